@@ -1,0 +1,19 @@
+#pragma once
+// GeoJSON (RFC 7946, WGS84 lon/lat) output of tracks for GIS tools.
+#include <string>
+#include <vector>
+
+#include "driftcorr/mapping/geodesy.h"
+
+namespace driftcorr::io {
+
+struct GeoTrack {
+    std::string name;                 ///< becomes properties.name, e.g. "estimate", "corrected"
+    std::vector<GeoPoint> points;
+};
+
+/// Writes a FeatureCollection with one LineString Feature per track (coordinates [lon, lat],
+/// 8 decimals), atomically (AtomicFile). Throws std::runtime_error naming the path on failure.
+void WriteGeoJsonTracks(const std::string& path, const std::vector<GeoTrack>& tracks);
+
+}  // namespace driftcorr::io

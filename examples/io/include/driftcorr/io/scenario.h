@@ -1,0 +1,64 @@
+#pragma once
+// The scenario format of ../shared/datasets/FORMAT.md (scenario.yaml and the files it names).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/frames.h"
+#include "driftcorr/core/types.h"
+
+namespace driftcorr::io {
+
+enum class ScenarioMode { kRoad2d, kIndoor3d };
+enum class TrajectoryFormat { kKitti, kTum };
+enum class MapFormat { kOsm, kGeoJson, kPcd, kPly, kOctomap };
+enum class LayerRole { kNone, kWalkways, kFloorplan };
+
+/// Where a trajectory comes from (the `estimate:` / `ground_truth:` blocks).
+struct TrajectorySource {
+    std::string path;                 ///< absolute or relative to the working dir (resolved)
+    TrajectoryFormat format = TrajectoryFormat::kTum;
+    std::optional<double> rate_hz;    ///< kitti only
+    std::optional<std::string> times_path;  ///< kitti only, resolved
+};
+
+/// `anchor:`. Exactly one of (lat_deg, lon_deg[, alt_m]) or (crs, easting_m, northing_m).
+struct AnchorSpec {
+    std::optional<double> lat_deg, lon_deg, alt_m;
+    std::optional<std::string> crs;         ///< e.g. "EPSG:32632", as written
+    std::optional<double> easting_m, northing_m;
+    double yaw_deg = 0.0;
+    double z_m = 0.0;
+    bool IsGeographic() const { return lat_deg.has_value(); }
+};
+
+struct MapLayerSpec {
+    std::string path;                  ///< resolved
+    MapFormat format = MapFormat::kOsm;
+    LayerRole role = LayerRole::kNone;
+    std::optional<double> floor_z_m;
+};
+
+struct Scenario {
+    std::string yaml_path;             ///< the scenario.yaml that was read
+    std::string dir;                   ///< its folder; relative paths are resolved against it
+    std::string name;
+    ScenarioMode mode = ScenarioMode::kRoad2d;
+    TrajectorySource estimate;
+    std::optional<TrajectorySource> ground_truth;
+    FrameAxes frame = FrameAxes::kEnu;
+    AnchorSpec anchor;
+    std::vector<MapLayerSpec> map;
+};
+
+/// Loads `path` (a scenario folder containing scenario.yaml, or a .yaml file). Throws
+/// InputError naming the yaml file, the line and the key for: unreadable file, YAML syntax error,
+/// missing required key, unknown mode/format/frame/role, anchor without coordinates (or with both
+/// kinds), kitti estimate without rate_hz and times, non-finite numbers, an empty map list.
+/// Does not open the files named inside (LoadTrajectory and the map readers do).
+Scenario LoadScenario(const std::string& path);
+
+std::string ToString(ScenarioMode mode);
+std::string ToString(MapFormat format);
+
+}  // namespace driftcorr::io

@@ -1,0 +1,1 @@
+// The batch corrector (windowed incremental pass + global refinement); see corrector.h.
