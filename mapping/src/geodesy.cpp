@@ -34,6 +34,26 @@ GeoPoint LocalTangentPlane::ToGeo(const Eigen::Vector3d& enu) const {
     return geo;
 }
 
+namespace {
+
+/// True when every axis of the CRS's coordinate system is in metres (conversion factor 1).
+bool AxesInMetres(PJ_CONTEXT* ctx, const PJ* crs) {
+    PJ* cs = proj_crs_get_coordinate_system(ctx, crs);
+    if (!cs) return false;
+    const int axis_count = proj_cs_get_axis_count(ctx, cs);
+    bool metres = axis_count > 0;
+    for (int i = 0; i < axis_count && metres; ++i) {
+        double unit_conv_factor = 0.0;
+        metres = proj_cs_get_axis_info(ctx, cs, i, nullptr, nullptr, nullptr, &unit_conv_factor,
+                                       nullptr, nullptr, nullptr) &&
+                 unit_conv_factor == 1.0;
+    }
+    proj_destroy(cs);
+    return metres;
+}
+
+}  // namespace
+
 struct CrsProjection::Impl {
     PJ_CONTEXT* ctx = nullptr;
     PJ* pj = nullptr;  // normalised for visualisation: (lon, lat) <-> (easting, northing)
@@ -46,7 +66,8 @@ struct CrsProjection::Impl {
 CrsProjection::CrsProjection(const std::string& crs) : impl_(std::make_unique<Impl>()) {
     name_ = NormaliseCrsName(crs);
     if (name_.empty() || name_ == "OGC:CRS84") {
-        throw std::invalid_argument("CRS '" + crs + "' is not a projected CRS of the form EPSG:<code>");
+        throw std::invalid_argument("CRS '" + crs +
+                                    "' is not a projected CRS of the form EPSG:<code>");
     }
     impl_->ctx = proj_context_create();
     proj_log_level(impl_->ctx, PJ_LOG_NONE);
@@ -55,12 +76,14 @@ CrsProjection::CrsProjection(const std::string& crs) : impl_(std::make_unique<Im
     impl_->pj = proj_normalize_for_visualization(impl_->ctx, raw);
     proj_destroy(raw);
     if (!impl_->pj) throw std::invalid_argument("CRS '" + crs + "' cannot be normalised by PROJ");
-    // A projected CRS in metres maps a point near its area of use to finite numbers; a geographic
-    // one would hand back degrees. Check the target CRS type explicitly.
+    // A geographic CRS would hand back degrees and a projected one in feet would hand back feet:
+    // check the target CRS type and its axis units explicitly.
     PJ* target = proj_create(impl_->ctx, name_.c_str());
     const bool projected = target && proj_get_type(target) == PJ_TYPE_PROJECTED_CRS;
+    const bool metres = projected && AxesInMetres(impl_->ctx, target);
     if (target) proj_destroy(target);
     if (!projected) throw std::invalid_argument("CRS '" + crs + "' is not a projected CRS");
+    if (!metres) throw std::invalid_argument("CRS '" + crs + "' does not use metre units");
 }
 CrsProjection::~CrsProjection() = default;
 CrsProjection::CrsProjection(CrsProjection&&) noexcept = default;

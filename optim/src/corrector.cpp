@@ -1,1 +1,147 @@
-// The batch corrector (windowed incremental pass + global refinement); see corrector.h.
+#include "driftcorr/optim/corrector.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+
+#include "driftcorr/core/observables.h"
+#include "driftcorr/optim/window_problem.h"
+
+namespace driftcorr {
+namespace {
+
+TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig& cfg,
+                             bool fix_height) {
+    TrajectoryState s;
+    s.obs = ComputeObservations(est, cfg.stationary_m);
+    s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
+    s.scales.assign(s.scale_segment.back() + 1, 1.0);
+    s.poses.resize(est.size());
+    const std::vector<double> yaw = UnwrappedHeadings(est, cfg.stationary_m);
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        s.poses[i].p = Eigen::Vector3d(est.p_en[i].x(), est.p_en[i].y(), est.up_m[i]);
+        s.poses[i].yaw_rad = yaw[i];
+    }
+    s.fix_height = fix_height;
+    return s;
+}
+
+// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1.
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i <= to; ++i) {
+        const StepObservation& o = s.obs[i];
+        const PoseState& a = s.poses[i - 1];
+        const double phi = a.yaw_rad + o.direction_rad;
+        const double len = s.scales[s.scale_segment[i]] * o.length_m;
+        PoseState& b = s.poses[i];
+        const double up = s.fix_height ? b.p.z() : a.p.z() + o.dup_m;
+        b.p = Eigen::Vector3d(a.p.x() + len * std::cos(phi), a.p.y() + len * std::sin(phi), up);
+        b.yaw_rad = a.yaw_rad + o.dheading_rad;
+    }
+    // New scale segments start from the latest estimate of the scale.
+    for (std::size_t g = s.scale_segment[from]; g < s.scales.size() && g > 0; ++g) {
+        if (g > static_cast<std::size_t>(s.scale_segment[from - 1])) s.scales[g] = s.scales[g - 1];
+    }
+}
+
+std::vector<std::uint8_t> GateConstraints(const TrajectoryState& s, const TraversableField* field,
+                                          const ModelConfig& m, std::size_t first,
+                                          std::size_t last) {
+    std::vector<std::uint8_t> flags(last - first + 1, 0);
+    if (!field || !m.hard_corridor) return flags;
+    for (std::size_t i = first; i <= last; ++i) {
+        auto q = field->Query(s.poses[i].p);
+        flags[i - first] = q && q->corridor.value <= m.corridor_gate_m;
+    }
+    return flags;
+}
+
+// Solves one window; on failure re-solves it with the soft terms only.
+SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
+                        const CorrectorConfig& cfg, const IpoptOptions& opt, std::size_t first,
+                        std::size_t last, CorrectionResult& result, bool count_constrained) {
+    std::vector<std::uint8_t> flags = GateConstraints(s, field, cfg.model, first, last);
+    if (count_constrained) {
+        result.constrained_poses = std::count(flags.begin(), flags.end(), std::uint8_t(1));
+    }
+    WindowProblem problem(s, field, cfg.model, first, last, flags);
+    SolveReport rep = SolveWithIpopt(problem, opt);
+    result.iterations += rep.iterations;
+    if (Usable(rep.status)) return rep;
+    ++result.window_retries;
+    WindowProblem soft(s, field, cfg.model, first, last,
+                       std::vector<std::uint8_t>(last - first + 1, 0));
+    SolveReport rep2 = SolveWithIpopt(soft, opt);
+    result.iterations += rep2.iterations;
+    rep2.message = rep.message + ", re-solved without hard constraints: " + rep2.message;
+    return rep2;
+}
+
+std::size_t AdvanceByDistance(const std::vector<double>& dist, std::size_t from, double metres,
+                              std::size_t max_poses) {
+    std::size_t i = from;
+    while (i + 1 < dist.size() && dist[i] - dist[from] < metres && i - from < max_poses) ++i;
+    return i;
+}
+
+PlanarTrajectory ToTrajectory(const PlanarTrajectory& est, const TrajectoryState& s) {
+    PlanarTrajectory out;
+    out.t_s = est.t_s;
+    for (const PoseState& p : s.poses) {
+        out.p_en.emplace_back(p.p.x(), p.p.y());
+        out.up_m.push_back(p.p.z());
+        out.yaw_rad.push_back(p.yaw_rad);
+    }
+    return out;
+}
+
+}  // namespace
+
+std::string CorrectorConfig::Validate() const {
+    if (std::string m = model.Validate(); !m.empty()) return m;
+    if (!(chunk_m > 0.0)) return "corrector.chunk_m: must be > 0";
+    if (!(window_m >= chunk_m)) return "corrector.window_m: must be >= chunk_m";
+    if (max_chunk_poses < 1) return "corrector.max_chunk_poses: must be >= 1";
+    if (max_window_poses < max_chunk_poses) return "corrector.max_window_poses: must be >= max_chunk_poses";
+    if (!(stationary_m >= 0.0)) return "corrector.stationary_m: must be >= 0";
+    return "";
+}
+
+CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
+                                   const CorrectorConfig& cfg, const ProgressCallback& progress) {
+    assert(estimate.size() >= 3 && "CorrectTrajectory needs at least 3 poses");
+    CorrectionResult result;
+    const bool planar = !field || field->planar();
+    TrajectoryState s = InitialState(estimate, cfg, planar);
+    const std::size_t n = estimate.size();
+    std::vector<double> dist(n, 0.0);
+    for (std::size_t i = 1; i < n; ++i) dist[i] = dist[i - 1] + s.obs[i].length_m;
+
+    std::size_t done = 0;  // poses [0, done] are corrected
+    while (done + 1 < n) {
+        const std::size_t end = std::max(done + 1, AdvanceByDistance(dist, done, cfg.chunk_m, cfg.max_chunk_poses));
+        ComposeOdometry(s, done + 1, end);
+        std::size_t first = end;
+        while (first > 1 && dist[end] - dist[first - 1] <= cfg.window_m && end - first + 1 < cfg.max_window_poses) --first;
+        SolveReport rep = SolveWindow(s, field, cfg, cfg.window_ipopt, first, end, result, false);
+        ++result.windows;
+        if (!Usable(rep.status)) ++result.window_failures;
+        done = end;
+        if (progress) progress({"incremental", done + 1, n});
+    }
+    if (cfg.refine) {
+        result.refine_report = SolveWindow(s, field, cfg, cfg.refine_ipopt, 1, n - 1, result, true);
+        if (progress) progress({"refine", n, n});
+        result.status = result.refine_report.status;
+        result.message = "refine: " + result.refine_report.message;
+    } else {
+        result.status = result.window_failures == 0 ? SolveStatus::kSuccess : SolveStatus::kFailed;
+        result.message = std::to_string(result.window_failures) + " window(s) failed";
+    }
+    result.scale_min = *std::min_element(s.scales.begin(), s.scales.end());
+    result.scale_max = *std::max_element(s.scales.begin(), s.scales.end());
+    if (Usable(result.status)) result.corrected = ToTrajectory(estimate, s);
+    return result;
+}
+
+}  // namespace driftcorr

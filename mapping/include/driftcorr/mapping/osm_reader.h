@@ -10,18 +10,19 @@ namespace driftcorr {
 
 struct OsmWay {
     std::int64_t id = 0;
-    std::string highway;            ///< value of the highway tag, e.g. "residential"
-    std::vector<GeoPoint> nodes;    ///< resolved node coordinates in way order (alt_m = 0)
-    double width_m = 0.0;           ///< from a parseable `width` tag, else 0
-    int lanes = 0;                  ///< from a parseable `lanes` tag, else 0
-    bool is_area = false;           ///< `area=yes` (a pedestrian square etc.)
+    std::string highway;          ///< value of the highway tag, e.g. "residential"
+    std::vector<GeoPoint> nodes;  ///< resolved node coordinates in way order (alt_m = 0)
+    double width_m = 0.0;         ///< from a parseable `width` tag, else 0
+    int lanes = 0;                ///< from a parseable `lanes` tag, else 0
+    bool is_area = false;         ///< `area=yes` (a pedestrian square etc.)
 };
 
 struct OsmReadReport {
-    std::size_t ways_total = 0;             ///< all <way> elements
-    std::size_t ways_highway = 0;           ///< ways with a highway tag, returned
-    std::size_t missing_node_refs = 0;      ///< <nd ref> with no matching <node>, dropped
-    std::size_t ways_too_short = 0;         ///< highway ways with < 2 resolved nodes, dropped
+    std::size_t nodes_total = 0;        ///< <node> elements with valid coordinates
+    std::size_t ways_total = 0;         ///< all <way> elements
+    std::size_t ways_highway = 0;       ///< ways with a highway tag, returned
+    std::size_t missing_node_refs = 0;  ///< <nd ref> (in highway ways) with no <node>, dropped
+    std::size_t ways_too_short = 0;     ///< highway ways with < 2 resolved nodes, dropped
 };
 
 struct OsmRoads {

@@ -13,7 +13,9 @@ struct GeoTrack {
 };
 
 /// Writes a FeatureCollection with one LineString Feature per track (coordinates [lon, lat],
-/// 8 decimals), atomically (AtomicFile). Throws std::runtime_error naming the path on failure.
+/// 8 decimals), atomically (AtomicFile). A track with a single point becomes a Point, an empty
+/// one a null geometry. Throws std::runtime_error naming the path on failure or on a non-finite
+/// coordinate (before anything is written).
 void WriteGeoJsonTracks(const std::string& path, const std::vector<GeoTrack>& tracks);
 
 }  // namespace driftcorr::io

@@ -21,7 +21,8 @@ Trajectory LoadTrajectory(const TrajectorySource& source, std::size_t min_poses 
 
 /// Writes TUM with full precision (timestamps %.6f, positions %.6f, quaternions %.9f), through an
 /// AtomicFile (nothing appears at `path` unless the whole file was written). Throws
-/// std::runtime_error naming the path on I/O failure.
+/// std::runtime_error naming the path on I/O failure, std::invalid_argument (before anything is
+/// written) when the trajectory's arrays differ in length or hold non-finite values.
 void WriteTum(const std::string& path, const Trajectory& traj);
 
 }  // namespace driftcorr::io

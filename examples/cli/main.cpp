@@ -1,0 +1,152 @@
+// driftcorr command-line tool. Parsing and printing live here; the work is in the library.
+//
+// Exit codes: 0 success, 1 usage error, 2 bad input (file, line, key named), 3 the solver did not
+// produce a usable correction (nothing written), 4 internal error.
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/errors.h"
+#include "driftcorr/io/geojson_writer.h"
+#include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/pipeline/pipeline.h"
+
+namespace {
+
+constexpr int kExitUsage = 1, kExitBadInput = 2, kExitSolver = 3, kExitInternal = 4;
+
+const char* kUsage =
+    "usage: driftcorr correct <scenario dir | scenario.yaml> -o <corrected.tum>\n"
+    "                         [--config params.yaml] [--geojson tracks.geojson] [--quiet]\n"
+    "\n"
+    "Corrects the scenario's drifting estimate against its map and writes the corrected\n"
+    "trajectory as TUM (t x y z qx qy qz qw) in the estimate's own frame and timestamps.\n"
+    "--geojson also writes estimate and corrected track (and ground truth) as WGS84 GeoJSON.\n"
+    "Exit codes: 0 ok, 1 usage, 2 bad input, 3 solver failure (nothing written), 4 internal.\n";
+
+struct Args {
+    std::string scenario, output, config, geojson;
+    bool quiet = false;
+};
+
+bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
+    if (argc < 2 || std::strcmp(argv[1], "correct") != 0) {
+        err = argc < 2 ? "missing command" : std::string("unknown command '") + argv[1] + "'";
+        return false;
+    }
+    for (int i = 2; i < argc; ++i) {
+        const std::string arg = argv[i];
+        auto value = [&](std::string& out) {
+            if (i + 1 >= argc) { err = arg + " needs a value"; return false; }
+            out = argv[++i];
+            return true;
+        };
+        if (arg == "-o" || arg == "--output") { if (!value(a.output)) return false; }
+        else if (arg == "--config") { if (!value(a.config)) return false; }
+        else if (arg == "--geojson") { if (!value(a.geojson)) return false; }
+        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
+        else if (arg == "-h" || arg == "--help") { err = ""; return false; }
+        else if (!arg.empty() && arg[0] == '-') { err = "unknown option " + arg; return false; }
+        else if (a.scenario.empty()) a.scenario = arg;
+        else { err = "unexpected argument " + arg; return false; }
+    }
+    if (a.scenario.empty()) err = "missing scenario";
+    else if (a.output.empty()) err = "missing -o <corrected.tum>";
+    return err.empty();
+}
+
+// Progress on stderr: a rewritten line on a terminal, a line per 20 % otherwise.
+driftcorr::ProgressCallback MakeProgress(bool quiet) {
+    if (quiet) return {};
+    const bool tty = ::isatty(STDERR_FILENO);
+    return [tty, last = -1](const driftcorr::CorrectionProgress& p) mutable {
+        const int pct = int(100.0 * p.poses_done / std::max<std::size_t>(1, p.poses_total));
+        if (tty) {
+            std::fprintf(stderr, "\r[driftcorr] %-11s %6zu / %zu poses (%3d %%)", p.stage.c_str(),
+                         p.poses_done, p.poses_total, pct);
+            if (p.stage == "refine") std::fputc('\n', stderr);
+        } else if (pct / 20 != last / 20 || p.stage == "refine") {
+            std::fprintf(stderr, "[driftcorr] %s %zu / %zu poses\n", p.stage.c_str(), p.poses_done,
+                         p.poses_total);
+        }
+        last = pct;
+    };
+}
+
+void PrintMetricsRow(const char* label, const driftcorr::ErrorMetrics& m) {
+    std::printf("  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%\n",
+                label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
+}
+
+void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::string& out) {
+    const auto& r = run.result;
+    const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
+    std::printf("scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
+                driftcorr::io::ToString(run.scenario.mode).c_str(), run.estimate.size());
+    std::printf("map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
+                run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
+    std::printf("solver     %s (%s); %zu windows, %d Ipopt iterations, %zu poses on hard corridor,"
+                " scale %.3f..%.3f\n", driftcorr::ToString(r.status).c_str(), r.message.c_str(),
+                r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
+    std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s)\n", total,
+                run.timings.load_s, run.timings.map_s, run.timings.solve_s,
+                run.estimate.size() / std::max(1e-9, run.timings.solve_s));
+    if (run.before) PrintMetricsRow("estimate", *run.before);
+    if (run.after) PrintMetricsRow("corrected", *run.after);
+    if (!out.empty()) std::printf("wrote      %s\n", out.c_str());
+}
+
+std::vector<driftcorr::GeoPoint> ToGeo(const driftcorr::pipeline::WorldFrame& w,
+                                       const driftcorr::PlanarTrajectory& t) {
+    std::vector<driftcorr::GeoPoint> out;
+    for (const auto& p : t.p_en) out.push_back(w.ToGeo(p));
+    return out;
+}
+
+int RunCorrect(const Args& a) {
+    using namespace driftcorr;
+    pipeline::PipelineConfig cfg;
+    if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
+    pipeline::CorrectionRun run = pipeline::RunCorrection(a.scenario, cfg, MakeProgress(a.quiet));
+    if (!Usable(run.result.status)) {
+        PrintSummary(run, "");
+        std::fprintf(stderr, "driftcorr: the solver did not produce a correction: %s (%s); nothing written\n",
+                     ToString(run.result.status).c_str(), run.result.message.c_str());
+        return kExitSolver;
+    }
+    io::WriteTum(a.output, run.corrected_frame);
+    if (!a.geojson.empty()) {
+        pipeline::WorldFrame world(run.scenario.anchor);
+        std::vector<io::GeoTrack> tracks = {{"estimate", ToGeo(world, run.estimate)},
+                                            {"corrected", ToGeo(world, run.result.corrected)}};
+        if (run.ground_truth) tracks.push_back({"ground_truth", ToGeo(world, *run.ground_truth)});
+        io::WriteGeoJsonTracks(a.geojson, tracks);
+    }
+    PrintSummary(run, a.output);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Args args;
+    std::string err;
+    if (!ParseArgs(argc, argv, args, err)) {
+        if (!err.empty()) std::fprintf(stderr, "driftcorr: %s\n\n", err.c_str());
+        std::fputs(kUsage, err.empty() ? stdout : stderr);
+        return err.empty() ? 0 : kExitUsage;
+    }
+    try {
+        return RunCorrect(args);
+    } catch (const driftcorr::InputError& e) {
+        std::fprintf(stderr, "driftcorr: %s\n", e.what());
+        return kExitBadInput;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "driftcorr: internal error: %s\n", e.what());
+        return kExitInternal;
+    }
+}

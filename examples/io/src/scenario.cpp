@@ -1,0 +1,319 @@
+#include "driftcorr/io/scenario.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <utility>
+#include <vector>
+
+#include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/geodesy.h"
+#include "parse_number.h"
+
+namespace driftcorr::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// 1-based line of a node, 0 when yaml-cpp has no position for it.
+long LineOf(const YAML::Node& node) {
+    const YAML::Mark mark = node.Mark();
+    return mark.line >= 0 ? mark.line + 1 : 0;
+}
+
+std::string Lower(std::string text) {
+    std::transform(text.begin(), text.end(), text.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return text;
+}
+
+/// One YAML mapping of the scenario file (the root, `estimate`, `anchor`, `map[i]`, ...) with the
+/// key path used in messages. Every accessor throws InputError naming file, line and key.
+class Block {
+public:
+    Block(const std::string& file, YAML::Node node, std::string prefix, long parent_line)
+        : file_(file), node_(std::move(node)), prefix_(std::move(prefix)) {
+        const long own_line = LineOf(node_);
+        line_ = own_line > 0 ? own_line : parent_line;
+        if (!node_.IsMap()) Fail("", "must be a mapping of keys to values");
+        CheckNoDuplicateKeys();
+    }
+
+    /// "prefix.key" (just "prefix" for an empty key).
+    std::string Key(const std::string& key) const {
+        if (key.empty()) return prefix_;
+        return prefix_.empty() ? key : prefix_ + "." + key;
+    }
+    /// Throws InputError at the key's line (or the block's line when the key is absent).
+    [[noreturn]] void Fail(const std::string& key, const std::string& message) const {
+        const std::optional<YAML::Node> child = key.empty() ? std::nullopt : Find(key);
+        throw InputError(file_, child ? LineOf(*child) : line_, Key(key), message);
+    }
+    /// The value of `key`, std::nullopt when it is absent or null (`key:` with nothing after it).
+    std::optional<YAML::Node> Find(const std::string& key) const {
+        const YAML::Node child = node_[key];
+        if (!child.IsDefined() || child.IsNull()) return std::nullopt;
+        return child;
+    }
+    YAML::Node Get(const std::string& key) const {
+        std::optional<YAML::Node> child = Find(key);
+        if (!child) Fail(key, "missing required key");
+        return *child;
+    }
+    Block Child(const std::string& key) const { return Block(file_, Get(key), Key(key), line_); }
+
+    std::string String(const std::string& key) const { return Scalar(key, Get(key)); }
+    std::optional<std::string> OptString(const std::string& key) const {
+        const std::optional<YAML::Node> child = Find(key);
+        return child ? std::optional<std::string>(Scalar(key, *child)) : std::nullopt;
+    }
+    double Double(const std::string& key) const { return ToDouble(key, String(key)); }
+    std::optional<double> OptDouble(const std::string& key) const {
+        const std::optional<std::string> text = OptString(key);
+        return text ? std::optional<double>(ToDouble(key, *text)) : std::nullopt;
+    }
+    bool Has(const std::string& key) const { return Find(key).has_value(); }
+    const std::string& file() const { return file_; }
+
+private:
+    /// yaml-cpp keeps the first of two equal keys; a repeated key is almost surely a mistake.
+    void CheckNoDuplicateKeys() const {
+        std::vector<std::string> seen;
+        for (const auto& entry : node_) {
+            if (!entry.first.IsScalar()) continue;
+            const std::string& key = entry.first.Scalar();
+            if (std::find(seen.begin(), seen.end(), key) != seen.end()) {
+                throw InputError(file_, LineOf(entry.first), Key(key), "key given twice");
+            }
+            seen.push_back(key);
+        }
+    }
+    std::string Scalar(const std::string& key, const YAML::Node& node) const {
+        if (!node.IsScalar()) Fail(key, "must be a single value, not a list or mapping");
+        return node.Scalar();
+    }
+    double ToDouble(const std::string& key, const std::string& text) const {
+        const std::optional<double> value = internal::ParseDouble(internal::Trim(text));
+        const std::string lower = Lower(text);
+        const bool special = lower.find("nan") != std::string::npos ||
+                             lower.find("inf") != std::string::npos;  // also YAML's .nan, .inf
+        if (!value && !special) Fail(key, "'" + text + "' is not a number");
+        if (!value || !std::isfinite(*value)) Fail(key, "'" + text + "' is not a finite number");
+        return *value;
+    }
+
+    std::string file_;
+    YAML::Node node_;
+    std::string prefix_;
+    long line_ = 0;
+};
+
+template <typename E>
+using Choices = std::vector<std::pair<const char*, E>>;
+
+/// Looks `text` up in `choices`; throws naming the key and the accepted values otherwise.
+template <typename E>
+E ParseChoice(const Block& block, const std::string& key, const std::string& text,
+              const Choices<E>& choices) {
+    std::string accepted;
+    for (const auto& [name, value] : choices) {
+        if (text == name) return value;
+        accepted += (accepted.empty() ? "" : " | ") + std::string(name);
+    }
+    block.Fail(key, "unknown value '" + text + "' (expected " + accepted + ")");
+}
+
+template <typename E>
+E ParseChoice(const Block& block, const std::string& key, const Choices<E>& choices) {
+    return ParseChoice(block, key, block.String(key), choices);
+}
+
+/// The scenario.yaml to read: `path` itself (.yaml/.yml) or `path`/scenario.yaml for a folder.
+std::string ResolveYamlPath(const std::string& path) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+        const std::string yaml = (fs::path(path) / "scenario.yaml").string();
+        if (!fs::exists(yaml, ec)) {
+            throw InputError(yaml, 0, "", "scenario folder has no scenario.yaml");
+        }
+        return yaml;
+    }
+    if (!fs::exists(path, ec)) throw InputError(path, 0, "", "no such file or folder");
+    const std::string ext = Lower(fs::path(path).extension().string());
+    if (ext != ".yaml" && ext != ".yml") {
+        throw InputError(path, 0, "", "expected a scenario folder or a .yaml/.yml file");
+    }
+    return path;
+}
+
+YAML::Node ParseYamlFile(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file, 0, "", "cannot open file");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw InputError(file, 0, "", "read error");
+    try {
+        return YAML::Load(text);
+    } catch (const YAML::Exception& e) {
+        throw InputError(file, e.mark.line >= 0 ? e.mark.line + 1 : 0, "", "YAML error: " + e.msg);
+    }
+}
+
+std::string ResolvePath(const fs::path& dir, const std::string& path) {
+    const fs::path p(path);
+    return (p.is_absolute() ? p : dir / p).lexically_normal().string();
+}
+
+TrajectorySource ParseSource(const Block& block, const fs::path& dir) {
+    TrajectorySource src;
+    src.path = ResolvePath(dir, block.String("path"));
+    src.format = ParseChoice<TrajectoryFormat>(
+        block, "format", {{"kitti", TrajectoryFormat::kKitti}, {"tum", TrajectoryFormat::kTum}});
+    src.rate_hz = block.OptDouble("rate_hz");
+    const std::optional<std::string> times = block.OptString("times");
+    if (times) src.times_path = ResolvePath(dir, *times);
+    if (src.rate_hz && !(*src.rate_hz > 0.0)) block.Fail("rate_hz", "must be positive");
+    if (src.format == TrajectoryFormat::kTum) {
+        for (const char* key : {"rate_hz", "times"}) {
+            if (block.Has(key)) block.Fail(key, "only valid with format: kitti");
+        }
+    } else if (!src.rate_hz && !src.times_path) {
+        block.Fail("", "a kitti trajectory needs rate_hz or times");
+    }
+    return src;
+}
+
+void ParseGeographicAnchor(const Block& block, AnchorSpec& anchor) {
+    anchor.lat_deg = block.Double("lat_deg");
+    anchor.lon_deg = block.Double("lon_deg");
+    anchor.alt_m = block.OptDouble("alt_m").value_or(0.0);
+    if (std::abs(*anchor.lat_deg) > 90.0) block.Fail("lat_deg", "must be within [-90, 90]");
+    if (std::abs(*anchor.lon_deg) > 180.0) block.Fail("lon_deg", "must be within [-180, 180]");
+}
+
+void ParseGridAnchor(const Block& block, AnchorSpec& anchor) {
+    anchor.crs = block.String("crs");
+    if (NormaliseCrsName(*anchor.crs).empty()) {
+        block.Fail("crs", "unknown CRS spelling '" + *anchor.crs + "' (expected e.g. EPSG:32632)");
+    }
+    anchor.easting_m = block.Double("easting_m");
+    anchor.northing_m = block.Double("northing_m");
+}
+
+AnchorSpec ParseAnchor(const Block& block) {
+    const bool geographic = block.Has("lat_deg") || block.Has("lon_deg") || block.Has("alt_m");
+    const bool grid = block.Has("crs") || block.Has("easting_m") || block.Has("northing_m");
+    if (geographic && grid) {
+        block.Fail("", "give either lat_deg/lon_deg[/alt_m] or crs/easting_m/northing_m, not both");
+    }
+    if (!geographic && !grid) {
+        block.Fail("", "needs lat_deg and lon_deg, or crs, easting_m and northing_m");
+    }
+    AnchorSpec anchor;
+    if (geographic) {
+        ParseGeographicAnchor(block, anchor);
+    } else {
+        ParseGridAnchor(block, anchor);
+    }
+    anchor.yaw_deg = block.OptDouble("yaw_deg").value_or(0.0);
+    anchor.z_m = block.OptDouble("z_m").value_or(0.0);
+    return anchor;
+}
+
+const Choices<MapFormat>& MapFormats() {
+    static const Choices<MapFormat> formats = {
+        {"osm", MapFormat::kOsm},        {"geojson", MapFormat::kGeoJson},
+        {"pcd", MapFormat::kPcd},        {"ply", MapFormat::kPly},
+        {"bt", MapFormat::kOctomap},     {"ot", MapFormat::kOctomap},
+        {"octomap", MapFormat::kOctomap}};
+    return formats;
+}
+
+/// `format:` when given, otherwise the layer file's extension (.json counts as GeoJSON).
+MapFormat ParseMapFormat(const Block& block, const std::string& path) {
+    if (block.Has("format")) return ParseChoice(block, "format", MapFormats());
+    std::string ext = Lower(fs::path(path).extension().string());
+    if (!ext.empty()) ext.erase(0, 1);
+    if (ext == "json") return MapFormat::kGeoJson;
+    for (const auto& [name, value] : MapFormats()) {
+        if (ext == name) return value;
+    }
+    block.Fail("format", "missing, and the extension of '" + path + "' names no known map format");
+}
+
+MapLayerSpec ParseLayer(const Block& block, const fs::path& dir) {
+    MapLayerSpec layer;
+    const std::string path = block.String("path");
+    layer.path = ResolvePath(dir, path);
+    layer.format = ParseMapFormat(block, path);
+    if (block.Has("role")) {
+        layer.role = ParseChoice<LayerRole>(
+            block, "role",
+            {{"walkways", LayerRole::kWalkways}, {"floorplan", LayerRole::kFloorplan}});
+    }
+    layer.floor_z_m = block.OptDouble("floor_z_m");
+    return layer;
+}
+
+std::vector<MapLayerSpec> ParseMap(const Block& root, const fs::path& dir) {
+    const YAML::Node list = root.Get("map");
+    if (!list.IsSequence()) root.Fail("map", "must be a list of layers");
+    if (list.size() == 0) root.Fail("map", "must list at least one layer");
+    std::vector<MapLayerSpec> layers;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+        const Block layer(root.file(), list[i], "map[" + std::to_string(i) + "]", LineOf(list));
+        layers.push_back(ParseLayer(layer, dir));
+    }
+    return layers;
+}
+
+void ParseRoot(const Block& root, Scenario& s) {
+    const fs::path dir(s.dir);
+    s.name = root.OptString("name").value_or(dir.filename().string());
+    s.mode = ParseChoice<ScenarioMode>(
+        root, "mode", {{"road2d", ScenarioMode::kRoad2d}, {"indoor3d", ScenarioMode::kIndoor3d}});
+    s.estimate = ParseSource(root.Child("estimate"), dir);
+    if (root.Has("ground_truth")) s.ground_truth = ParseSource(root.Child("ground_truth"), dir);
+    const std::string frame = root.String("frame");
+    const std::optional<FrameAxes> axes = ParseFrameAxes(frame);
+    if (!axes) root.Fail("frame", "unknown value '" + frame + "' (expected kitti_camera | enu)");
+    s.frame = *axes;
+    s.anchor = ParseAnchor(root.Child("anchor"));
+    s.map = ParseMap(root, dir);
+}
+
+}  // namespace
+
+Scenario LoadScenario(const std::string& path) {
+    Scenario s;
+    s.yaml_path = ResolveYamlPath(path);
+    s.dir = fs::absolute(s.yaml_path).lexically_normal().parent_path().string();
+    const YAML::Node doc = ParseYamlFile(s.yaml_path);
+    try {
+        ParseRoot(Block(s.yaml_path, doc, "", 1), s);
+    } catch (const YAML::Exception& e) {  // safety net: yaml-cpp access errors carry a position
+        throw InputError(s.yaml_path, e.mark.line >= 0 ? e.mark.line + 1 : 0, "", e.msg);
+    }
+    return s;
+}
+
+std::string ToString(ScenarioMode mode) {
+    return mode == ScenarioMode::kRoad2d ? "road2d" : "indoor3d";
+}
+
+std::string ToString(MapFormat format) {
+    switch (format) {
+        case MapFormat::kOsm: return "osm";
+        case MapFormat::kGeoJson: return "geojson";
+        case MapFormat::kPcd: return "pcd";
+        case MapFormat::kPly: return "ply";
+        case MapFormat::kOctomap: return "octomap";
+    }
+    return "unknown";
+}
+
+}  // namespace driftcorr::io

@@ -1,0 +1,69 @@
+#pragma once
+// The example pipeline behind `driftcorr correct`: scenario -> world plane -> map field ->
+// correction -> corrected trajectory in the trajectory's own frame, with metrics when the
+// scenario has ground truth. It wires the library together; the CLI only parses and prints.
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "driftcorr/core/metrics.h"
+#include "driftcorr/io/scenario.h"
+#include "driftcorr/mapping/road_network.h"
+#include "driftcorr/optim/corrector.h"
+
+namespace driftcorr::pipeline {
+
+/// Every parameter of a run; defaults written once, in the member structs.
+struct PipelineConfig {
+    CorrectorConfig corrector;
+    RoadClassConfig roads;
+    RoadFieldConfig field;
+
+    std::string Validate() const;
+};
+
+/// Reads a params.yaml (sections `model`, `corrector`, `roads`, `field`). Unknown keys are errors
+/// (a misspelt parameter must not be ignored). Throws InputError naming file, line and key.
+PipelineConfig LoadPipelineConfig(const std::string& path);
+
+/// Converts between the world plane (ENU at the anchor) and WGS84, for maps and GeoJSON output.
+class WorldFrame {
+public:
+    explicit WorldFrame(const io::AnchorSpec& anchor);  ///< throws InputError for a bad CRS
+    ~WorldFrame();
+    Eigen::Vector2d ToEn(const GeoPoint& geo) const;
+    GeoPoint ToGeo(const Eigen::Vector2d& en) const;
+    PlanarAnchor planar_anchor() const { return anchor_; }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    PlanarAnchor anchor_;
+};
+
+struct Timings {
+    double load_s = 0.0;    ///< scenario and trajectories
+    double map_s = 0.0;     ///< map parsing and field
+    double solve_s = 0.0;   ///< correction
+};
+
+struct CorrectionRun {
+    io::Scenario scenario;
+    Trajectory estimate_frame;          ///< as read
+    PlanarTrajectory estimate;          ///< in the world plane
+    std::optional<PlanarTrajectory> ground_truth;
+    RoadNetwork network;
+    std::size_t map_grid_cells = 0;
+    CorrectionResult result;
+    Trajectory corrected_frame;         ///< valid only when Usable(result.status)
+    std::optional<ErrorMetrics> before, after;
+    Timings timings;
+};
+
+/// Runs the whole correction. Throws InputError for bad input (files, anchor, map with no usable
+/// roads, field too large). Solver outcomes are reported in run.result, never thrown.
+CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
+                            const ProgressCallback& progress = {});
+
+}  // namespace driftcorr::pipeline

@@ -1,0 +1,141 @@
+#include "driftcorr/pipeline/pipeline.h"
+
+#include <chrono>
+#include <stdexcept>
+
+#include "driftcorr/core/angles.h"
+#include "driftcorr/core/errors.h"
+#include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/geodesy.h"
+#include "driftcorr/mapping/osm_reader.h"
+
+namespace driftcorr::pipeline {
+namespace {
+
+double Since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Eigen::AlignedBox2d BoundsOf(const PlanarTrajectory& t) {
+    Eigen::AlignedBox2d box;
+    for (const auto& p : t.p_en) box.extend(p);
+    return box;
+}
+
+// Road map of all osm layers. Throws InputError when no layer yields a usable road.
+RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world, const RoadClassConfig& roads) {
+    RoadNetwork net;
+    std::string last_layer;
+    for (const io::MapLayerSpec& layer : sc.map) {
+        if (layer.format != io::MapFormat::kOsm) {
+            throw InputError(sc.yaml_path, 0, "map",
+                             "road2d mode reads OpenStreetMap layers only; '" + layer.path +
+                                 "' is " + io::ToString(layer.format));
+        }
+        const OsmRoads osm = ReadOsmRoads(layer.path);
+        RoadNetwork part = BuildRoadNetwork(
+            osm, [&](const GeoPoint& g) { return world.ToEn(g); }, roads);
+        if (part.roads.empty()) {
+            throw InputError(layer.path, 0, "",
+                             "no usable roads: " + std::to_string(osm.ways.size()) +
+                                 " highway way(s), none of a class in the '" + roads.profile +
+                                 "' profile");
+        }
+        net.ways_excluded_by_class += part.ways_excluded_by_class;
+        net.ways_area += part.ways_area;
+        for (auto& r : part.roads) net.roads.push_back(std::move(r));
+    }
+    return net;
+}
+
+}  // namespace
+
+struct WorldFrame::Impl {
+    std::optional<LocalTangentPlane> ltp;
+    std::optional<CrsProjection> crs;
+    Eigen::Vector2d crs_origin = Eigen::Vector2d::Zero();
+};
+
+WorldFrame::WorldFrame(const io::AnchorSpec& a) : impl_(std::make_unique<Impl>()) {
+    anchor_.yaw_rad = DegToRad(a.yaw_deg);
+    anchor_.origin_up_m = a.z_m;
+    if (a.IsGeographic()) {
+        impl_->ltp.emplace(GeoPoint{*a.lat_deg, *a.lon_deg, a.alt_m.value_or(0.0)});
+    } else {
+        try {
+            impl_->crs.emplace(*a.crs);
+        } catch (const std::invalid_argument& e) {
+            throw InputError("", 0, "anchor.crs", e.what());
+        }
+        impl_->crs_origin = Eigen::Vector2d(*a.easting_m, *a.northing_m);
+    }
+}
+WorldFrame::~WorldFrame() = default;
+
+Eigen::Vector2d WorldFrame::ToEn(const GeoPoint& geo) const {
+    if (impl_->ltp) return impl_->ltp->ToEnu(geo).head<2>();
+    return impl_->crs->FromGeo(geo) - impl_->crs_origin;
+}
+
+GeoPoint WorldFrame::ToGeo(const Eigen::Vector2d& en) const {
+    if (impl_->ltp) return impl_->ltp->ToGeo(Eigen::Vector3d(en.x(), en.y(), 0.0));
+    return impl_->crs->ToGeo(en + impl_->crs_origin);
+}
+
+CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
+                            const ProgressCallback& progress) {
+    CorrectionRun run;
+    auto t0 = std::chrono::steady_clock::now();
+    run.scenario = io::LoadScenario(scenario_path);
+    const io::Scenario& sc = run.scenario;
+    if (sc.mode != io::ScenarioMode::kRoad2d) {
+        throw InputError(sc.yaml_path, 0, "mode", "indoor3d scenarios are not supported yet");
+    }
+    run.estimate_frame = io::LoadTrajectory(sc.estimate);
+    WorldFrame world = [&] {
+        try {
+            return WorldFrame(sc.anchor);
+        } catch (const InputError& e) {
+            throw InputError(sc.yaml_path, 0, e.key(), e.what());
+        }
+    }();
+    run.estimate = ToPlanar(run.estimate_frame, sc.frame, world.planar_anchor());
+    if (sc.ground_truth) {
+        const Trajectory gt = io::LoadTrajectory(*sc.ground_truth);
+        if (gt.size() != run.estimate_frame.size()) {
+            throw InputError(sc.ground_truth->path, 0, "",
+                             "ground truth has " + std::to_string(gt.size()) + " poses, the estimate " +
+                                 std::to_string(run.estimate_frame.size()));
+        }
+        run.ground_truth = ToPlanar(gt, sc.frame, world.planar_anchor());
+    }
+    run.timings.load_s = Since(t0);
+
+    t0 = std::chrono::steady_clock::now();
+    run.network = LoadRoads(sc, world, config.roads);
+    TraversableField field;
+    try {
+        field = RasteriseRoads(run.network, BoundsOf(run.estimate), config.field);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(sc.yaml_path, 0, "map", e.what());
+    }
+    run.map_grid_cells = field.spec().size();
+    run.timings.map_s = Since(t0);
+
+    t0 = std::chrono::steady_clock::now();
+    run.result = CorrectTrajectory(run.estimate, &field, config.corrector, progress);
+    run.timings.solve_s = Since(t0);
+    if (Usable(run.result.status)) {
+        run.corrected_frame = FromPlanar(run.result.corrected, run.estimate, run.estimate_frame,
+                                         sc.frame, world.planar_anchor());
+        if (run.ground_truth) {
+            run.before = ComputeMetrics(run.estimate, *run.ground_truth);
+            run.after = ComputeMetrics(run.result.corrected, *run.ground_truth);
+        }
+    } else if (run.ground_truth) {
+        run.before = ComputeMetrics(run.estimate, *run.ground_truth);
+    }
+    return run;
+}
+
+}  // namespace driftcorr::pipeline

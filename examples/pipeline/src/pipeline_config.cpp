@@ -1,0 +1,170 @@
+// params.yaml -> PipelineConfig. Every key maps to one field; unknown keys are errors.
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <functional>
+#include <map>
+
+#include "driftcorr/core/errors.h"
+#include "driftcorr/pipeline/pipeline.h"
+
+namespace driftcorr::pipeline {
+namespace {
+
+using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
+
+struct Context {
+    std::string file;
+};
+
+long Line(const YAML::Node& n) { return n.Mark().line >= 0 ? n.Mark().line + 1 : 0; }
+
+double Number(const Context& c, const YAML::Node& n, const std::string& key) {
+    try {
+        const double v = n.as<double>();
+        if (!std::isfinite(v)) throw InputError(c.file, Line(n), key, "must be a finite number");
+        return v;
+    } catch (const YAML::Exception&) {
+        throw InputError(c.file, Line(n), key, "must be a number");
+    }
+}
+
+bool Bool(const Context& c, const YAML::Node& n, const std::string& key) {
+    try {
+        return n.as<bool>();
+    } catch (const YAML::Exception&) {
+        throw InputError(c.file, Line(n), key, "must be true or false");
+    }
+}
+
+std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
+    std::map<std::string, Setter> s;
+    auto num = [&](const char* name, double* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
+    };
+    num("step_sigma_m", &m.step_sigma_m);
+    num("step_sigma_rel", &m.step_sigma_rel);
+    num("lateral_sigma_m", &m.lateral_sigma_m);
+    num("lateral_sigma_rel", &m.lateral_sigma_rel);
+    num("heading_rw_rad_per_sqrt_s", &m.heading_rw_rad_per_sqrt_s);
+    num("heading_sigma_rel", &m.heading_sigma_rel);
+    num("heading_sigma_min_rad", &m.heading_sigma_min_rad);
+    num("preservation_sigma_rad", &m.preservation_sigma_rad);
+    num("height_sigma_m", &m.height_sigma_m);
+    num("height_sigma_rel", &m.height_sigma_rel);
+    num("map_sigma_m", &m.map_sigma_m);
+    num("map_giveup_m", &m.map_giveup_m);
+    num("scale_segment_m", &m.scale_segment_m);
+    num("scale_prior_sigma", &m.scale_prior_sigma);
+    num("scale_rw_sigma", &m.scale_rw_sigma);
+    num("step_weight", &m.step_weight);
+    num("heading_weight", &m.heading_weight);
+    num("preservation_weight", &m.preservation_weight);
+    num("map_weight", &m.map_weight);
+    num("height_weight", &m.height_weight);
+    num("corridor_gate_m", &m.corridor_gate_m);
+    num("corridor_slack_m", &m.corridor_slack_m);
+    s["hard_corridor"] = [&c, &m](const YAML::Node& n, const std::string& k) { m.hard_corridor = Bool(c, n, k); };
+    return s;
+}
+
+std::map<std::string, Setter> CorrectorSetters(const Context& c, CorrectorConfig& cc) {
+    std::map<std::string, Setter> s;
+    auto num = [&](const char* name, double* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
+    };
+    auto count = [&](const char* name, auto* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) {
+            const double v = Number(c, n, k);
+            if (v < 0 || v != std::floor(v)) throw InputError(c.file, Line(n), k, "must be a whole number >= 0");
+            *field = static_cast<std::remove_pointer_t<decltype(field)>>(v);
+        };
+    };
+    num("chunk_m", &cc.chunk_m);
+    num("window_m", &cc.window_m);
+    num("stationary_m", &cc.stationary_m);
+    count("max_chunk_poses", &cc.max_chunk_poses);
+    count("max_window_poses", &cc.max_window_poses);
+    count("window_max_iterations", &cc.window_ipopt.max_iterations);
+    count("refine_max_iterations", &cc.refine_ipopt.max_iterations);
+    num("refine_max_cpu_time_s", &cc.refine_ipopt.max_cpu_time_s);
+    num("window_max_cpu_time_s", &cc.window_ipopt.max_cpu_time_s);
+    s["refine"] = [&c, &cc](const YAML::Node& n, const std::string& k) { cc.refine = Bool(c, n, k); };
+    return s;
+}
+
+std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f) {
+    std::map<std::string, Setter> s;
+    auto num = [&](const char* name, double* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
+    };
+    num("resolution_m", &f.resolution_m);
+    num("margin_m", &f.margin_m);
+    num("truncation_m", &f.truncation_m);
+    num("exact_band_m", &f.exact_band_m);
+    num("max_memory_mb", &f.max_memory_mb);
+    return s;
+}
+
+std::map<std::string, Setter> RoadSetters(const Context& c, RoadClassConfig& r) {
+    std::map<std::string, Setter> s;
+    s["profile"] = [&r](const YAML::Node& n, const std::string&) { r.profile = n.as<std::string>(); };
+    s["default_half_width_m"] = [&c, &r](const YAML::Node& n, const std::string& k) {
+        r.default_half_width_m = Number(c, n, k);
+    };
+    s["half_width_m"] = [&c, &r](const YAML::Node& n, const std::string& k) {
+        if (!n.IsMap()) throw InputError(c.file, Line(n), k, "must be a map of highway class to metres");
+        for (const auto& kv : n) {
+            const std::string cls = kv.first.as<std::string>();
+            r.half_width_overrides_m[cls] = Number(c, kv.second, k + "." + cls);
+        }
+    };
+    return s;
+}
+
+void ApplySection(const Context& c, const YAML::Node& node, const std::string& section,
+                  const std::map<std::string, Setter>& setters) {
+    if (!node.IsMap()) throw InputError(c.file, Line(node), section, "must be a map");
+    for (const auto& kv : node) {
+        const std::string key = kv.first.as<std::string>();
+        auto it = setters.find(key);
+        if (it == setters.end()) throw InputError(c.file, Line(kv.first), section + "." + key, "unknown parameter");
+        it->second(kv.second, section + "." + key);
+    }
+}
+
+}  // namespace
+
+std::string PipelineConfig::Validate() const {
+    if (std::string m = corrector.Validate(); !m.empty()) return m;
+    if (std::string m = roads.Validate(); !m.empty()) return "roads." + m;
+    if (std::string m = field.Validate(); !m.empty()) return m;
+    return "";
+}
+
+PipelineConfig LoadPipelineConfig(const std::string& path) {
+    Context c{path};
+    YAML::Node root;
+    try {
+        root = YAML::LoadFile(path);
+    } catch (const YAML::BadFile&) {
+        throw InputError(path, 0, "", "cannot open the parameter file");
+    } catch (const YAML::ParserException& e) {
+        throw InputError(path, e.mark.line + 1, "", "YAML syntax error: " + e.msg);
+    }
+    PipelineConfig cfg;
+    if (root.IsNull()) return cfg;
+    if (!root.IsMap()) throw InputError(path, Line(root), "", "must be a map of sections");
+    for (const auto& kv : root) {
+        const std::string section = kv.first.as<std::string>();
+        if (section == "model") ApplySection(c, kv.second, section, ModelSetters(c, cfg.corrector.model));
+        else if (section == "corrector") ApplySection(c, kv.second, section, CorrectorSetters(c, cfg.corrector));
+        else if (section == "roads") ApplySection(c, kv.second, section, RoadSetters(c, cfg.roads));
+        else if (section == "field") ApplySection(c, kv.second, section, FieldSetters(c, cfg.field));
+        else throw InputError(path, Line(kv.first), section, "unknown section (model, corrector, roads, field)");
+    }
+    if (std::string m = cfg.Validate(); !m.empty()) throw InputError(path, 0, "", m);
+    return cfg;
+}
+
+}  // namespace driftcorr::pipeline

@@ -1,0 +1,42 @@
+#pragma once
+// Regular sample grids and the exact Euclidean distance transform.
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace driftcorr {
+
+/// A regular grid of samples: sample (i, j, k) sits at origin_m + resolution_m * (i, j, k).
+/// A planar grid has nz == 1 (the road case); its samples ignore the height coordinate.
+struct GridSpec {
+    Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+    double resolution_m = 0.5;
+    int nx = 0, ny = 0, nz = 1;
+
+    std::size_t size() const {
+        return static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) *
+               static_cast<std::size_t>(nz);
+    }
+    std::size_t Index(int i, int j, int k = 0) const {
+        return (static_cast<std::size_t>(k) * ny + j) * static_cast<std::size_t>(nx) + i;
+    }
+    Eigen::Vector3d Position(int i, int j, int k = 0) const {
+        return origin_m + resolution_m * Eigen::Vector3d(i, j, k);
+    }
+    bool planar() const { return nz == 1; }
+};
+
+/// Exact Euclidean distance transform (Felzenszwalb & Huttenlocher 2012, separable lower
+/// envelope of parabolas, linear in the number of samples). Returns, for every sample, the
+/// distance in metres to the nearest sample whose `feature` is non-zero, or +infinity when the
+/// grid has no feature. Precondition: feature.size() == spec.size().
+std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
+                                              const std::vector<std::uint8_t>& feature);
+
+/// Signed distance to a set: negative inside (distance to the nearest outside sample, minus
+/// half a cell), positive outside (distance to the nearest inside sample, minus half a cell), so
+/// that the zero level lies between the last inside and the first outside sample.
+std::vector<float> SignedDistanceTransform(const GridSpec& spec,
+                                           const std::vector<std::uint8_t>& inside);
+
+}  // namespace driftcorr

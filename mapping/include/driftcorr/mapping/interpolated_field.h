@@ -1,0 +1,44 @@
+#pragma once
+// A scalar field on a GridSpec, interpolated by a uniform cubic B-spline whose control points are
+// the samples: value, gradient and Hessian are continuous everywhere inside (C2), which is what a
+// Newton-type solver needs. A raw voxel/pixel distance grid is a staircase; this is not.
+// Linear functions are reproduced exactly, so away from kinks (the centre line, the medial axis)
+// the distance is exact; at a kink the V is rounded over about two cells.
+#include <optional>
+#include <vector>
+
+#include "driftcorr/mapping/grid.h"
+
+namespace driftcorr {
+
+/// Value, gradient [1/m * unit] and Hessian of a field at a point (world frame, metres).
+/// For a planar field the z row/column of gradient and Hessian are zero.
+struct FieldSample {
+    double value = 0.0;
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+};
+
+class InterpolatedField {
+public:
+    InterpolatedField() = default;
+    /// Precondition: values.size() == spec.size(), all finite.
+    InterpolatedField(const GridSpec& spec, std::vector<float> values);
+
+    /// The interpolated sample at p, or std::nullopt where the B-spline support leaves the grid
+    /// (p closer than one cell to the border) or the grid is empty. For planar grids p.z() is
+    /// ignored.
+    std::optional<FieldSample> Query(const Eigen::Vector3d& p) const;
+    /// Like Query but several fields sharing one spec are evaluated with one set of weights.
+    static bool QueryMany(const std::vector<const InterpolatedField*>& fields,
+                          const Eigen::Vector3d& p, std::vector<FieldSample>& out);
+
+    const GridSpec& spec() const { return spec_; }
+    const std::vector<float>& values() const { return values_; }
+
+private:
+    GridSpec spec_;
+    std::vector<float> values_;
+};
+
+}  // namespace driftcorr

@@ -1,0 +1,92 @@
+#include "driftcorr/mapping/grid.h"
+
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+namespace driftcorr {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// One 1-D pass on squared distances in cell units: f (input, kInf where no site) -> d.
+// Scratch buffers v (site indices) and z (envelope boundaries) have n and n + 1 entries.
+void Edt1d(const float* f, int n, float* d, int* v, float* z) {
+    int k = -1;
+    for (int q = 0; q < n; ++q) {
+        if (f[q] == kInf) continue;
+        float s = 0.0f;
+        while (k >= 0) {
+            const int p = v[k];
+            s = ((f[q] + float(q) * q) - (f[p] + float(p) * p)) / (2.0f * (q - p));
+            if (s > z[k]) break;
+            --k;
+        }
+        ++k;
+        v[k] = q;
+        z[k] = (k == 0) ? -kInf : s;
+        z[k + 1] = kInf;
+    }
+    if (k < 0) {
+        for (int q = 0; q < n; ++q) d[q] = kInf;
+        return;
+    }
+    int j = 0;
+    for (int q = 0; q < n; ++q) {
+        while (z[j + 1] < q) ++j;
+        const float dq = float(q - v[j]);
+        d[q] = dq * dq + f[v[j]];
+    }
+}
+
+// Applies Edt1d along one axis of the grid, in place.
+void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
+    const int n = axis == 0 ? s.nx : (axis == 1 ? s.ny : s.nz);
+    const std::size_t stride = axis == 0 ? 1 : (axis == 1 ? std::size_t(s.nx)
+                                                           : std::size_t(s.nx) * s.ny);
+    const int lines_a = axis == 0 ? s.ny : s.nx;
+    const int lines_b = axis == 2 ? s.ny : s.nz;
+    std::vector<float> f(n), d(n), z(n + 1);
+    std::vector<int> v(n);
+    for (int b = 0; b < lines_b; ++b) {
+        for (int a = 0; a < lines_a; ++a) {
+            std::size_t base;
+            if (axis == 0) base = s.Index(0, a, b);
+            else if (axis == 1) base = s.Index(a, 0, b);
+            else base = s.Index(a, b, 0);
+            for (int q = 0; q < n; ++q) f[q] = g[base + q * stride];
+            Edt1d(f.data(), n, d.data(), v.data(), z.data());
+            for (int q = 0; q < n; ++q) g[base + q * stride] = d[q];
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
+                                              const std::vector<std::uint8_t>& feature) {
+    assert(feature.size() == spec.size() && "feature mask does not match the grid");
+    std::vector<float> g(spec.size());
+    for (std::size_t i = 0; i < g.size(); ++i) g[i] = feature[i] ? 0.0f : kInf;
+    EdtAxis(g, spec, 0);
+    EdtAxis(g, spec, 1);
+    if (spec.nz > 1) EdtAxis(g, spec, 2);
+    const float res = static_cast<float>(spec.resolution_m);
+    for (float& x : g) x = (x == kInf) ? kInf : std::sqrt(x) * res;
+    return g;
+}
+
+std::vector<float> SignedDistanceTransform(const GridSpec& spec,
+                                           const std::vector<std::uint8_t>& inside) {
+    std::vector<std::uint8_t> outside(inside.size());
+    for (std::size_t i = 0; i < inside.size(); ++i) outside[i] = inside[i] ? 0 : 1;
+    std::vector<float> to_inside = EuclideanDistanceTransform(spec, inside);
+    const std::vector<float> to_outside = EuclideanDistanceTransform(spec, outside);
+    const float half = 0.5f * static_cast<float>(spec.resolution_m);
+    for (std::size_t i = 0; i < to_inside.size(); ++i) {
+        to_inside[i] = inside[i] ? -(to_outside[i] - half) : (to_inside[i] - half);
+    }
+    return to_inside;
+}
+
+}  // namespace driftcorr

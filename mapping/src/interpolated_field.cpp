@@ -1,0 +1,129 @@
+#include "driftcorr/mapping/interpolated_field.h"
+
+#include <cassert>
+#include <cmath>
+
+namespace driftcorr {
+namespace {
+
+// Uniform cubic B-spline basis at fractional offset t in [0, 1): weights of samples
+// i-1, i, i+1, i+2 and their first and second derivatives with respect to t.
+struct Basis {
+    double w[4], dw[4], ddw[4];
+};
+
+Basis CubicBSpline(double t) {
+    const double t2 = t * t, t3 = t2 * t, u = 1.0 - t;
+    Basis b;
+    b.w[0] = u * u * u / 6.0;
+    b.w[1] = (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0;
+    b.w[2] = (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0;
+    b.w[3] = t3 / 6.0;
+    b.dw[0] = -0.5 * u * u;
+    b.dw[1] = 0.5 * (3.0 * t2 - 4.0 * t);
+    b.dw[2] = 0.5 * (-3.0 * t2 + 2.0 * t + 1.0);
+    b.dw[3] = 0.5 * t2;
+    b.ddw[0] = u;
+    b.ddw[1] = 3.0 * t - 2.0;
+    b.ddw[2] = -3.0 * t + 1.0;
+    b.ddw[3] = t;
+    return b;
+}
+
+// Locates the support of p along one axis; false if it leaves [0, n).
+bool Locate(double coord, double origin, double res, int n, int& i0, double& t) {
+    const double g = (coord - origin) / res;
+    if (!(g >= 1.0) || !(g < n - 2.0)) return false;
+    const double fl = std::floor(g);
+    i0 = static_cast<int>(fl) - 1;
+    t = g - fl;
+    return true;
+}
+
+struct Stencil {
+    int i0 = 0, j0 = 0, k0 = 0;
+    Basis bx, by, bz;
+    bool planar = true;
+};
+
+bool MakeStencil(const GridSpec& s, const Eigen::Vector3d& p, Stencil& st) {
+    double tx, ty, tz = 0.0;
+    if (s.nx == 0 || !Locate(p.x(), s.origin_m.x(), s.resolution_m, s.nx, st.i0, tx) ||
+        !Locate(p.y(), s.origin_m.y(), s.resolution_m, s.ny, st.j0, ty)) {
+        return false;
+    }
+    st.planar = s.planar();
+    if (!st.planar && !Locate(p.z(), s.origin_m.z(), s.resolution_m, s.nz, st.k0, tz)) {
+        return false;
+    }
+    st.bx = CubicBSpline(tx);
+    st.by = CubicBSpline(ty);
+    st.bz = CubicBSpline(tz);
+    return true;
+}
+
+// Accumulates value, gradient (in grid units) and Hessian (grid units) of one field.
+void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& st,
+                FieldSample& out) {
+    double val = 0, gx = 0, gy = 0, gz = 0, hxx = 0, hxy = 0, hyy = 0, hxz = 0, hyz = 0, hzz = 0;
+    const int nk = st.planar ? 1 : 4;
+    for (int c = 0; c < nk; ++c) {
+        const double wz = st.planar ? 1.0 : st.bz.w[c];
+        const double dz = st.planar ? 0.0 : st.bz.dw[c];
+        const double ddz = st.planar ? 0.0 : st.bz.ddw[c];
+        for (int b = 0; b < 4; ++b) {
+            const float* row = &v[s.Index(st.i0, st.j0 + b, st.k0 + (st.planar ? 0 : c))];
+            double r = 0, rd = 0, rdd = 0;
+            for (int a = 0; a < 4; ++a) {
+                r += st.bx.w[a] * row[a];
+                rd += st.bx.dw[a] * row[a];
+                rdd += st.bx.ddw[a] * row[a];
+            }
+            const double wy = st.by.w[b], dy = st.by.dw[b], ddy = st.by.ddw[b];
+            val += r * wy * wz;
+            gx += rd * wy * wz;
+            gy += r * dy * wz;
+            gz += r * wy * dz;
+            hxx += rdd * wy * wz;
+            hxy += rd * dy * wz;
+            hyy += r * ddy * wz;
+            hxz += rd * wy * dz;
+            hyz += r * dy * dz;
+            hzz += r * wy * ddz;
+        }
+    }
+    const double inv = 1.0 / s.resolution_m, inv2 = inv * inv;
+    out.value = val;
+    out.gradient = Eigen::Vector3d(gx, gy, gz) * inv;
+    out.hessian << hxx, hxy, hxz, hxy, hyy, hyz, hxz, hyz, hzz;
+    out.hessian *= inv2;
+}
+
+}  // namespace
+
+InterpolatedField::InterpolatedField(const GridSpec& spec, std::vector<float> values)
+    : spec_(spec), values_(std::move(values)) {
+    assert(values_.size() == spec_.size() && "field values do not match the grid");
+}
+
+std::optional<FieldSample> InterpolatedField::Query(const Eigen::Vector3d& p) const {
+    Stencil st;
+    if (!MakeStencil(spec_, p, st)) return std::nullopt;
+    FieldSample out;
+    Accumulate(spec_, values_, st, out);
+    return out;
+}
+
+bool InterpolatedField::QueryMany(const std::vector<const InterpolatedField*>& fields,
+                                  const Eigen::Vector3d& p, std::vector<FieldSample>& out) {
+    if (fields.empty()) return false;
+    Stencil st;
+    if (!MakeStencil(fields[0]->spec_, p, st)) return false;
+    out.resize(fields.size());
+    for (std::size_t f = 0; f < fields.size(); ++f) {
+        Accumulate(fields[f]->spec_, fields[f]->values_, st, out[f]);
+    }
+    return true;
+}
+
+}  // namespace driftcorr

@@ -1,0 +1,57 @@
+#pragma once
+// The batch corrector: processes the trajectory incrementally (extend by a chunk, initialise the
+// new poses by composing odometry onto the corrected end, re-solve a trailing window), then
+// refines the whole trajectory in one solve. No I/O: progress goes through a callback, the outcome
+// into CorrectionResult.
+#include <functional>
+#include <string>
+
+#include "driftcorr/core/types.h"
+#include "driftcorr/mapping/traversable_field.h"
+#include "driftcorr/optim/ipopt_solver.h"
+#include "driftcorr/optim/model_config.h"
+
+namespace driftcorr {
+
+struct CorrectorConfig {
+    ModelConfig model;
+    double chunk_m = 40.0;           ///< estimated path added per incremental step [m]
+    double window_m = 200.0;         ///< trailing path re-solved per incremental step [m]
+    std::size_t max_chunk_poses = 400;   ///< cap per chunk (long stops) [poses]
+    std::size_t max_window_poses = 1500; ///< cap per window [poses]
+    bool refine = true;              ///< final whole-trajectory solve
+    double stationary_m = 1e-3;      ///< steps shorter than this are stops [m]
+    IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0};
+    IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
+
+    /// Empty if valid, else a message naming the bad field.
+    std::string Validate() const;
+};
+
+struct CorrectionProgress {
+    std::string stage;          ///< "incremental" or "refine"
+    std::size_t poses_done = 0;
+    std::size_t poses_total = 0;
+};
+using ProgressCallback = std::function<void(const CorrectionProgress&)>;
+
+struct CorrectionResult {
+    SolveStatus status = SolveStatus::kFailed;
+    std::string message;            ///< human-readable outcome, names the failing stage
+    PlanarTrajectory corrected;     ///< valid only when Usable(status)
+    std::size_t windows = 0;
+    std::size_t window_retries = 0;    ///< windows re-solved without hard constraints
+    std::size_t window_failures = 0;   ///< windows that failed even then
+    int iterations = 0;                ///< Ipopt iterations, all solves
+    std::size_t constrained_poses = 0; ///< poses with the hard corridor constraint (refine)
+    double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range
+    SolveReport refine_report;
+};
+
+/// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry
+/// only). Pose 0 is the known initial position and heading and stays fixed.
+CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
+                                   const CorrectorConfig& config,
+                                   const ProgressCallback& progress = {});
+
+}  // namespace driftcorr

@@ -1,0 +1,45 @@
+#pragma once
+// The parameters of the weighted NLL: one sigma and one weight per term. Sigmas are given in
+// sampling-independent units so the same values serve 10 Hz cars and 2 Hz pedestrian steps.
+#include <string>
+
+namespace driftcorr {
+
+struct ModelConfig {
+    // Step length: sigma = step_sigma_m + step_sigma_rel * L.
+    double step_sigma_m = 0.02;       ///< [m]
+    double step_sigma_rel = 0.01;     ///< [-] share of the step length
+    // Sideways motion against the observed step direction: sigma = lateral_sigma_m + rel * L.
+    double lateral_sigma_m = 0.02;    ///< [m]
+    double lateral_sigma_rel = 0.02;  ///< [-]
+    // Heading change: sigma^2 = heading_rw^2 * dt + (heading_sigma_rel * |dheading|)^2.
+    double heading_rw_rad_per_sqrt_s = 0.004;  ///< heading random walk [rad/sqrt(s)]
+    double heading_sigma_rel = 0.02;           ///< [-] gyro scale error share of a turn
+    double heading_sigma_min_rad = 1e-4;       ///< floor [rad]
+    // Heading preservation prior (turns are small), per step.
+    double preservation_sigma_rad = 1.0;  ///< [rad]; large = weak
+    // Height change (indoor3d): sigma = height_sigma_m + height_sigma_rel * |dup|.
+    double height_sigma_m = 0.05;     ///< [m]
+    double height_sigma_rel = 0.05;   ///< [-]
+    // Map distance to the nearest traversable centre: Gaussian with sigma, gives up beyond ~giveup.
+    double map_sigma_m = 2.0;         ///< [m]
+    double map_giveup_m = 8.0;        ///< [m]
+    // Step-length scale: one variable per scale_segment_m of estimated path, random walk between
+    // segments, prior around 1 on the first.
+    double scale_segment_m = 150.0;   ///< [m]
+    double scale_prior_sigma = 0.1;   ///< [-]
+    double scale_rw_sigma = 0.01;     ///< [-] per segment
+    // Weights w in (0, 1] of each term family.
+    double step_weight = 1.0, heading_weight = 1.0, preservation_weight = 1.0, map_weight = 1.0,
+           height_weight = 1.0;
+    // Hard corridor: every pose whose start point is within corridor_gate_m of the traversable
+    // corridor must end inside it (signed corridor distance <= corridor_slack_m).
+    bool hard_corridor = true;
+    double corridor_gate_m = 3.0;     ///< [m]
+    double corridor_slack_m = 0.0;    ///< [m]
+
+    /// Empty if valid, else a message naming the first bad field.
+    std::string Validate() const;
+};
+
+}  // namespace driftcorr

@@ -1,0 +1,92 @@
+#pragma once
+// The correction as a nonlinear program over a window of poses [first, last] of a trajectory,
+// solver-independent: objective (the weighted NLL), its gradient and exact Hessian, and the
+// hard corridor constraints with their Jacobian and Hessians, in sparse triplet form.
+// Pose first-1 and everything before it is held fixed.
+//
+// Variables: per pose (x, y, z, yaw) in the ENU map frame, then one scale per scale segment
+// touched by the window's steps.
+#include <array>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "driftcorr/core/cost_terms.h"
+#include "driftcorr/core/observables.h"
+#include "driftcorr/mapping/traversable_field.h"
+#include "driftcorr/optim/model_config.h"
+
+namespace driftcorr {
+
+struct PoseState {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();  ///< ENU [m]
+    double yaw_rad = 0.0;                         ///< unwrapped heading
+};
+
+/// The whole trajectory's state and its fixed inputs; windows read and write it.
+struct TrajectoryState {
+    std::vector<StepObservation> obs;   ///< obs[i]: step into pose i
+    std::vector<int> scale_segment;     ///< scale segment of step i (obs index)
+    std::vector<PoseState> poses;
+    std::vector<double> scales;         ///< one per scale segment
+    bool fix_height = true;             ///< planar mode: heights stay as initialised
+};
+
+/// Assigns scale segments from the estimated path length (one per `segment_m`).
+std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
+
+class WindowProblem {
+public:
+    /// `constrained[k]` (k = pose - first) marks poses that carry the hard corridor constraint.
+    /// Preconditions: 1 <= first <= last < poses.size(); field may be null (no map terms).
+    WindowProblem(TrajectoryState& state, const TraversableField* field, const ModelConfig& cfg,
+                  std::size_t first, std::size_t last, std::vector<std::uint8_t> constrained);
+
+    int NumVariables() const { return n_vars_; }
+    int NumConstraints() const { return static_cast<int>(constraint_pose_.size()); }
+    void InitialPoint(double* x) const;
+    void Bounds(double* x_l, double* x_u, double* g_l, double* g_u) const;
+
+    double Objective(const double* x) const;
+    void Gradient(const double* x, double* grad) const;
+    void Constraints(const double* x, double* g) const;
+
+    const std::vector<std::pair<int, int>>& JacobianStructure() const { return jac_; }
+    void JacobianValues(const double* x, double* values) const;
+    /// Lower triangle (row >= col).
+    const std::vector<std::pair<int, int>>& HessianStructure() const { return hess_; }
+    void HessianValues(const double* x, double obj_factor, const double* lambda,
+                       double* values) const;
+
+    /// Writes a solution back into the trajectory state.
+    void Store(const double* x) const;
+    /// Corridor signed distance of each constrained pose at x (for reports).
+    std::size_t first() const { return first_; }
+    std::size_t last() const { return last_; }
+
+private:
+    struct StepSlots {
+        int var[kStepVars];
+        int hess_slot[kStepVars][kStepVars];  // lower triangle, -1 if not a variable pair
+    };
+    int PoseVar(std::size_t pose, int component) const;
+    int ScaleVar(int segment) const;
+    StepVector GatherStep(const double* x, std::size_t i) const;
+    double StepCost(std::size_t i, const StepVector& v, StepVector* g, StepMatrix* h) const;
+    Eigen::Vector3d PosePosition(const double* x, std::size_t pose) const;
+    int HessSlot(int r, int c);
+    void BuildStructure();
+
+    TrajectoryState& state_;
+    const TraversableField* field_;
+    ModelConfig cfg_;
+    std::size_t first_, last_;
+    int seg_first_ = 0, seg_last_ = 0, n_vars_ = 0;
+    std::vector<std::size_t> constraint_pose_;
+    std::vector<StepSlots> steps_;
+    std::vector<std::pair<int, int>> jac_, hess_;
+    std::vector<std::array<int, 6>> pose_hess_slot_;
+    std::vector<std::array<int, 3>> scale_hess_slot_;
+};
+
+}  // namespace driftcorr

@@ -1,0 +1,46 @@
+#include "driftcorr/optim/model_config.h"
+
+#include <cmath>
+
+namespace driftcorr {
+namespace {
+
+bool Positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool NonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
+bool Weight(double v) { return std::isfinite(v) && v > 0.0 && v <= 1.0; }
+
+}  // namespace
+
+std::string ModelConfig::Validate() const {
+    struct Check { const char* name; double value; bool (*ok)(double); const char* rule; };
+    const Check checks[] = {
+        {"model.step_sigma_m", step_sigma_m, Positive, "> 0"},
+        {"model.step_sigma_rel", step_sigma_rel, NonNegative, ">= 0"},
+        {"model.lateral_sigma_m", lateral_sigma_m, Positive, "> 0"},
+        {"model.lateral_sigma_rel", lateral_sigma_rel, NonNegative, ">= 0"},
+        {"model.heading_rw_rad_per_sqrt_s", heading_rw_rad_per_sqrt_s, NonNegative, ">= 0"},
+        {"model.heading_sigma_rel", heading_sigma_rel, NonNegative, ">= 0"},
+        {"model.heading_sigma_min_rad", heading_sigma_min_rad, Positive, "> 0"},
+        {"model.preservation_sigma_rad", preservation_sigma_rad, Positive, "> 0"},
+        {"model.height_sigma_m", height_sigma_m, Positive, "> 0"},
+        {"model.height_sigma_rel", height_sigma_rel, NonNegative, ">= 0"},
+        {"model.map_sigma_m", map_sigma_m, Positive, "> 0"},
+        {"model.map_giveup_m", map_giveup_m, Positive, "> 0"},
+        {"model.scale_segment_m", scale_segment_m, Positive, "> 0"},
+        {"model.scale_prior_sigma", scale_prior_sigma, Positive, "> 0"},
+        {"model.scale_rw_sigma", scale_rw_sigma, Positive, "> 0"},
+        {"model.step_weight", step_weight, Weight, "in (0, 1]"},
+        {"model.heading_weight", heading_weight, Weight, "in (0, 1]"},
+        {"model.preservation_weight", preservation_weight, Weight, "in (0, 1]"},
+        {"model.map_weight", map_weight, Weight, "in (0, 1]"},
+        {"model.height_weight", height_weight, Weight, "in (0, 1]"},
+        {"model.corridor_gate_m", corridor_gate_m, NonNegative, ">= 0"},
+        {"model.corridor_slack_m", corridor_slack_m, NonNegative, ">= 0"},
+    };
+    for (const Check& c : checks) {
+        if (!c.ok(c.value)) return std::string(c.name) + ": must be " + c.rule;
+    }
+    return "";
+}
+
+}  // namespace driftcorr

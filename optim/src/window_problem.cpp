@@ -1,0 +1,270 @@
+#include "driftcorr/optim/window_problem.h"
+
+#include <cassert>
+#include <cmath>
+#include <unordered_map>
+
+namespace driftcorr {
+namespace {
+
+constexpr double kInfBound = 1e19;
+constexpr double kScaleMin = 0.5, kScaleMax = 1.5;
+
+}  // namespace
+
+std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m) {
+    std::vector<int> seg(obs.size(), 0);
+    double dist = 0.0;
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        seg[i] = static_cast<int>(dist / segment_m);
+        dist += obs[i].length_m;
+    }
+    if (!seg.empty()) seg[0] = seg.size() > 1 ? seg[1] : 0;
+    return seg;
+}
+
+WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* field,
+                             const ModelConfig& cfg, std::size_t first, std::size_t last,
+                             std::vector<std::uint8_t> constrained)
+    : state_(state), field_(field), cfg_(cfg), first_(first), last_(last) {
+    assert(first >= 1 && first <= last && last < state.poses.size() && "bad window");
+    assert(constrained.size() == last - first + 1 && "one constraint flag per window pose");
+    seg_first_ = state.scale_segment[first];
+    seg_last_ = state.scale_segment[last];
+    n_vars_ = 4 * static_cast<int>(last - first + 1) + (seg_last_ - seg_first_ + 1);
+    for (std::size_t k = 0; k < constrained.size(); ++k) {
+        if (constrained[k] && field_) constraint_pose_.push_back(first + k);
+    }
+    BuildStructure();
+}
+
+int WindowProblem::PoseVar(std::size_t pose, int component) const {
+    if (pose < first_) return -1;
+    return 4 * static_cast<int>(pose - first_) + component;
+}
+
+int WindowProblem::ScaleVar(int segment) const {
+    if (segment < seg_first_) return -1;
+    return 4 * static_cast<int>(last_ - first_ + 1) + (segment - seg_first_);
+}
+
+void WindowProblem::BuildStructure() {
+    std::unordered_map<std::int64_t, int> slots;
+    auto slot = [&](int r, int c) {
+        if (r < c) std::swap(r, c);
+        const std::int64_t key = (std::int64_t(r) << 32) | std::int64_t(c);
+        auto [it, inserted] = slots.emplace(key, static_cast<int>(hess_.size()));
+        if (inserted) hess_.emplace_back(r, c);
+        return it->second;
+    };
+    steps_.resize(last_ - first_ + 1);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        StepSlots& s = steps_[i - first_];
+        for (int c = 0; c < 4; ++c) {
+            s.var[c] = PoseVar(i - 1, c);
+            s.var[4 + c] = PoseVar(i, c);
+        }
+        s.var[kScale] = ScaleVar(state_.scale_segment[i]);
+        for (int r = 0; r < kStepVars; ++r) {
+            for (int c = 0; c <= r; ++c) {
+                s.hess_slot[r][c] = (s.var[r] >= 0 && s.var[c] >= 0) ? slot(s.var[r], s.var[c]) : -1;
+            }
+        }
+    }
+    pose_hess_slot_.resize(last_ - first_ + 1);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        const int x = PoseVar(i, 0), y = PoseVar(i, 1), z = PoseVar(i, 2);
+        pose_hess_slot_[i - first_] = {slot(x, x), slot(y, x), slot(y, y),
+                                       slot(z, x), slot(z, y), slot(z, z)};
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
+        const int a = ScaleVar(sgm - 1), b = ScaleVar(sgm);
+        scale_hess_slot_.push_back({a >= 0 ? slot(a, a) : -1, a >= 0 ? slot(b, a) : -1, slot(b, b)});
+    }
+    for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
+        for (int c = 0; c < 3; ++c) jac_.emplace_back(static_cast<int>(k), PoseVar(constraint_pose_[k], c));
+    }
+}
+
+void WindowProblem::InitialPoint(double* x) const {
+    for (std::size_t i = first_; i <= last_; ++i) {
+        const PoseState& p = state_.poses[i];
+        double* v = x + PoseVar(i, 0);
+        v[0] = p.p.x(), v[1] = p.p.y(), v[2] = p.p.z(), v[3] = p.yaw_rad;
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) x[ScaleVar(sgm)] = state_.scales[sgm];
+}
+
+void WindowProblem::Bounds(double* x_l, double* x_u, double* g_l, double* g_u) const {
+    for (int k = 0; k < n_vars_; ++k) x_l[k] = -kInfBound, x_u[k] = kInfBound;
+    for (std::size_t i = first_; i <= last_; ++i) {
+        if (state_.fix_height) x_l[PoseVar(i, 2)] = x_u[PoseVar(i, 2)] = state_.poses[i].p.z();
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
+        x_l[ScaleVar(sgm)] = kScaleMin, x_u[ScaleVar(sgm)] = kScaleMax;
+    }
+    for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
+        g_l[k] = -kInfBound;
+        g_u[k] = cfg_.corridor_slack_m;
+    }
+}
+
+StepVector WindowProblem::GatherStep(const double* x, std::size_t i) const {
+    const StepSlots& s = steps_[i - first_];
+    StepVector v;
+    const PoseState& a = state_.poses[i - 1];
+    const double fixed_a[4] = {a.p.x(), a.p.y(), a.p.z(), a.yaw_rad};
+    for (int c = 0; c < 4; ++c) v[c] = s.var[c] >= 0 ? x[s.var[c]] : fixed_a[c];
+    for (int c = 4; c < 8; ++c) v[c] = x[s.var[c]];
+    v[kScale] = s.var[kScale] >= 0 ? x[s.var[kScale]] : state_.scales[state_.scale_segment[i]];
+    return v;
+}
+
+double WindowProblem::StepCost(std::size_t i, const StepVector& v, StepVector* g,
+                               StepMatrix* h) const {
+    const StepObservation& o = state_.obs[i];
+    const double len_sigma = cfg_.step_sigma_m + cfg_.step_sigma_rel * o.length_m;
+    const double lat_sigma = cfg_.lateral_sigma_m + cfg_.lateral_sigma_rel * o.length_m;
+    const double rw = cfg_.heading_rw_rad_per_sqrt_s, rel = cfg_.heading_sigma_rel * o.dheading_rad;
+    const double head_sigma = std::max(cfg_.heading_sigma_min_rad,
+                                       std::sqrt(rw * rw * std::max(o.dt_s, 0.0) + rel * rel));
+    StepVector gt;
+    StepMatrix ht;
+    StepVector* gp = g ? &gt : nullptr;
+    StepMatrix* hp = h ? &ht : nullptr;
+    if (g) g->setZero();
+    if (h) h->setZero();
+    double cost = 0.0;
+    auto add = [&](double c) {
+        cost += c;
+        if (g) *g += gt;
+        if (h) *h += ht;
+    };
+    add(StepLengthTerm{o.length_m, o.direction_rad, len_sigma, cfg_.step_weight}.Evaluate(v, gp, hp));
+    add(StepDirectionTerm{o.direction_rad, lat_sigma, cfg_.step_weight}.Evaluate(v, gp, hp));
+    add(HeadingChangeTerm{o.dheading_rad, head_sigma, cfg_.heading_weight}.Evaluate(v, gp, hp));
+    add(HeadingPreservationTerm{cfg_.preservation_sigma_rad, cfg_.preservation_weight}.Evaluate(v, gp, hp));
+    if (!state_.fix_height) {
+        const double hs = cfg_.height_sigma_m + cfg_.height_sigma_rel * std::abs(o.dup_m);
+        add(HeightChangeTerm{o.dup_m, hs, cfg_.height_weight}.Evaluate(v, gp, hp));
+    }
+    return cost;
+}
+
+Eigen::Vector3d WindowProblem::PosePosition(const double* x, std::size_t pose) const {
+    const double* v = x + PoseVar(pose, 0);
+    return {v[0], v[1], v[2]};
+}
+
+double WindowProblem::Objective(const double* x) const {
+    double f = 0.0;
+    const MapDistanceTerm map{cfg_.map_sigma_m, cfg_.map_giveup_m, cfg_.map_weight};
+    for (std::size_t i = first_; i <= last_; ++i) {
+        f += StepCost(i, GatherStep(x, i), nullptr, nullptr);
+        if (!field_) continue;
+        if (auto s = field_->Query(PosePosition(x, i))) {
+            f += map.Evaluate(s->centre.value, s->centre.gradient, s->centre.hessian, nullptr, nullptr);
+        }
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
+        const int a = ScaleVar(sgm - 1);
+        const double sa = a >= 0 ? x[a] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
+        const double sigma = sgm > 0 ? cfg_.scale_rw_sigma : cfg_.scale_prior_sigma;
+        f += ScaleRandomWalkTerm{sigma, 1.0}.Evaluate({sa, x[ScaleVar(sgm)]}, nullptr, nullptr);
+    }
+    return f;
+}
+
+void WindowProblem::Gradient(const double* x, double* grad) const {
+    for (int k = 0; k < n_vars_; ++k) grad[k] = 0.0;
+    const MapDistanceTerm map{cfg_.map_sigma_m, cfg_.map_giveup_m, cfg_.map_weight};
+    StepVector g;
+    for (std::size_t i = first_; i <= last_; ++i) {
+        StepCost(i, GatherStep(x, i), &g, nullptr);
+        const StepSlots& s = steps_[i - first_];
+        for (int r = 0; r < kStepVars; ++r) if (s.var[r] >= 0) grad[s.var[r]] += g[r];
+        if (!field_) continue;
+        if (auto fs = field_->Query(PosePosition(x, i))) {
+            Eigen::Vector3d gm;
+            map.Evaluate(fs->centre.value, fs->centre.gradient, fs->centre.hessian, &gm, nullptr);
+            for (int c = 0; c < 3; ++c) grad[PoseVar(i, c)] += gm[c];
+        }
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
+        const int a = ScaleVar(sgm - 1), b = ScaleVar(sgm);
+        const double sa = a >= 0 ? x[a] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
+        const double sigma = sgm > 0 ? cfg_.scale_rw_sigma : cfg_.scale_prior_sigma;
+        Eigen::Vector2d gs;
+        ScaleRandomWalkTerm{sigma, 1.0}.Evaluate({sa, x[b]}, &gs, nullptr);
+        if (a >= 0) grad[a] += gs[0];
+        grad[b] += gs[1];
+    }
+}
+
+void WindowProblem::Constraints(const double* x, double* g) const {
+    for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
+        auto s = field_->Query(PosePosition(x, constraint_pose_[k]));
+        g[k] = s ? s->corridor.value : field_->truncation_m();
+    }
+}
+
+void WindowProblem::JacobianValues(const double* x, double* values) const {
+    for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
+        auto s = field_->Query(PosePosition(x, constraint_pose_[k]));
+        for (int c = 0; c < 3; ++c) values[3 * k + c] = s ? s->corridor.gradient[c] : 0.0;
+    }
+}
+
+void WindowProblem::HessianValues(const double* x, double obj_factor, const double* lambda,
+                                  double* values) const {
+    for (std::size_t k = 0; k < hess_.size(); ++k) values[k] = 0.0;
+    StepMatrix h;
+    for (std::size_t i = first_; i <= last_; ++i) {
+        StepCost(i, GatherStep(x, i), nullptr, &h);
+        const StepSlots& s = steps_[i - first_];
+        for (int r = 0; r < kStepVars; ++r) {
+            for (int c = 0; c <= r; ++c) {
+                if (s.hess_slot[r][c] >= 0) values[s.hess_slot[r][c]] += obj_factor * h(r, c);
+            }
+        }
+    }
+    const MapDistanceTerm map{cfg_.map_sigma_m, cfg_.map_giveup_m, cfg_.map_weight};
+    auto add_pose = [&](std::size_t pose, const Eigen::Matrix3d& m, double factor) {
+        const auto& sl = pose_hess_slot_[pose - first_];
+        values[sl[0]] += factor * m(0, 0), values[sl[1]] += factor * m(1, 0);
+        values[sl[2]] += factor * m(1, 1), values[sl[3]] += factor * m(2, 0);
+        values[sl[4]] += factor * m(2, 1), values[sl[5]] += factor * m(2, 2);
+    };
+    if (field_) {
+        for (std::size_t i = first_; i <= last_; ++i) {
+            auto fs = field_->Query(PosePosition(x, i));
+            if (!fs) continue;
+            Eigen::Matrix3d hm;
+            map.Evaluate(fs->centre.value, fs->centre.gradient, fs->centre.hessian, nullptr, &hm);
+            add_pose(i, hm, obj_factor);
+        }
+        for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
+            auto fs = field_->Query(PosePosition(x, constraint_pose_[k]));
+            if (fs) add_pose(constraint_pose_[k], fs->corridor.hessian, lambda[k]);
+        }
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
+        const auto& sl = scale_hess_slot_[sgm - seg_first_];
+        const double sigma = sgm > 0 ? cfg_.scale_rw_sigma : cfg_.scale_prior_sigma;
+        const double k = obj_factor / (sigma * sigma);
+        if (sl[0] >= 0) values[sl[0]] += k, values[sl[1]] -= k;
+        values[sl[2]] += k;
+    }
+}
+
+void WindowProblem::Store(const double* x) const {
+    for (std::size_t i = first_; i <= last_; ++i) {
+        PoseState& p = state_.poses[i];
+        const double* v = x + PoseVar(i, 0);
+        p.p = Eigen::Vector3d(v[0], v[1], v[2]);
+        p.yaw_rad = v[3];
+    }
+    for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) state_.scales[sgm] = x[ScaleVar(sgm)];
+}
+
+}  // namespace driftcorr
