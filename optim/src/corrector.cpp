@@ -57,17 +57,22 @@ std::vector<std::uint8_t> GateConstraints(const TrajectoryState& s, const Traver
 }
 
 // Solves one window; on failure re-solves it with the soft terms only.
+// Incremental windows carry the soft terms only: a hard corridor on poses whose road is not yet
+// settled pins them to whichever corridor they first touch (at junctions, the crossing road), and
+// the chain then cannot recover (measured: kitti00 gicp ATE 213 m with, 7 m without). The hard
+// constraint is imposed in the refinement, once the soft solution sits on its roads.
 SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
                         const CorrectorConfig& cfg, const IpoptOptions& opt, std::size_t first,
-                        std::size_t last, CorrectionResult& result, bool count_constrained) {
-    std::vector<std::uint8_t> flags = GateConstraints(s, field, cfg.model, first, last);
-    if (count_constrained) {
+                        std::size_t last, CorrectionResult& result, bool hard) {
+    std::vector<std::uint8_t> flags = hard ? GateConstraints(s, field, cfg.model, first, last)
+                                           : std::vector<std::uint8_t>(last - first + 1, 0);
+    if (hard) {
         result.constrained_poses = std::count(flags.begin(), flags.end(), std::uint8_t(1));
     }
     WindowProblem problem(s, field, cfg.model, first, last, flags);
     SolveReport rep = SolveWithIpopt(problem, opt);
     result.iterations += rep.iterations;
-    if (Usable(rep.status)) return rep;
+    if (Usable(rep.status) || !hard) return rep;
     ++result.window_retries;
     WindowProblem soft(s, field, cfg.model, first, last,
                        std::vector<std::uint8_t>(last - first + 1, 0));
