@@ -38,10 +38,24 @@ void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
         b.p = Eigen::Vector3d(a.p.x() + len * std::cos(phi), a.p.y() + len * std::sin(phi), up);
         b.yaw_rad = a.yaw_rad + o.dheading_rad;
     }
-    // New scale segments start from the latest estimate of the scale.
-    for (std::size_t g = s.scale_segment[from]; g < s.scales.size() && g > 0; ++g) {
-        if (g > static_cast<std::size_t>(s.scale_segment[from - 1])) s.scales[g] = s.scales[g - 1];
+}
+
+// Scale segments first entered by steps [from, to] start from the latest scale estimate.
+void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
+    for (int g = s.scale_segment[from - 1] + 1; g <= s.scale_segment[to]; ++g) {
+        s.scales[g] = s.scales[g - 1];
     }
+}
+
+// Share of poses [first, last] farther than limit_m from every traversable centre.
+double OffRoadShare(const TrajectoryState& s, const TraversableField& field, std::size_t first,
+                    std::size_t last, double limit_m) {
+    std::size_t off = 0;
+    for (std::size_t i = first; i <= last; ++i) {
+        auto q = field.Query(s.poses[i].p);
+        if (!q || q->centre.value > limit_m) ++off;
+    }
+    return double(off) / double(last - first + 1);
 }
 
 std::vector<std::uint8_t> GateConstraints(const TrajectoryState& s, const TraversableField* field,
@@ -80,6 +94,40 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
     result.iterations += rep2.iterations;
     rep2.message = rep.message + ", re-solved without hard constraints: " + rep2.message;
     return rep2;
+}
+
+// One incremental window (soft terms). When its solution leaves many poses off the roads, the
+// window fell into a wrong basin (typically: a turn before the junction is reached, with the scale
+// collapsing to keep the poses on the road they left), so it is re-solved from other step-length
+// scale hypotheses, re-composed from the window's fixed start, and the lowest NLL wins.
+SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* field,
+                                   const CorrectorConfig& cfg, std::size_t first, std::size_t last,
+                                   CorrectionResult& result) {
+    const std::vector<PoseState> saved_poses = s.poses;
+    const std::vector<double> saved_scales = s.scales;
+    SolveReport best = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+    if (!field || cfg.restart_scale_factors.empty() ||
+        OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <= cfg.restart_offroad_share) {
+        return best;
+    }
+    std::vector<PoseState> best_poses = s.poses;
+    std::vector<double> best_scales = s.scales;
+    for (double factor : cfg.restart_scale_factors) {
+        s.poses = saved_poses;
+        s.scales = saved_scales;
+        for (int g = s.scale_segment[first]; g <= s.scale_segment[last]; ++g) s.scales[g] *= factor;
+        ComposeOdometry(s, first, last);
+        SolveReport rep = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+        ++result.window_restarts;
+        if (Usable(rep.status) && (!Usable(best.status) || rep.objective < best.objective)) {
+            best = rep;
+            best_poses = s.poses;
+            best_scales = s.scales;
+        }
+    }
+    s.poses = std::move(best_poses);
+    s.scales = std::move(best_scales);
+    return best;
 }
 
 std::size_t AdvanceByDistance(const std::vector<double>& dist, std::size_t from, double metres,
@@ -124,11 +172,16 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
 
     std::size_t done = 0;  // poses [0, done] are corrected
     while (done + 1 < n) {
-        const std::size_t end = std::max(done + 1, AdvanceByDistance(dist, done, cfg.chunk_m, cfg.max_chunk_poses));
+        const std::size_t end =
+            std::max(done + 1, AdvanceByDistance(dist, done, cfg.chunk_m, cfg.max_chunk_poses));
+        SeedNewScales(s, done + 1, end);
         ComposeOdometry(s, done + 1, end);
         std::size_t first = end;
-        while (first > 1 && dist[end] - dist[first - 1] <= cfg.window_m && end - first + 1 < cfg.max_window_poses) --first;
-        SolveReport rep = SolveWindow(s, field, cfg, cfg.window_ipopt, first, end, result, false);
+        while (first > 1 && dist[end] - dist[first - 1] <= cfg.window_m &&
+               end - first + 1 < cfg.max_window_poses) {
+            --first;
+        }
+        SolveReport rep = SolveIncrementalWindow(s, field, cfg, first, end, result);
         ++result.windows;
         if (!Usable(rep.status)) ++result.window_failures;
         done = end;

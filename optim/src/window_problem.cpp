@@ -8,7 +8,7 @@ namespace driftcorr {
 namespace {
 
 constexpr double kInfBound = 1e19;
-constexpr double kScaleMin = 0.5, kScaleMax = 1.5;
+constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
 
 }  // namespace
 

@@ -5,6 +5,7 @@
 // into CorrectionResult.
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "driftcorr/core/types.h"
 #include "driftcorr/mapping/traversable_field.h"
@@ -20,6 +21,12 @@ struct CorrectorConfig {
     std::size_t max_chunk_poses = 400;   ///< cap per chunk (long stops) [poses]
     std::size_t max_window_poses = 1500; ///< cap per window [poses]
     bool refine = true;              ///< final whole-trajectory solve
+    /// A window whose solution leaves more than restart_offroad_share of its poses farther than
+    /// restart_offroad_m from every road is re-solved from these step-length scale hypotheses
+    /// (multiplying the current scale); the lowest NLL wins. Empty: no restarts.
+    std::vector<double> restart_scale_factors = {1.3, 0.8, 1.7};
+    double restart_offroad_m = 6.0;      ///< [m]
+    double restart_offroad_share = 0.05; ///< [-]
     double stationary_m = 1e-3;      ///< steps shorter than this are stops [m]
     IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0};
     IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
@@ -42,6 +49,7 @@ struct CorrectionResult {
     std::size_t windows = 0;
     std::size_t window_retries = 0;    ///< windows re-solved without hard constraints
     std::size_t window_failures = 0;   ///< windows that failed even then
+    std::size_t window_restarts = 0;   ///< extra window solves from other scale hypotheses
     int iterations = 0;                ///< Ipopt iterations, all solves
     std::size_t constrained_poses = 0; ///< poses with the hard corridor constraint (refine)
     double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range

@@ -1,0 +1,383 @@
+// Tests of the NLL cost terms (core/src/cost_terms.cpp): every term costs zero with zero gradient
+// at a step block built consistently with its observation ("value at truth"), and its analytic
+// gradient and Hessian equal central differences at random points (fixed seeds).
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <string>
+
+#include "driftcorr/core/cost_terms.h"
+
+namespace driftcorr {
+namespace {
+
+// Central differences: h = 1e-6 on variables of order 1..10 keeps both the truncation error
+// (h^2 * f''' ~ 1e-10) and the round-off error (eps * f / h ~ 1e-8 for costs below 100) far
+// below the tolerance |analytic - numeric| <= kAbsTol + kRelTol * max(|analytic|, |numeric|).
+constexpr double kStep = 1e-6;
+constexpr double kAbsTol = 1e-6;
+constexpr double kRelTol = 1e-5;
+
+bool Close(double analytic, double numeric) {
+    return std::abs(analytic - numeric) <=
+           kAbsTol + kRelTol * std::max(std::abs(analytic), std::abs(numeric));
+}
+
+using StepFn = std::function<double(const StepVector&, StepVector*, StepMatrix*)>;
+
+/// The observation parameters shared by all step terms; a truth block satisfies all of them.
+struct StepParams {
+    double length_m = 2.5, direction_rad = 0.3, dheading_rad = -0.2, dup_m = 0.4;
+    double sigma = 0.3, weight = 0.8, scale = 1.1;
+};
+
+enum class TermKind { kLength, kDirection, kHeadingChange, kPreservation, kHeight };
+
+std::string Name(TermKind k) {
+    switch (k) {
+        case TermKind::kLength: return "StepLength";
+        case TermKind::kDirection: return "StepDirection";
+        case TermKind::kHeadingChange: return "HeadingChange";
+        case TermKind::kPreservation: return "HeadingPreservation";
+        default: return "HeightChange";
+    }
+}
+
+StepFn MakeTerm(TermKind kind, const StepParams& p) {
+    switch (kind) {
+        case TermKind::kLength: {
+            const StepLengthTerm t{p.length_m, p.direction_rad, p.sigma, p.weight};
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+        }
+        case TermKind::kDirection: {
+            const StepDirectionTerm t{p.direction_rad, p.sigma, p.weight};
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+        }
+        case TermKind::kHeadingChange: {
+            const HeadingChangeTerm t{p.dheading_rad, p.sigma, p.weight};
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+        }
+        case TermKind::kPreservation: {
+            const HeadingPreservationTerm t{p.sigma, p.weight};
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+        }
+        default: {
+            const HeightChangeTerm t{p.dup_m, p.sigma, p.weight};
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+        }
+    }
+}
+
+/// Pose a at (3, -2, 1) with yaw 0.4; pose b displaced by s * L along yaw_a + direction, raised
+/// by dup and turned by dheading: the block every step observation agrees with.
+StepVector TruthBlock(const StepParams& p) {
+    StepVector x;
+    const double yaw_a = 0.4, phi = yaw_a + p.direction_rad, len = p.scale * p.length_m;
+    x << 3.0, -2.0, 1.0, yaw_a, 3.0 + len * std::cos(phi), -2.0 + len * std::sin(phi),
+        1.0 + p.dup_m, yaw_a + p.dheading_rad, p.scale;
+    return x;
+}
+
+StepParams RandomParams(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0), pos(0.0, 1.0);
+    StepParams p;
+    p.length_m = 5.0 * pos(rng);
+    p.direction_rad = 3.0 * u(rng);
+    p.dheading_rad = 1.5 * u(rng);
+    p.dup_m = 2.0 * u(rng);
+    p.sigma = 0.3 + 1.7 * pos(rng);
+    p.weight = 0.1 + 0.9 * pos(rng);
+    return p;
+}
+
+StepVector RandomBlock(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    StepVector x;
+    for (int k = 0; k < kStepVars; ++k) x[k] = 5.0 * u(rng);
+    x[kYawA] = 3.5 * u(rng);
+    x[kYawB] = 3.5 * u(rng);
+    x[kScale] = 1.0 + 0.3 * u(rng);
+    return x;
+}
+
+/// Expects the analytic gradient and Hessian of `f` at x to equal central differences (of the
+/// cost, and of the analytic gradient respectively).
+void ExpectDerivativesMatch(const StepFn& f, const StepVector& x, const std::string& where) {
+    StepVector g;
+    StepMatrix h;
+    f(x, &g, &h);
+    for (int k = 0; k < kStepVars; ++k) {
+        StepVector xp = x, xm = x;
+        xp[k] += kStep;
+        xm[k] -= kStep;
+        const double num_g = (f(xp, nullptr, nullptr) - f(xm, nullptr, nullptr)) / (2.0 * kStep);
+        EXPECT_PRED2(Close, g[k], num_g) << where << " d/dx[" << k << "]";
+        StepVector gp, gm;
+        f(xp, &gp, nullptr);
+        f(xm, &gm, nullptr);
+        const StepVector num_h = (gp - gm) / (2.0 * kStep);
+        for (int r = 0; r < kStepVars; ++r) {
+            EXPECT_PRED2(Close, h(r, k), num_h[r]) << where << " d2/dx[" << r << "]dx[" << k << "]";
+        }
+    }
+    EXPECT_TRUE(h.isApprox(h.transpose(), 1e-12)) << where << " Hessian not symmetric";
+}
+
+class StepTermTest : public ::testing::TestWithParam<TermKind> {};
+
+TEST_P(StepTermTest, ZeroCostAndGradientAtTruth) {
+    StepParams p;
+    if (GetParam() == TermKind::kPreservation) p.dheading_rad = 0.0;  // its truth: no turn
+    const StepFn f = MakeTerm(GetParam(), p);
+    StepVector g;
+    StepMatrix h;
+    EXPECT_NEAR(f(TruthBlock(p), &g, &h), 0.0, 1e-20);
+    EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-12) << g.transpose();
+    // The Gauss-Newton part remains: positive semi-definite at truth.
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<StepMatrix>(h).eigenvalues().minCoeff(), -1e-12);
+}
+
+TEST_P(StepTermTest, DerivativesMatchCentralDifferencesAtRandomPoints) {
+    std::mt19937 rng(1234u + static_cast<unsigned>(GetParam()));
+    for (int trial = 0; trial < 50; ++trial) {
+        const StepParams p = RandomParams(rng);
+        const StepVector x = RandomBlock(rng);
+        ExpectDerivativesMatch(MakeTerm(GetParam(), p), x, "trial " + std::to_string(trial));
+    }
+}
+
+TEST_P(StepTermTest, DerivativesMatchNearTruth) {
+    std::mt19937 rng(99u + static_cast<unsigned>(GetParam()));
+    std::normal_distribution<double> n(0.0, 0.05);
+    StepParams p;
+    const StepFn f = MakeTerm(GetParam(), p);
+    for (int trial = 0; trial < 20; ++trial) {
+        StepVector x = TruthBlock(p);
+        for (int k = 0; k < kStepVars; ++k) x[k] += n(rng);
+        ExpectDerivativesMatch(f, x, "trial " + std::to_string(trial));
+    }
+}
+
+TEST_P(StepTermTest, StationaryStepIsFiniteEverywhere) {
+    // L = 0, direction 0 (what ComputeObservations reports for a stop); poses coincide or not.
+    StepParams p;
+    p.length_m = 0.0;
+    p.direction_rad = 0.0;
+    const StepFn f = MakeTerm(GetParam(), p);
+    std::mt19937 rng(7u + static_cast<unsigned>(GetParam()));
+    for (int trial = 0; trial < 20; ++trial) {
+        StepVector x = RandomBlock(rng);
+        if (trial % 2 == 0) x.segment<3>(kXb) = x.segment<3>(kXa);  // exactly stationary
+        StepVector g;
+        StepMatrix h;
+        const double c = f(x, &g, &h);
+        EXPECT_TRUE(std::isfinite(c));
+        EXPECT_TRUE(g.allFinite());
+        EXPECT_TRUE(h.allFinite());
+        ExpectDerivativesMatch(f, x, "stationary trial " + std::to_string(trial));
+    }
+    if (GetParam() == TermKind::kLength || GetParam() == TermKind::kDirection) {
+        StepVector x = TruthBlock(p);  // pose b == pose a
+        StepVector g;
+        EXPECT_NEAR(f(x, &g, nullptr), 0.0, 1e-20);
+        EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-12);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllStepTerms, StepTermTest,
+                         ::testing::Values(TermKind::kLength, TermKind::kDirection,
+                                           TermKind::kHeadingChange, TermKind::kPreservation,
+                                           TermKind::kHeight),
+                         [](const ::testing::TestParamInfo<TermKind>& param_info) {
+                             return Name(param_info.param);
+                         });
+
+TEST(StepLengthTerm, CostIsHalfWeightedSquaredResidual) {
+    // Pose b 3 m ahead of a along yaw_a + direction, observed 2 m at scale 1: r = 1 m.
+    const StepLengthTerm t{2.0, 0.5, 0.25, 0.5};
+    StepVector x = StepVector::Zero();
+    x[kYawA] = 0.2;
+    x[kXb] = 3.0 * std::cos(0.7);
+    x[kYb] = 3.0 * std::sin(0.7);
+    x[kScale] = 1.0;
+    EXPECT_NEAR(t.Evaluate(x, nullptr, nullptr), 0.5 * 0.5 * (1.0 / 0.25) * (1.0 / 0.25), 1e-12);
+}
+
+TEST(StepDirectionTerm, SidewaysMotionIsPenalisedWithSign) {
+    // Moving 1 m to the left of yaw_a + direction: r = +1.
+    const StepDirectionTerm t{0.0, 0.5, 1.0};
+    StepVector x = StepVector::Zero();
+    x[kYb] = 1.0;  // yaw_a = 0, motion along +North = left
+    StepVector g;
+    EXPECT_NEAR(t.Evaluate(x, &g, nullptr), 0.5 * 4.0, 1e-12);
+    EXPECT_NEAR(g[kYb], 4.0, 1e-12);  // k * r * dr/dy_b = 4 * 1 * 1
+}
+
+// ---- Scale terms -------------------------------------------------------------------------
+
+TEST(ScaleRandomWalkTerm, ZeroAtTruthAndDerivativesMatch) {
+    const ScaleRandomWalkTerm t{0.02, 0.7};
+    Eigen::Vector2d g;
+    Eigen::Matrix2d h;
+    EXPECT_NEAR(t.Evaluate(Eigen::Vector2d(1.1, 1.1), &g, &h), 0.0, 1e-20);
+    EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-12);
+    std::mt19937 rng(2024u);
+    std::uniform_real_distribution<double> u(0.7, 1.3);
+    for (int trial = 0; trial < 50; ++trial) {
+        const Eigen::Vector2d x(u(rng), u(rng));
+        t.Evaluate(x, &g, &h);
+        for (int k = 0; k < 2; ++k) {
+            Eigen::Vector2d xp = x, xm = x;
+            xp[k] += kStep;
+            xm[k] -= kStep;
+            const double num =
+                (t.Evaluate(xp, nullptr, nullptr) - t.Evaluate(xm, nullptr, nullptr)) / (2 * kStep);
+            EXPECT_PRED2(Close, g[k], num) << "trial " << trial << " k " << k;
+            Eigen::Vector2d gp, gm;
+            t.Evaluate(xp, &gp, nullptr);
+            t.Evaluate(xm, &gm, nullptr);
+            for (int r = 0; r < 2; ++r) {
+                EXPECT_PRED2(Close, h(r, k), (gp[r] - gm[r]) / (2 * kStep)) << "trial " << trial;
+            }
+        }
+    }
+    EXPECT_NEAR(t.Evaluate(Eigen::Vector2d(1.0, 1.04), nullptr, nullptr),
+                0.5 * 0.7 * (0.04 / 0.02) * (0.04 / 0.02), 1e-12);
+}
+
+TEST(ScalePriorTerm, ZeroAtOneAndDerivativesMatch) {
+    const ScalePriorTerm t{0.1, 0.9};
+    double g = -1.0, h = -1.0;
+    EXPECT_NEAR(t.Evaluate(1.0, &g, &h), 0.0, 1e-20);
+    EXPECT_NEAR(g, 0.0, 1e-15);
+    EXPECT_NEAR(h, 0.9 / 0.01, 1e-9);
+    std::mt19937 rng(77u);
+    std::uniform_real_distribution<double> u(0.5, 1.5);
+    for (int trial = 0; trial < 50; ++trial) {
+        const double s = u(rng);
+        t.Evaluate(s, &g, &h);
+        const double num_g =
+            (t.Evaluate(s + kStep, nullptr, nullptr) - t.Evaluate(s - kStep, nullptr, nullptr)) /
+            (2 * kStep);
+        double gp, gm;
+        t.Evaluate(s + kStep, &gp, nullptr);
+        t.Evaluate(s - kStep, &gm, nullptr);
+        EXPECT_PRED2(Close, g, num_g) << "s = " << s;
+        EXPECT_PRED2(Close, h, (gp - gm) / (2 * kStep)) << "s = " << s;
+    }
+}
+
+// ---- Map distance term -------------------------------------------------------------------
+
+/// A synthetic distance field d(p) = |p - c| with its exact gradient and Hessian, composed with
+/// the term: the total cost f(p) = rho(d(p)) and its analytic derivatives with respect to p.
+struct PointDistance {
+    Eigen::Vector3d c{1.0, -2.0, 0.5};
+    double Cost(const MapDistanceTerm& t, const Eigen::Vector3d& p, Eigen::Vector3d* grad,
+                Eigen::Matrix3d* hess) const {
+        const Eigen::Vector3d v = p - c;
+        const double d = v.norm();
+        const Eigen::Vector3d u = v / d;
+        const Eigen::Matrix3d hd = (Eigen::Matrix3d::Identity() - u * u.transpose()) / d;
+        return t.Evaluate(d, u, hd, grad, hess);
+    }
+};
+
+TEST(MapDistanceTerm, ZeroCostAndGradientOnTheCentre) {
+    const MapDistanceTerm t{2.0, 8.0, 1.0};
+    Eigen::Vector3d g;
+    Eigen::Matrix3d h;
+    const Eigen::Vector3d grad_d(0.0, 1.0, 0.0);
+    EXPECT_NEAR(t.Evaluate(0.0, grad_d, Eigen::Matrix3d::Zero(), &g, &h), 0.0, 1e-20);
+    EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-15);
+    // Curvature there is w / sigma^2 along the distance gradient.
+    EXPECT_NEAR(h(1, 1), 1.0 / 4.0, 1e-12);
+}
+
+TEST(MapDistanceTerm, TotalDerivativesMatchCentralDifferences) {
+    const PointDistance field;
+    std::mt19937 rng(31415u);
+    std::uniform_real_distribution<double> u(-1.0, 1.0), pos(0.0, 1.0);
+    for (int trial = 0; trial < 50; ++trial) {
+        const MapDistanceTerm t{0.5 + 2.5 * pos(rng), 2.0 + 10.0 * pos(rng), 0.1 + 0.9 * pos(rng)};
+        // Random direction, distance 0.5 .. 30 m from the centre (inside and beyond give-up).
+        Eigen::Vector3d dir(u(rng), u(rng), u(rng));
+        dir.normalize();
+        const Eigen::Vector3d p = field.c + (0.5 + 29.5 * pos(rng)) * dir;
+        Eigen::Vector3d g;
+        Eigen::Matrix3d h;
+        field.Cost(t, p, &g, &h);
+        for (int k = 0; k < 3; ++k) {
+            Eigen::Vector3d pp = p, pm = p;
+            pp[k] += kStep;
+            pm[k] -= kStep;
+            const double num_g =
+                (field.Cost(t, pp, nullptr, nullptr) - field.Cost(t, pm, nullptr, nullptr)) /
+                (2.0 * kStep);
+            EXPECT_PRED2(Close, g[k], num_g) << "trial " << trial << " k " << k;
+            Eigen::Vector3d gp, gm;
+            field.Cost(t, pp, &gp, nullptr);
+            field.Cost(t, pm, &gm, nullptr);
+            for (int r = 0; r < 3; ++r) {
+                EXPECT_PRED2(Close, h(r, k), (gp[r] - gm[r]) / (2.0 * kStep))
+                    << "trial " << trial << " (" << r << ", " << k << ")";
+            }
+        }
+        EXPECT_TRUE(h.isApprox(h.transpose(), 1e-12));
+    }
+}
+
+TEST(MapDistanceTerm, DerivativesWithRespectToDistanceMatch) {
+    // The scalar profile rho(d): d rho / dd and d2 rho / dd2 via a unit gradient along x.
+    const MapDistanceTerm t{2.0, 8.0, 0.6};
+    const Eigen::Vector3d ex = Eigen::Vector3d::UnitX();
+    const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
+    auto rho = [&](double d) { return t.Evaluate(d, ex, zero, nullptr, nullptr); };
+    for (double d = 0.0; d <= 40.0; d += 0.37) {
+        Eigen::Vector3d g;
+        Eigen::Matrix3d h;
+        t.Evaluate(d, ex, zero, &g, &h);
+        EXPECT_PRED2(Close, g.x(), (rho(d + kStep) - rho(d - kStep)) / (2.0 * kStep)) << "d " << d;
+        Eigen::Vector3d gp, gm;
+        t.Evaluate(d + kStep, ex, zero, &gp, nullptr);
+        t.Evaluate(d - kStep, ex, zero, &gm, nullptr);
+        EXPECT_PRED2(Close, h(0, 0), (gp.x() - gm.x()) / (2.0 * kStep)) << "d " << d;
+    }
+}
+
+TEST(MapDistanceTerm, GaussianNearTheCentreAndGivesUpFarAway) {
+    const double sigma = 2.0, giveup = 8.0, w = 0.7;
+    const MapDistanceTerm t{sigma, giveup, w};
+    const Eigen::Vector3d ex = Eigen::Vector3d::UnitX();
+    const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
+    // d << c: rho = 0.5 w (d / sigma)^2 (1 - d^2 / (4 c^2) + ...), within 1% for d <= c / 10.
+    for (double d : {0.01, 0.1, 0.4, 0.8}) {
+        const double gaussian = 0.5 * w * (d / sigma) * (d / sigma);
+        EXPECT_NEAR(t.Evaluate(d, ex, zero, nullptr, nullptr), gaussian, 0.01 * gaussian)
+            << "d = " << d;
+        Eigen::Vector3d g;
+        t.Evaluate(d, ex, zero, &g, nullptr);
+        EXPECT_NEAR(g.x(), w * d / (sigma * sigma), 0.01 * w * d / (sigma * sigma));
+    }
+    // d >> c: no pull, and the cost saturates at w (c / sigma)^2.
+    for (double d : {6.0 * giveup, 10.0 * giveup, 100.0 * giveup}) {
+        Eigen::Vector3d g;
+        Eigen::Matrix3d h;
+        const double c = t.Evaluate(d, ex, zero, &g, &h);
+        EXPECT_LT(g.norm(), 1e-6) << "d = " << d;
+        EXPECT_LT(h.cwiseAbs().maxCoeff(), 1e-6) << "d = " << d;
+        EXPECT_NEAR(c, w * (giveup / sigma) * (giveup / sigma), 1e-6);
+    }
+    // Beyond the inflection d = c the cost flattens: the pull decreases with distance.
+    Eigen::Vector3d g1, g2;
+    t.Evaluate(1.5 * giveup, ex, zero, &g1, nullptr);
+    t.Evaluate(2.5 * giveup, ex, zero, &g2, nullptr);
+    EXPECT_LT(g2.x(), g1.x());
+}
+
+}  // namespace
+}  // namespace driftcorr

@@ -1,0 +1,359 @@
+// Tests of the step observations (core/src/observables.cpp), the accuracy metrics
+// (core/src/metrics.cpp) and the frame conventions (core/src/frames.cpp), all on hand-built
+// trajectories whose answers can be worked out on paper.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "driftcorr/core/angles.h"
+#include "driftcorr/core/frames.h"
+#include "driftcorr/core/metrics.h"
+#include "driftcorr/core/observables.h"
+
+namespace driftcorr {
+namespace {
+
+constexpr double kTol = 1e-12;
+
+PlanarTrajectory MakePlanar(const std::vector<Eigen::Vector2d>& p, std::vector<double> yaw = {},
+                            std::vector<double> up = {}) {
+    PlanarTrajectory t;
+    for (std::size_t i = 0; i < p.size(); ++i) t.t_s.push_back(0.5 * double(i));
+    t.p_en = p;
+    t.up_m = up.empty() ? std::vector<double>(p.size(), 0.0) : up;
+    t.yaw_rad = std::move(yaw);
+    return t;
+}
+
+// ---- Observations ----------------------------------------------------------------------------
+
+TEST(Observables, SquareWithYawHasKnownLengthsTurnsAndUnwrappedHeadings) {
+    // A 10 m square driven counter-clockwise, facing along each side; the yaw of pose 3 is given
+    // wrapped (-pi/2), the unwrapped headings climb to 2 pi.
+    const PlanarTrajectory t = MakePlanar({{0, 0}, {10, 0}, {10, 10}, {0, 10}, {0, 0}},
+                                          {0.0, kPi / 2, kPi, -kPi / 2, 0.0}, {0, 0, 1, 1, 0});
+    const std::vector<double> yaw = UnwrappedHeadings(t);
+    ASSERT_EQ(yaw.size(), 5u);
+    for (int i = 0; i < 5; ++i) EXPECT_NEAR(yaw[i], i * kPi / 2, kTol) << "pose " << i;
+
+    const std::vector<StepObservation> obs = ComputeObservations(t);
+    ASSERT_EQ(obs.size(), 5u);
+    EXPECT_EQ(obs[0].length_m, 0.0);
+    EXPECT_EQ(obs[0].dheading_rad, 0.0);
+    for (int i = 1; i < 5; ++i) {
+        EXPECT_NEAR(obs[i].dt_s, 0.5, kTol);
+        EXPECT_NEAR(obs[i].length_m, 10.0, kTol) << "step " << i;
+        EXPECT_NEAR(obs[i].direction_rad, 0.0, 1e-9) << "step " << i;
+        EXPECT_NEAR(obs[i].dheading_rad, kPi / 2, kTol) << "step " << i;
+        EXPECT_FALSE(obs[i].stationary);
+    }
+    EXPECT_NEAR(obs[1].dup_m, 0.0, kTol);
+    EXPECT_NEAR(obs[2].dup_m, 1.0, kTol);
+    EXPECT_NEAR(obs[4].dup_m, -1.0, kTol);
+}
+
+TEST(Observables, DirectionIsRelativeToThePreviousHeading) {
+    // Facing East throughout while moving North then North-West: a crab walk.
+    const PlanarTrajectory t = MakePlanar({{0, 0}, {0, 2}, {-3, 5}}, {0.0, 0.0, 0.0});
+    const std::vector<StepObservation> obs = ComputeObservations(t);
+    EXPECT_NEAR(obs[1].direction_rad, kPi / 2, kTol);
+    EXPECT_NEAR(obs[1].length_m, 2.0, kTol);
+    EXPECT_NEAR(obs[2].direction_rad, 3 * kPi / 4, kTol);
+    EXPECT_NEAR(obs[2].length_m, 3.0 * std::sqrt(2.0), kTol);
+    EXPECT_NEAR(obs[2].dheading_rad, 0.0, kTol);
+}
+
+TEST(Observables, WithoutYawHeadingsFollowStepDirections) {
+    // The square again, no orientation: pose i looks along step i -> i+1; the last pose keeps
+    // the last step's direction. Every step then has direction 0; the turns land on the corners.
+    const PlanarTrajectory t =
+        MakePlanar({{0, 0}, {5, 0}, {10, 0}, {10, 5}, {10, 10}, {5, 10}, {0, 10}});
+    const std::vector<double> yaw = UnwrappedHeadings(t);
+    const std::vector<double> expected = {0, 0, kPi / 2, kPi / 2, kPi, kPi, kPi};
+    ASSERT_EQ(yaw.size(), expected.size());
+    for (std::size_t i = 0; i < yaw.size(); ++i) EXPECT_NEAR(yaw[i], expected[i], kTol) << i;
+    const std::vector<StepObservation> obs = ComputeObservations(t);
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        EXPECT_NEAR(obs[i].length_m, 5.0, kTol) << "step " << i;
+        EXPECT_NEAR(obs[i].direction_rad, 0.0, kTol) << "step " << i;
+        EXPECT_NEAR(obs[i].dheading_rad, expected[i] - expected[i - 1], kTol) << "step " << i;
+    }
+}
+
+TEST(Observables, StopIsStationaryAndHeadingIsCarriedAcrossIt) {
+    // East 2 m, stop for two steps (one exact repeat, one 0.5 mm jitter), then North.
+    const PlanarTrajectory t =
+        MakePlanar({{0, 0}, {1, 0}, {2, 0}, {2, 0}, {2.0005, 0}, {2.0005, 1}, {2.0005, 2}});
+    const std::vector<double> yaw = UnwrappedHeadings(t);
+    // Poses 2..4 look along the next moving step (North), across the stop.
+    const std::vector<double> expected = {0, 0, kPi / 2, kPi / 2, kPi / 2, kPi / 2, kPi / 2};
+    for (std::size_t i = 0; i < yaw.size(); ++i) EXPECT_NEAR(yaw[i], expected[i], kTol) << i;
+
+    const std::vector<StepObservation> obs = ComputeObservations(t, 1e-3);
+    for (int i : {3, 4}) {
+        EXPECT_TRUE(obs[i].stationary) << "step " << i;
+        EXPECT_EQ(obs[i].length_m, 0.0) << "step " << i;
+        EXPECT_EQ(obs[i].direction_rad, 0.0) << "step " << i;
+        EXPECT_NEAR(obs[i].dheading_rad, 0.0, kTol) << "step " << i;
+    }
+    for (int i : {1, 2, 5, 6}) EXPECT_FALSE(obs[i].stationary) << "step " << i;
+    EXPECT_NEAR(obs[2].dheading_rad, kPi / 2, kTol);  // the turn lands before the stop
+    EXPECT_NEAR(obs[5].direction_rad, 0.0, kTol);     // carried heading matches the departure
+    // Total turn across the whole trajectory is preserved.
+    double total = 0.0;
+    for (const auto& o : obs) total += o.dheading_rad;
+    EXPECT_NEAR(total, kPi / 2, kTol);
+}
+
+TEST(Observables, StopWithYawKeepsTheGivenHeadings) {
+    const PlanarTrajectory t = MakePlanar({{0, 0}, {1, 0}, {1, 0}, {1, 0}, {2, 0}},
+                                          {0.1, 0.1, 0.3, 0.3, 0.3});
+    const std::vector<StepObservation> obs = ComputeObservations(t);
+    EXPECT_TRUE(obs[2].stationary);
+    EXPECT_TRUE(obs[3].stationary);
+    EXPECT_NEAR(obs[2].dheading_rad, 0.2, kTol);  // turning on the spot is still observed
+    EXPECT_NEAR(obs[3].dheading_rad, 0.0, kTol);
+    EXPECT_NEAR(obs[4].direction_rad, -0.3, kTol);
+    EXPECT_NEAR(obs[1].direction_rad, -0.1, kTol);
+}
+
+TEST(Observables, HeadingsUnwrapAcrossPlusMinusPi) {
+    const PlanarTrajectory t = MakePlanar({{0, 0}, {-1, 0}, {-2, 0}, {-3, 0}},
+                                          {3.0, -3.0, 3.1, -3.1});
+    const std::vector<double> yaw = UnwrappedHeadings(t);
+    EXPECT_NEAR(yaw[0], 3.0, kTol);
+    EXPECT_NEAR(yaw[1], 2 * kPi - 3.0, 1e-12);
+    EXPECT_NEAR(yaw[2], 3.1, 1e-12);
+    EXPECT_NEAR(yaw[3], 2 * kPi - 3.1, 1e-12);
+    const std::vector<StepObservation> obs = ComputeObservations(t);
+    EXPECT_NEAR(obs[1].dheading_rad, 2 * kPi - 6.0, 1e-12);
+    EXPECT_NEAR(obs[2].dheading_rad, 6.2 - 2 * kPi, 1e-12);
+    // Moving West (atan2 = pi) while facing 3.0 rad: direction pi - 3.0, wrapped small.
+    EXPECT_NEAR(obs[1].direction_rad, kPi - 3.0, 1e-12);
+    EXPECT_NEAR(obs[2].direction_rad, kPi - (2 * kPi - 3.0), 1e-12);
+}
+
+TEST(Observables, WithoutYawUnwrapsWestboundZigZag) {
+    // Steps heading just above and just below West alternate between +pi and -pi directions.
+    const PlanarTrajectory t = MakePlanar({{0, 0}, {-1, 0.01}, {-2, 0}, {-3, 0.01}, {-4, 0}});
+    const std::vector<double> yaw = UnwrappedHeadings(t);
+    for (std::size_t i = 1; i < yaw.size(); ++i) {
+        EXPECT_LT(std::abs(yaw[i] - yaw[i - 1]), 0.1) << "jump at pose " << i;
+    }
+}
+
+// ---- Metrics ---------------------------------------------------------------------------------
+
+TEST(Metrics, TenPoseExampleWithKnownErrors) {
+    // Ground truth along East every 10 m; the estimate is off by e_i metres in the direction
+    // (0.6, 0.8), and its height is off by 2 m on poses 2, 5 and 7 (1.5 m on pose 9: on floor).
+    const std::vector<double> e = {1, 0, 3, 2, 5, 4, 9, 6, 8, 7};
+    std::vector<Eigen::Vector2d> p_gt, p;
+    std::vector<double> up_gt(10, 3.0), up(10, 3.0);
+    for (int i = 0; i < 10; ++i) {
+        p_gt.emplace_back(10.0 * i, 0.0);
+        p.push_back(p_gt.back() + e[i] * Eigen::Vector2d(0.6, 0.8));
+    }
+    up[2] += 2.0, up[5] -= 2.0, up[7] += 2.0, up[9] += 1.5;
+    const PlanarTrajectory gt = MakePlanar(p_gt, {}, up_gt), est = MakePlanar(p, {}, up);
+
+    const std::vector<double> errs = HorizontalErrors(est, gt);
+    for (int i = 0; i < 10; ++i) EXPECT_NEAR(errs[i], e[i], 1e-12);
+
+    const ErrorMetrics m = ComputeMetrics(est, gt);
+    EXPECT_EQ(m.poses, 10u);
+    EXPECT_NEAR(m.ate_m, std::sqrt(285.0 / 10.0), 1e-12);  // sum of 0..9 squared = 285
+    EXPECT_NEAR(m.mean_m, 4.5, 1e-12);
+    EXPECT_NEAR(m.final_m, 7.0, 1e-12);
+    EXPECT_NEAR(m.max_m, 9.0, 1e-12);
+    EXPECT_NEAR(m.p90_m, 8.0, 1e-12);  // 9th of 10 sorted errors
+    EXPECT_NEAR(m.floor_accuracy, 0.7, 1e-12);
+    EXPECT_NEAR(m.path_length_m, 90.0, 1e-12);
+    EXPECT_EQ(m.drift_pct, 0.0);  // path shorter than the shortest 100 m segment
+}
+
+TEST(Metrics, PerfectTrajectoryScoresZero) {
+    std::vector<Eigen::Vector2d> p;
+    for (int i = 0; i < 150; ++i) p.emplace_back(2.0 * i, 0.01 * i * i);
+    const PlanarTrajectory gt = MakePlanar(p);
+    const ErrorMetrics m = ComputeMetrics(gt, gt);
+    EXPECT_EQ(m.ate_m, 0.0);
+    EXPECT_EQ(m.max_m, 0.0);
+    EXPECT_EQ(m.p90_m, 0.0);
+    EXPECT_NEAR(m.drift_pct, 0.0, 1e-9);
+    EXPECT_EQ(m.floor_accuracy, 1.0);
+    EXPECT_GT(m.path_length_m, 100.0);
+}
+
+TEST(Metrics, DriftOfAUniformlyScaledStraightLine) {
+    // Straight East at 1 m steps for 301 m; the estimate is 2% too long. Every 100..300 m
+    // segment of ground truth is covered 2% too far: drift 2%.
+    std::vector<Eigen::Vector2d> p_gt, p;
+    for (int i = 0; i <= 300; ++i) {
+        p_gt.emplace_back(double(i), 0.0);
+        p.emplace_back(1.02 * i, 0.0);
+    }
+    const ErrorMetrics m = ComputeMetrics(MakePlanar(p), MakePlanar(p_gt));
+    EXPECT_NEAR(m.drift_pct, 2.0, 1e-9);
+    EXPECT_NEAR(m.final_m, 6.0, 1e-9);
+    EXPECT_NEAR(m.path_length_m, 300.0, 1e-9);
+}
+
+TEST(Metrics, DistanceTravelledAccumulatesHorizontalSteps) {
+    const PlanarTrajectory gt = MakePlanar({{0, 0}, {3, 4}, {3, 4}, {3, 10}}, {}, {0, 5, 9, 0});
+    const std::vector<double> s = DistanceTravelled(gt);
+    ASSERT_EQ(s.size(), 4u);
+    EXPECT_NEAR(s[0], 0.0, kTol);
+    EXPECT_NEAR(s[1], 5.0, kTol);
+    EXPECT_NEAR(s[2], 5.0, kTol);
+    EXPECT_NEAR(s[3], 11.0, kTol);
+}
+
+// ---- Frames ----------------------------------------------------------------------------------
+
+Trajectory RandomTrajectory(unsigned seed, int n) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Trajectory t;
+    for (int i = 0; i < n; ++i) {
+        t.t_s.push_back(0.1 * i);
+        t.p_frame.emplace_back(50.0 * u(rng), 5.0 * u(rng), 50.0 * u(rng));
+        // Mostly level bodies with a random heading, some tilt.
+        const Eigen::Quaterniond q(Eigen::AngleAxisd(kPi * u(rng), Eigen::Vector3d::UnitY()) *
+                                   Eigen::AngleAxisd(0.2 * u(rng), Eigen::Vector3d::UnitX()) *
+                                   Eigen::AngleAxisd(0.2 * u(rng), Eigen::Vector3d::UnitZ()));
+        t.q_frame_body.push_back(q.normalized());
+    }
+    return t;
+}
+
+double AngleBetween(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+    return a.angularDistance(b);
+}
+
+class FrameRoundTrip : public ::testing::TestWithParam<FrameAxes> {};
+
+TEST_P(FrameRoundTrip, ToPlanarThenFromPlanarIsIdentity) {
+    PlanarAnchor anchor;
+    anchor.yaw_rad = 0.7;
+    anchor.origin_en = Eigen::Vector2d(1250.0, -340.0);
+    anchor.origin_up_m = 12.5;
+    const Trajectory traj = RandomTrajectory(4242u, 40);
+    const PlanarTrajectory planar = ToPlanar(traj, GetParam(), anchor);
+    ASSERT_TRUE(planar.HasYaw());
+    const Trajectory back = FromPlanar(planar, planar, traj, GetParam(), anchor);
+    ASSERT_EQ(back.size(), traj.size());
+    ASSERT_TRUE(back.HasOrientation());
+    for (std::size_t i = 0; i < traj.size(); ++i) {
+        EXPECT_LT((back.p_frame[i] - traj.p_frame[i]).norm(), 1e-9) << "pose " << i;
+        EXPECT_LT(AngleBetween(back.q_frame_body[i], traj.q_frame_body[i]), 1e-9) << "pose " << i;
+        EXPECT_EQ(back.t_s[i], traj.t_s[i]);
+    }
+}
+
+TEST_P(FrameRoundTrip, HeadingCorrectionTurnsTheBodyByThatAngle) {
+    // Correct every pose by a shift and a turn: placing the result again gives the corrected
+    // positions and yaw (the turn is about Up, counter-clockwise in East-North).
+    PlanarAnchor anchor;
+    anchor.yaw_rad = -1.1;
+    anchor.origin_en = Eigen::Vector2d(-20.0, 30.0);
+    anchor.origin_up_m = -3.0;
+    const Trajectory traj = RandomTrajectory(777u, 25);
+    const PlanarTrajectory reference = ToPlanar(traj, GetParam(), anchor);
+    PlanarTrajectory corrected = reference;
+    for (std::size_t i = 0; i < corrected.size(); ++i) {
+        corrected.p_en[i] += Eigen::Vector2d(3.0, -1.0 + 0.1 * i);
+        corrected.up_m[i] += 0.5;
+        corrected.yaw_rad[i] += 0.3 - 0.02 * i;
+    }
+    const Trajectory out = FromPlanar(corrected, reference, traj, GetParam(), anchor);
+    const PlanarTrajectory again = ToPlanar(out, GetParam(), anchor);
+    for (std::size_t i = 0; i < corrected.size(); ++i) {
+        EXPECT_LT((again.p_en[i] - corrected.p_en[i]).norm(), 1e-9) << "pose " << i;
+        EXPECT_NEAR(again.up_m[i], corrected.up_m[i], 1e-9) << "pose " << i;
+        EXPECT_NEAR(AngleDiff(again.yaw_rad[i], corrected.yaw_rad[i]), 0.0, 1e-9) << "pose " << i;
+    }
+}
+
+TEST_P(FrameRoundTrip, WithoutOrientationRoundTripsPositions) {
+    PlanarAnchor anchor;
+    anchor.yaw_rad = 2.5;
+    anchor.origin_en = Eigen::Vector2d(7.0, 8.0);
+    Trajectory traj = RandomTrajectory(99u, 10);
+    traj.q_frame_body.clear();
+    const PlanarTrajectory planar = ToPlanar(traj, GetParam(), anchor);
+    EXPECT_FALSE(planar.HasYaw());
+    const Trajectory back = FromPlanar(planar, planar, traj, GetParam(), anchor);
+    EXPECT_FALSE(back.HasOrientation());
+    for (std::size_t i = 0; i < traj.size(); ++i) {
+        EXPECT_LT((back.p_frame[i] - traj.p_frame[i]).norm(), 1e-9) << "pose " << i;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(BothAxes, FrameRoundTrip,
+                         ::testing::Values(FrameAxes::kKittiCamera, FrameAxes::kEnu),
+                         [](const ::testing::TestParamInfo<FrameAxes>& param_info) {
+                             return ToString(param_info.param);
+                         });
+
+TEST(Frames, KittiCameraForwardZIsNorthAndForwardXIsEast) {
+    const PlanarAnchor anchor;  // yaw 0, origin 0
+    Trajectory t;
+    t.t_s = {0.0, 1.0, 2.0};
+    t.p_frame = {{0, 0, 0}, {0, -1.5, 5}, {0, 0, 10}};  // moving along camera +z; y down
+    const Eigen::Quaterniond level = Eigen::Quaterniond::Identity();
+    const Eigen::Quaterniond to_x(Eigen::AngleAxisd(kPi / 2, Eigen::Vector3d::UnitY()));
+    ASSERT_LT((to_x * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitX()).norm(), 1e-12);
+    t.q_frame_body = {level, to_x, level};
+    const PlanarTrajectory p = ToPlanar(t, FrameAxes::kKittiCamera, anchor);
+    EXPECT_LT((p.p_en[1] - Eigen::Vector2d(0.0, 5.0)).norm(), 1e-12);   // +z -> North
+    EXPECT_LT((p.p_en[2] - Eigen::Vector2d(0.0, 10.0)).norm(), 1e-12);
+    EXPECT_NEAR(p.up_m[1], 1.5, 1e-12);                                  // y down -> Up = -y
+    EXPECT_NEAR(p.yaw_rad[0], kPi / 2, 1e-12);                           // looks along +z: North
+    EXPECT_NEAR(p.yaw_rad[1], 0.0, 1e-12);                               // forward +x: East
+    // Moving along +z while facing +z: the step direction relative to the heading is 0.
+    const std::vector<StepObservation> obs = ComputeObservations(p);
+    EXPECT_NEAR(obs[1].direction_rad, 0.0, 1e-12);
+}
+
+TEST(Frames, EnuForwardXIsEastAndAnchorYawRotatesCounterClockwise) {
+    PlanarAnchor anchor;
+    anchor.yaw_rad = kPi / 2;
+    anchor.origin_en = Eigen::Vector2d(100.0, 200.0);
+    Trajectory t;
+    t.t_s = {0.0};
+    t.p_frame = {{1.0, 0.0, 2.0}};
+    t.q_frame_body = {Eigen::Quaterniond::Identity()};
+    const PlanarTrajectory p = ToPlanar(t, FrameAxes::kEnu, anchor);
+    EXPECT_LT((p.p_en[0] - Eigen::Vector2d(100.0, 201.0)).norm(), 1e-12);  // +x turned to North
+    EXPECT_NEAR(p.up_m[0], 2.0, 1e-12);
+    EXPECT_NEAR(p.yaw_rad[0], kPi / 2, 1e-12);
+}
+
+TEST(Frames, ParseAndPrintAxes) {
+    EXPECT_EQ(ParseFrameAxes("kitti_camera"), FrameAxes::kKittiCamera);
+    EXPECT_EQ(ParseFrameAxes("enu"), FrameAxes::kEnu);
+    EXPECT_FALSE(ParseFrameAxes("ned").has_value());
+    EXPECT_EQ(ToString(FrameAxes::kKittiCamera), "kitti_camera");
+    EXPECT_EQ(ToString(FrameAxes::kEnu), "enu");
+    // The (u, v, h) split is right-handed for both: u x v = h.
+    for (FrameAxes a : {FrameAxes::kKittiCamera, FrameAxes::kEnu}) {
+        const Eigen::Vector3d u = FrameToUvh(a, Eigen::Vector3d::UnitX());
+        const Eigen::Matrix3d m = [&] {
+            Eigen::Matrix3d r;
+            for (int k = 0; k < 3; ++k) r.col(k) = FrameToUvh(a, Eigen::Vector3d::Unit(k));
+            return r;
+        }();
+        EXPECT_NEAR(m.determinant(), 1.0, 1e-12) << ToString(a);
+        EXPECT_LT((UvhToFrame(a, FrameToUvh(a, Eigen::Vector3d(1, 2, 3))) -
+                   Eigen::Vector3d(1, 2, 3)).norm(), 1e-15);
+        EXPECT_LT((FrameToUvh(a, FrameUpAxis(a)) - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
+        (void)u;
+    }
+}
+
+}  // namespace
+}  // namespace driftcorr
