@@ -92,9 +92,10 @@ void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::stri
     std::printf("solver     %s (%s); %zu windows, %d Ipopt iterations, %zu poses on hard corridor,"
                 " scale %.3f..%.3f\n", driftcorr::ToString(r.status).c_str(), r.message.c_str(),
                 r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
-    std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s)\n", total,
-                run.timings.load_s, run.timings.map_s, run.timings.solve_s,
-                run.estimate.size() / std::max(1e-9, run.timings.solve_s));
+    std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
+                " incremental %.3f, refine %.3f)\n", total, run.timings.load_s, run.timings.map_s,
+                run.timings.solve_s, run.estimate.size() / std::max(1e-9, run.timings.solve_s),
+                r.incremental_s, r.refine_s);
     if (run.before) PrintMetricsRow("estimate", *run.before);
     if (run.after) PrintMetricsRow("corrected", *run.after);
     if (!out.empty()) std::printf("wrote      %s\n", out.c_str());

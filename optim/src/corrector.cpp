@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 
 #include "driftcorr/core/observables.h"
@@ -9,6 +10,10 @@
 
 namespace driftcorr {
 namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig& cfg,
                              bool fix_height) {
@@ -96,8 +101,8 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
     return rep2;
 }
 
-// One incremental window (soft terms). When its solution leaves many poses off the roads, the
-// window fell into a wrong basin (typically: a turn before the junction is reached, with the scale
+// One incremental window (soft terms). When its solution leaves many poses off the roads, or
+// explains the window poorly (a high NLL per pose), the window fell into a wrong basin (typically: a turn before the junction is reached, with the scale
 // collapsing to keep the poses on the road they left), so it is re-solved from other step-length
 // scale hypotheses, re-composed from the window's fixed start, and the lowest NLL wins.
 SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* field,
@@ -106,8 +111,10 @@ SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* f
     const std::vector<PoseState> saved_poses = s.poses;
     const std::vector<double> saved_scales = s.scales;
     SolveReport best = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+    const double nll_per_pose = best.objective / double(last - first + 1);
     if (!field || cfg.restart_scale_factors.empty() ||
-        OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <= cfg.restart_offroad_share) {
+        (Usable(best.status) && nll_per_pose <= cfg.restart_nll_per_pose &&
+         OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <= cfg.restart_offroad_share)) {
         return best;
     }
     std::vector<PoseState> best_poses = s.poses;
@@ -170,6 +177,7 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
     std::vector<double> dist(n, 0.0);
     for (std::size_t i = 1; i < n; ++i) dist[i] = dist[i - 1] + s.obs[i].length_m;
 
+    auto t0 = std::chrono::steady_clock::now();
     std::size_t done = 0;  // poses [0, done] are corrected
     while (done + 1 < n) {
         const std::size_t end =
@@ -187,6 +195,8 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
         done = end;
         if (progress) progress({"incremental", done + 1, n});
     }
+    result.incremental_s = SecondsSince(t0);
+    t0 = std::chrono::steady_clock::now();
     if (cfg.refine) {
         result.refine_report = SolveWindow(s, field, cfg, cfg.refine_ipopt, 1, n - 1, result, true);
         if (progress) progress({"refine", n, n});
@@ -196,6 +206,7 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
         result.status = result.window_failures == 0 ? SolveStatus::kSuccess : SolveStatus::kFailed;
         result.message = std::to_string(result.window_failures) + " window(s) failed";
     }
+    result.refine_s = SecondsSince(t0);
     result.scale_min = *std::min_element(s.scales.begin(), s.scales.end());
     result.scale_max = *std::max_element(s.scales.begin(), s.scales.end());
     if (Usable(result.status)) result.corrected = ToTrajectory(estimate, s);

@@ -1,5 +1,6 @@
 #include "driftcorr/optim/window_problem.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <unordered_map>
@@ -151,6 +152,17 @@ double WindowProblem::StepCost(std::size_t i, const StepVector& v, StepVector* g
     return cost;
 }
 
+const std::vector<std::optional<TraversableSample>>& WindowProblem::Samples(const double* x) const {
+    const std::size_t n = static_cast<std::size_t>(n_vars_);
+    if (cache_x_.size() == n && std::equal(cache_x_.begin(), cache_x_.end(), x)) return cache_samples_;
+    cache_x_.assign(x, x + n);
+    cache_samples_.resize(last_ - first_ + 1);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        cache_samples_[i - first_] = field_ ? field_->Query(PosePosition(x, i)) : std::nullopt;
+    }
+    return cache_samples_;
+}
+
 Eigen::Vector3d WindowProblem::PosePosition(const double* x, std::size_t pose) const {
     const double* v = x + PoseVar(pose, 0);
     return {v[0], v[1], v[2]};
@@ -159,10 +171,10 @@ Eigen::Vector3d WindowProblem::PosePosition(const double* x, std::size_t pose) c
 double WindowProblem::Objective(const double* x) const {
     double f = 0.0;
     const MapDistanceTerm map{cfg_.map_sigma_m, cfg_.map_giveup_m, cfg_.map_weight};
+    const auto& samples = Samples(x);
     for (std::size_t i = first_; i <= last_; ++i) {
         f += StepCost(i, GatherStep(x, i), nullptr, nullptr);
-        if (!field_) continue;
-        if (auto s = field_->Query(PosePosition(x, i))) {
+        if (const auto& s = samples[i - first_]) {
             f += map.Evaluate(s->centre.value, s->centre.gradient, s->centre.hessian, nullptr, nullptr);
         }
     }
@@ -179,12 +191,12 @@ void WindowProblem::Gradient(const double* x, double* grad) const {
     for (int k = 0; k < n_vars_; ++k) grad[k] = 0.0;
     const MapDistanceTerm map{cfg_.map_sigma_m, cfg_.map_giveup_m, cfg_.map_weight};
     StepVector g;
+    const auto& samples = Samples(x);
     for (std::size_t i = first_; i <= last_; ++i) {
         StepCost(i, GatherStep(x, i), &g, nullptr);
         const StepSlots& s = steps_[i - first_];
         for (int r = 0; r < kStepVars; ++r) if (s.var[r] >= 0) grad[s.var[r]] += g[r];
-        if (!field_) continue;
-        if (auto fs = field_->Query(PosePosition(x, i))) {
+        if (const auto& fs = samples[i - first_]) {
             Eigen::Vector3d gm;
             map.Evaluate(fs->centre.value, fs->centre.gradient, fs->centre.hessian, &gm, nullptr);
             for (int c = 0; c < 3; ++c) grad[PoseVar(i, c)] += gm[c];
@@ -202,15 +214,17 @@ void WindowProblem::Gradient(const double* x, double* grad) const {
 }
 
 void WindowProblem::Constraints(const double* x, double* g) const {
+    const auto& samples = Samples(x);
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
-        auto s = field_->Query(PosePosition(x, constraint_pose_[k]));
+        const auto& s = samples[constraint_pose_[k] - first_];
         g[k] = s ? s->corridor.value : field_->truncation_m();
     }
 }
 
 void WindowProblem::JacobianValues(const double* x, double* values) const {
+    const auto& samples = Samples(x);
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
-        auto s = field_->Query(PosePosition(x, constraint_pose_[k]));
+        const auto& s = samples[constraint_pose_[k] - first_];
         for (int c = 0; c < 3; ++c) values[3 * k + c] = s ? s->corridor.gradient[c] : 0.0;
     }
 }
@@ -236,15 +250,16 @@ void WindowProblem::HessianValues(const double* x, double obj_factor, const doub
         values[sl[4]] += factor * m(2, 1), values[sl[5]] += factor * m(2, 2);
     };
     if (field_) {
+        const auto& samples = Samples(x);
         for (std::size_t i = first_; i <= last_; ++i) {
-            auto fs = field_->Query(PosePosition(x, i));
+            const auto& fs = samples[i - first_];
             if (!fs) continue;
             Eigen::Matrix3d hm;
             map.Evaluate(fs->centre.value, fs->centre.gradient, fs->centre.hessian, nullptr, &hm);
             add_pose(i, hm, obj_factor);
         }
         for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
-            auto fs = field_->Query(PosePosition(x, constraint_pose_[k]));
+            const auto& fs = samples[constraint_pose_[k] - first_];
             if (fs) add_pose(constraint_pose_[k], fs->corridor.hessian, lambda[k]);
         }
     }

@@ -16,17 +16,19 @@ namespace driftcorr {
 
 struct CorrectorConfig {
     ModelConfig model;
-    double chunk_m = 40.0;           ///< estimated path added per incremental step [m]
-    double window_m = 200.0;         ///< trailing path re-solved per incremental step [m]
+    double chunk_m = 80.0;           ///< estimated path added per incremental step [m]
+    double window_m = 240.0;         ///< trailing path re-solved per incremental step [m]
     std::size_t max_chunk_poses = 400;   ///< cap per chunk (long stops) [poses]
     std::size_t max_window_poses = 1500; ///< cap per window [poses]
     bool refine = true;              ///< final whole-trajectory solve
     /// A window whose solution leaves more than restart_offroad_share of its poses farther than
-    /// restart_offroad_m from every road is re-solved from these step-length scale hypotheses
+    /// restart_offroad_m from every road, or whose NLL per pose exceeds restart_nll_per_pose, is
+    /// re-solved from these step-length scale hypotheses
     /// (multiplying the current scale); the lowest NLL wins. Empty: no restarts.
     std::vector<double> restart_scale_factors = {1.3, 0.8, 1.7};
     double restart_offroad_m = 6.0;      ///< [m]
     double restart_offroad_share = 0.05; ///< [-]
+    double restart_nll_per_pose = 0.3;   ///< [-]
     double stationary_m = 1e-3;      ///< steps shorter than this are stops [m]
     IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0};
     IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
@@ -54,6 +56,8 @@ struct CorrectionResult {
     std::size_t constrained_poses = 0; ///< poses with the hard corridor constraint (refine)
     double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range
     SolveReport refine_report;
+    double incremental_s = 0.0;        ///< wall time of the incremental pass [s]
+    double refine_s = 0.0;             ///< wall time of the refinement [s]
 };
 
 /// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry

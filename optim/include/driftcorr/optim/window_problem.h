@@ -8,6 +8,7 @@
 // touched by the window's steps.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -74,7 +75,9 @@ private:
     StepVector GatherStep(const double* x, std::size_t i) const;
     double StepCost(std::size_t i, const StepVector& v, StepVector* g, StepMatrix* h) const;
     Eigen::Vector3d PosePosition(const double* x, std::size_t pose) const;
-    int HessSlot(int r, int c);
+    /// Map field samples of every window pose at x, queried once per distinct x (Ipopt evaluates
+    /// objective, gradient, constraints and Hessians at the same point).
+    const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
     void BuildStructure();
 
     TrajectoryState& state_;
@@ -87,6 +90,8 @@ private:
     std::vector<std::pair<int, int>> jac_, hess_;
     std::vector<std::array<int, 6>> pose_hess_slot_;
     std::vector<std::array<int, 3>> scale_hess_slot_;
+    mutable std::vector<double> cache_x_;
+    mutable std::vector<std::optional<TraversableSample>> cache_samples_;
 };
 
 }  // namespace driftcorr
