@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <ostream>
 #include <random>
 #include <string>
 
@@ -39,35 +40,52 @@ enum class TermKind { kLength, kDirection, kHeadingChange, kPreservation, kHeigh
 
 std::string Name(TermKind k) {
     switch (k) {
-        case TermKind::kLength: return "StepLength";
-        case TermKind::kDirection: return "StepDirection";
-        case TermKind::kHeadingChange: return "HeadingChange";
-        case TermKind::kPreservation: return "HeadingPreservation";
-        default: return "HeightChange";
+        case TermKind::kLength:
+            return "StepLength";
+        case TermKind::kDirection:
+            return "StepDirection";
+        case TermKind::kHeadingChange:
+            return "HeadingChange";
+        case TermKind::kPreservation:
+            return "HeadingPreservation";
+        default:
+            return "HeightChange";
     }
 }
+
+void PrintTo(TermKind k, std::ostream* os) { *os << Name(k); }
 
 StepFn MakeTerm(TermKind kind, const StepParams& p) {
     switch (kind) {
         case TermKind::kLength: {
             const StepLengthTerm t{p.length_m, p.direction_rad, p.sigma, p.weight};
-            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) {
+                return t.Evaluate(x, g, h);
+            };
         }
         case TermKind::kDirection: {
             const StepDirectionTerm t{p.direction_rad, p.sigma, p.weight};
-            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) {
+                return t.Evaluate(x, g, h);
+            };
         }
         case TermKind::kHeadingChange: {
             const HeadingChangeTerm t{p.dheading_rad, p.sigma, p.weight};
-            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) {
+                return t.Evaluate(x, g, h);
+            };
         }
         case TermKind::kPreservation: {
             const HeadingPreservationTerm t{p.sigma, p.weight};
-            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) {
+                return t.Evaluate(x, g, h);
+            };
         }
         default: {
             const HeightChangeTerm t{p.dup_m, p.sigma, p.weight};
-            return [t](const StepVector& x, StepVector* g, StepMatrix* h) { return t.Evaluate(x, g, h); };
+            return [t](const StepVector& x, StepVector* g, StepMatrix* h) {
+                return t.Evaluate(x, g, h);
+            };
         }
     }
 }

@@ -187,7 +187,10 @@ TraversableField RasteriseRoads(const RoadNetwork& network, const Eigen::Aligned
     for (std::size_t i = 0; i < n; ++i) {
         const bool exact = r.centre_exact[i] < inf;
         centre[i] = std::min(trunc, exact ? r.centre_exact[i] : centre[i]);
-        corridor[i] = std::min(trunc, exact ? r.corridor_exact[i] : corridor[i] + half);
+        // Beyond the band: the distance to the nearest inside sample overestimates the distance
+        // to the corridor edge (which lies between that sample and the next one) by up to one
+        // cell; minus half a cell centres the error (same convention as SignedDistanceTransform).
+        corridor[i] = std::min(trunc, exact ? r.corridor_exact[i] : corridor[i] - half);
     }
     return TraversableField(InterpolatedField(r.spec, std::move(centre)),
                             InterpolatedField(r.spec, std::move(corridor)), config.truncation_m);
