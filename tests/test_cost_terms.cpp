@@ -399,3 +399,35 @@ TEST(MapDistanceTerm, GaussianNearTheCentreAndGivesUpFarAway) {
 
 }  // namespace
 }  // namespace driftcorr
+
+namespace {
+
+// The heavy-tailed scale walk: quadratic near zero, logarithmic far out, exact derivatives.
+TEST(ScaleRandomWalkRobust, MatchesGaussianNearZeroAndCentralDifferences) {
+    const driftcorr::ScaleRandomWalkTerm robust{0.01, 0.7, 3.0};
+    const driftcorr::ScaleRandomWalkTerm gauss{0.01, 0.7, 0.0};
+    const Eigen::Vector2d small(1.0, 1.0005);
+    EXPECT_NEAR(robust.Evaluate(small, nullptr, nullptr), gauss.Evaluate(small, nullptr, nullptr),
+                1e-3 * gauss.Evaluate(small, nullptr, nullptr));
+    const Eigen::Vector2d far(1.0, 1.4);  // 40 sigma
+    EXPECT_LT(robust.Evaluate(far, nullptr, nullptr), 0.05 * gauss.Evaluate(far, nullptr, nullptr));
+    for (const Eigen::Vector2d& x : {Eigen::Vector2d(0.9, 1.1), Eigen::Vector2d(1.2, 1.15),
+                                    Eigen::Vector2d(1.0, 1.03)}) {
+        Eigen::Vector2d g;
+        Eigen::Matrix2d h;
+        robust.Evaluate(x, &g, &h);
+        const double eps = 1e-7;
+        for (int k = 0; k < 2; ++k) {
+            Eigen::Vector2d xp = x, xm = x;
+            xp[k] += eps;
+            xm[k] -= eps;
+            Eigen::Vector2d gp, gm;
+            const double fd = (robust.Evaluate(xp, &gp, nullptr) - robust.Evaluate(xm, &gm, nullptr)) / (2 * eps);
+            EXPECT_NEAR(g[k], fd, 1e-5 * (1.0 + std::abs(fd)));
+            const Eigen::Vector2d hfd = (gp - gm) / (2 * eps);
+            EXPECT_NEAR((h.col(k) - hfd).norm(), 0.0, 1e-4 * (1.0 + hfd.norm()));
+        }
+    }
+}
+
+}  // namespace

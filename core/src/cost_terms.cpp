@@ -93,7 +93,14 @@ double HeightChangeTerm::Evaluate(const StepVector& x, StepVector* grad, StepMat
 double ScaleRandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
                                      Eigen::Matrix2d* hess) const {
     const Eigen::Vector2d j(-1.0, 1.0);
-    return Gaussian<2>(x[1] - x[0], j, nullptr, sigma, weight, grad, hess);
+    if (robust_k <= 0.0) return Gaussian<2>(x[1] - x[0], j, nullptr, sigma, weight, grad, hess);
+    const double r = (x[1] - x[0]) / sigma, k2 = robust_k * robust_k;
+    const double q = 1.0 + r * r / k2;
+    const double rho_r = weight * r / q;                         // d rho / d r
+    const double rho_rr = weight * (1.0 - r * r / k2) / (q * q);  // d2 rho / d r2
+    if (grad) *grad = (rho_r / sigma) * j;
+    if (hess) *hess = (rho_rr / (sigma * sigma)) * j * j.transpose();
+    return 0.5 * weight * k2 * std::log(q);
 }
 
 double ScalePriorTerm::Evaluate(double s, double* grad, double* hess) const {

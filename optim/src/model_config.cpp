@@ -29,6 +29,7 @@ std::string ModelConfig::Validate() const {
         {"model.scale_segment_m", scale_segment_m, Positive, "> 0"},
         {"model.scale_prior_sigma", scale_prior_sigma, Positive, "> 0"},
         {"model.scale_rw_sigma", scale_rw_sigma, Positive, "> 0"},
+        {"model.scale_rw_robust_k", scale_rw_robust_k, NonNegative, ">= 0"},
         {"model.step_weight", step_weight, Weight, "in (0, 1]"},
         {"model.heading_weight", heading_weight, Weight, "in (0, 1]"},
         {"model.preservation_weight", preservation_weight, Weight, "in (0, 1]"},

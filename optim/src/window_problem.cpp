@@ -152,6 +152,12 @@ double WindowProblem::StepCost(std::size_t i, const StepVector& v, StepVector* g
     return cost;
 }
 
+// Segment 0 carries the prior around 1 (Gaussian); later segments the (robust) random walk.
+ScaleRandomWalkTerm WindowProblem::ScaleTerm(int segment) const {
+    if (segment == 0) return ScaleRandomWalkTerm{cfg_.scale_prior_sigma, 1.0, 0.0};
+    return ScaleRandomWalkTerm{cfg_.scale_rw_sigma, 1.0, cfg_.scale_rw_robust_k};
+}
+
 const std::vector<std::optional<TraversableSample>>& WindowProblem::Samples(const double* x) const {
     const std::size_t n = static_cast<std::size_t>(n_vars_);
     if (cache_x_.size() == n && std::equal(cache_x_.begin(), cache_x_.end(), x)) return cache_samples_;
@@ -181,8 +187,7 @@ double WindowProblem::Objective(const double* x) const {
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
         const int a = ScaleVar(sgm - 1);
         const double sa = a >= 0 ? x[a] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
-        const double sigma = sgm > 0 ? cfg_.scale_rw_sigma : cfg_.scale_prior_sigma;
-        f += ScaleRandomWalkTerm{sigma, 1.0}.Evaluate({sa, x[ScaleVar(sgm)]}, nullptr, nullptr);
+        f += ScaleTerm(sgm).Evaluate({sa, x[ScaleVar(sgm)]}, nullptr, nullptr);
     }
     return f;
 }
@@ -205,9 +210,8 @@ void WindowProblem::Gradient(const double* x, double* grad) const {
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
         const int a = ScaleVar(sgm - 1), b = ScaleVar(sgm);
         const double sa = a >= 0 ? x[a] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
-        const double sigma = sgm > 0 ? cfg_.scale_rw_sigma : cfg_.scale_prior_sigma;
         Eigen::Vector2d gs;
-        ScaleRandomWalkTerm{sigma, 1.0}.Evaluate({sa, x[b]}, &gs, nullptr);
+        ScaleTerm(sgm).Evaluate({sa, x[b]}, &gs, nullptr);
         if (a >= 0) grad[a] += gs[0];
         grad[b] += gs[1];
     }
@@ -265,10 +269,12 @@ void WindowProblem::HessianValues(const double* x, double obj_factor, const doub
     }
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
         const auto& sl = scale_hess_slot_[sgm - seg_first_];
-        const double sigma = sgm > 0 ? cfg_.scale_rw_sigma : cfg_.scale_prior_sigma;
-        const double k = obj_factor / (sigma * sigma);
-        if (sl[0] >= 0) values[sl[0]] += k, values[sl[1]] -= k;
-        values[sl[2]] += k;
+        const int a = ScaleVar(sgm - 1);
+        const double sa = a >= 0 ? x[a] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
+        Eigen::Matrix2d hs;
+        ScaleTerm(sgm).Evaluate({sa, x[ScaleVar(sgm)]}, nullptr, &hs);
+        if (sl[0] >= 0) values[sl[0]] += obj_factor * hs(0, 0), values[sl[1]] += obj_factor * hs(1, 0);
+        values[sl[2]] += obj_factor * hs(1, 1);
     }
 }
 

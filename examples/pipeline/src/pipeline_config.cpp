@@ -4,6 +4,8 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <set>
+#include <sstream>
 
 #include "driftcorr/core/errors.h"
 #include "driftcorr/pipeline/pipeline.h"
@@ -27,6 +29,21 @@ double Number(const Context& c, const YAML::Node& n, const std::string& key) {
     } catch (const YAML::Exception&) {
         throw InputError(c.file, Line(n), key, "must be a number");
     }
+}
+
+/// The text of a mapping key; a list or mapping used as a key is an error naming its line.
+std::string KeyText(const Context& c, const YAML::Node& key, const std::string& where) {
+    if (!key.IsScalar()) {
+        throw InputError(c.file, Line(key), where, "keys must be plain names, not lists or maps");
+    }
+    return key.Scalar();
+}
+
+/// Throws when `key` was already seen in the same mapping (yaml-cpp would keep both entries and
+/// the last one would silently win).
+void CheckOnce(const Context& c, std::set<std::string>& seen, const YAML::Node& key_node,
+               const std::string& key) {
+    if (!seen.insert(key).second) throw InputError(c.file, Line(key_node), key, "key given twice");
 }
 
 bool Bool(const Context& c, const YAML::Node& n, const std::string& key) {
@@ -57,6 +74,7 @@ std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
     num("scale_segment_m", &m.scale_segment_m);
     num("scale_prior_sigma", &m.scale_prior_sigma);
     num("scale_rw_sigma", &m.scale_rw_sigma);
+    num("scale_rw_robust_k", &m.scale_rw_robust_k);
     num("step_weight", &m.step_weight);
     num("heading_weight", &m.heading_weight);
     num("preservation_weight", &m.preservation_weight);
@@ -108,36 +126,105 @@ std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f)
 
 std::map<std::string, Setter> RoadSetters(const Context& c, RoadClassConfig& r) {
     std::map<std::string, Setter> s;
-    s["profile"] = [&r](const YAML::Node& n, const std::string&) { r.profile = n.as<std::string>(); };
+    s["profile"] = [&c, &r](const YAML::Node& n, const std::string& k) {
+        if (!n.IsScalar()) throw InputError(c.file, Line(n), k, "must be vehicle, pedestrian or all");
+        r.profile = n.Scalar();
+    };
     s["default_half_width_m"] = [&c, &r](const YAML::Node& n, const std::string& k) {
         r.default_half_width_m = Number(c, n, k);
     };
     s["half_width_m"] = [&c, &r](const YAML::Node& n, const std::string& k) {
         if (!n.IsMap()) throw InputError(c.file, Line(n), k, "must be a map of highway class to metres");
+        std::set<std::string> seen;
         for (const auto& kv : n) {
-            const std::string cls = kv.first.as<std::string>();
+            const std::string cls = KeyText(c, kv.first, k);
+            CheckOnce(c, seen, kv.first, k + "." + cls);
             r.half_width_overrides_m[cls] = Number(c, kv.second, k + "." + cls);
         }
     };
     return s;
 }
 
-void ApplySection(const Context& c, const YAML::Node& node, const std::string& section,
-                  const std::map<std::string, Setter>& setters) {
-    if (!node.IsMap()) throw InputError(c.file, Line(node), section, "must be a map");
+void ApplySection(const Context& c, const YAML::Node& key_node, const YAML::Node& node,
+                  const std::string& section, const std::map<std::string, Setter>& setters) {
+    if (!node.IsMap()) throw InputError(c.file, Line(key_node), section, "must be a map");
+    std::set<std::string> seen;
     for (const auto& kv : node) {
-        const std::string key = kv.first.as<std::string>();
+        const std::string key = KeyText(c, kv.first, section);
+        CheckOnce(c, seen, kv.first, section + "." + key);
         auto it = setters.find(key);
-        if (it == setters.end()) throw InputError(c.file, Line(kv.first), section + "." + key, "unknown parameter");
+        if (it == setters.end()) {
+            throw InputError(c.file, Line(kv.first), section + "." + key, "unknown parameter");
+        }
         it->second(kv.second, section + "." + key);
     }
+}
+
+/// RoadClassConfig::Validate names its fields road_profile / road_half_width_m.<class>; in the
+/// parameter file they are roads.profile / roads.half_width_m.<class>.
+std::string RoadsKeyInFile(std::string m) {
+    for (const auto& [field, key] : {std::pair<std::string, std::string>{"road_profile", "profile"},
+                                     {"road_half_width_m", "half_width_m"}}) {
+        if (m.compare(0, field.size(), field) == 0) return key + m.substr(field.size());
+    }
+    return m;
+}
+
+/// Line of the dotted key path a Validate() message starts with ("model.step_sigma_m: ..."),
+/// 0 when the key is not in the file (a default value failed, or the message names no key).
+long LineOfMessageKey(const YAML::Node& root, const std::string& message) {
+    const std::size_t colon = message.find(": ");
+    if (colon == std::string::npos) return 0;
+    std::istringstream path(message.substr(0, colon));
+    YAML::Node node = root;
+    for (std::string part; std::getline(path, part, '.');) {
+        if (!node.IsMap()) return 0;
+        bool found = false;
+        for (const auto& kv : node) {
+            if (kv.first.IsScalar() && kv.first.Scalar() == part) {
+                node = kv.second;
+                found = true;
+                break;
+            }
+        }
+        if (!found) return 0;
+    }
+    return Line(node);
+}
+
+PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
+    PipelineConfig cfg;
+    if (root.IsNull()) return cfg;
+    if (!root.IsMap()) throw InputError(c.file, Line(root), "", "must be a map of sections");
+    std::set<std::string> seen;
+    for (const auto& kv : root) {
+        const std::string section = KeyText(c, kv.first, "");
+        CheckOnce(c, seen, kv.first, section);
+        const YAML::Node& body = kv.second;
+        if (section == "model") {
+            ApplySection(c, kv.first, body, section, ModelSetters(c, cfg.corrector.model));
+        } else if (section == "corrector") {
+            ApplySection(c, kv.first, body, section, CorrectorSetters(c, cfg.corrector));
+        } else if (section == "roads") {
+            ApplySection(c, kv.first, body, section, RoadSetters(c, cfg.roads));
+        } else if (section == "field") {
+            ApplySection(c, kv.first, body, section, FieldSetters(c, cfg.field));
+        } else {
+            throw InputError(c.file, Line(kv.first), section,
+                             "unknown section (model, corrector, roads, field)");
+        }
+    }
+    if (std::string m = cfg.Validate(); !m.empty()) {
+        throw InputError(c.file, LineOfMessageKey(root, m), "", m);
+    }
+    return cfg;
 }
 
 }  // namespace
 
 std::string PipelineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;
-    if (std::string m = roads.Validate(); !m.empty()) return "roads." + m;
+    if (std::string m = roads.Validate(); !m.empty()) return "roads." + RoadsKeyInFile(m);
     if (std::string m = field.Validate(); !m.empty()) return m;
     return "";
 }
@@ -152,19 +239,11 @@ PipelineConfig LoadPipelineConfig(const std::string& path) {
     } catch (const YAML::ParserException& e) {
         throw InputError(path, e.mark.line + 1, "", "YAML syntax error: " + e.msg);
     }
-    PipelineConfig cfg;
-    if (root.IsNull()) return cfg;
-    if (!root.IsMap()) throw InputError(path, Line(root), "", "must be a map of sections");
-    for (const auto& kv : root) {
-        const std::string section = kv.first.as<std::string>();
-        if (section == "model") ApplySection(c, kv.second, section, ModelSetters(c, cfg.corrector.model));
-        else if (section == "corrector") ApplySection(c, kv.second, section, CorrectorSetters(c, cfg.corrector));
-        else if (section == "roads") ApplySection(c, kv.second, section, RoadSetters(c, cfg.roads));
-        else if (section == "field") ApplySection(c, kv.second, section, FieldSetters(c, cfg.field));
-        else throw InputError(path, Line(kv.first), section, "unknown section (model, corrector, roads, field)");
+    try {
+        return ParseConfig(c, root);
+    } catch (const YAML::Exception& e) {  // safety net: yaml-cpp access errors carry a position
+        throw InputError(path, e.mark.line >= 0 ? e.mark.line + 1 : 0, "", e.msg);
     }
-    if (std::string m = cfg.Validate(); !m.empty()) throw InputError(path, 0, "", m);
-    return cfg;
 }
 
 }  // namespace driftcorr::pipeline

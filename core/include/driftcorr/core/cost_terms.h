@@ -49,9 +49,15 @@ struct HeightChangeTerm {
 };
 
 /// Scale random walk between consecutive scale segments, variables [s_prev, s_next]:
-/// r = s_next - s_prev; and the prior on the first segment's scale, r = s - 1.
+/// r = (s_next - s_prev) / sigma. With robust_k > 0 the walk is heavy-tailed (Cauchy),
+///   rho(r) = w * k^2 / 2 * log(1 + r^2 / k^2),
+/// quadratic for |r| << k, so the scale of a steady odometry stays steady, but a jump that the map
+/// supports (frame-to-frame ICP shortening its steps along a straight street) costs only
+/// logarithmically. robust_k = 0: Gaussian, 0.5 * w * r^2. And the prior on the first segment's
+/// scale, r = s - 1.
 struct ScaleRandomWalkTerm {
     double sigma, weight;
+    double robust_k = 0.0;
     double Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad, Eigen::Matrix2d* hess) const;
 };
 struct ScalePriorTerm {

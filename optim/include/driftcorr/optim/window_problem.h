@@ -71,6 +71,7 @@ private:
         int hess_slot[kStepVars][kStepVars];  // lower triangle, -1 if not a variable pair
     };
     int PoseVar(std::size_t pose, int component) const;
+    ScaleRandomWalkTerm ScaleTerm(int segment) const;
     int ScaleVar(int segment) const;
     StepVector GatherStep(const double* x, std::size_t i) const;
     double StepCost(std::size_t i, const StepVector& v, StepVector* g, StepMatrix* h) const;
