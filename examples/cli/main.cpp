@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -108,8 +109,34 @@ std::vector<driftcorr::GeoPoint> ToGeo(const driftcorr::pipeline::WorldFrame& w,
     return out;
 }
 
+// An output path must be creatable before any work is done: an existing folder, a missing or
+// read-only parent folder are bad input (exit 2), not an internal error after the correction.
+void CheckOutputPath(const std::string& path, const std::string& option) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+        throw driftcorr::InputError(path, 0, option, "is a folder, expected an output file path");
+    }
+    const fs::path parent = fs::path(path).parent_path();
+    const std::string dir = parent.empty() ? "." : parent.string();
+    if (!fs::is_directory(dir, ec)) {
+        throw driftcorr::InputError(path, 0, option, "folder '" + dir + "' does not exist");
+    }
+    if (::access(dir.c_str(), W_OK) != 0) {
+        throw driftcorr::InputError(path, 0, option, "folder '" + dir + "' is not writable");
+    }
+}
+
 int RunCorrect(const Args& a) {
     using namespace driftcorr;
+    CheckOutputPath(a.output, "-o");
+    if (!a.geojson.empty()) {
+        CheckOutputPath(a.geojson, "--geojson");
+        std::error_code ec;
+        if (a.geojson == a.output || std::filesystem::equivalent(a.geojson, a.output, ec)) {
+            throw InputError(a.geojson, 0, "--geojson", "is the same file as -o");
+        }
+    }
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
     pipeline::CorrectionRun run = pipeline::RunCorrection(a.scenario, cfg, MakeProgress(a.quiet));
@@ -119,7 +146,8 @@ int RunCorrect(const Args& a) {
                      ToString(run.result.status).c_str(), run.result.message.c_str());
         return kExitSolver;
     }
-    io::WriteTum(a.output, run.corrected_frame);
+    // The GeoJSON first: if anything fails, the corrected trajectory (the main output) is not
+    // written (each file itself is written to a temporary and renamed when complete).
     if (!a.geojson.empty()) {
         pipeline::WorldFrame world(run.scenario.anchor);
         std::vector<io::GeoTrack> tracks = {{"estimate", ToGeo(world, run.estimate)},
@@ -127,6 +155,7 @@ int RunCorrect(const Args& a) {
         if (run.ground_truth) tracks.push_back({"ground_truth", ToGeo(world, *run.ground_truth)});
         io::WriteGeoJsonTracks(a.geojson, tracks);
     }
+    io::WriteTum(a.output, run.corrected_frame);
     PrintSummary(run, a.output);
     return 0;
 }

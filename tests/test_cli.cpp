@@ -1,0 +1,726 @@
+// End-to-end tests of the `driftcorr` command-line tool on bad and unusual input.
+//
+// One valid synthetic scenario (a 60 s drive, 601 poses) is generated per test process in a
+// folder named after the process id, so parallel ctest runs do not collide. Every case copies it,
+// changes one thing, runs the CLI and checks
+//   1. the exit code (0 ok, 1 usage, 2 bad input, 3 no usable correction, 4 internal);
+//   2. that stderr holds exactly one message line, "driftcorr: ...", naming the offending file and
+//      line or key (progress lines "[driftcorr] ..." and, after a usage error, the usage text
+//      are allowed besides it);
+//   3. that no output file (nor a temporary of it) was created, or, for the cases marked
+//      `sentinel`, that a pre-existing output file is left byte-identical.
+// Valid but unusual inputs must succeed with one output pose per estimate pose.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <iterator>
+#include <ostream>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "driftcorr/io/trajectory_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kCli = DRIFTCORR_BINARY_DIR "/examples/driftcorr";
+const std::string kGenerator = DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_road_scenario";
+constexpr int kExitOk = 0, kExitUsage = 1, kExitBadInput = 2, kExitSolver = 3;
+
+// ---- files ------------------------------------------------------------------------------------
+
+std::string ReadFile(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("test setup: cannot read " + path.string());
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void WriteFile(const fs::path& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) throw std::runtime_error("test setup: cannot write " + path.string());
+}
+
+// The edit helpers throw when their pattern is absent, so that a change of the generator's output
+// makes a case fail loudly instead of silently testing a valid file.
+
+/// Replaces the one occurrence of `from` in `file`.
+void Replace(const fs::path& file, const std::string& from, const std::string& to) {
+    std::string text = ReadFile(file);
+    const std::size_t at = text.find(from);
+    if (at == std::string::npos || text.find(from, at + 1) != std::string::npos) {
+        throw std::runtime_error("test setup: '" + from + "' is not in " + file.string() + " once");
+    }
+    WriteFile(file, text.replace(at, from.size(), to));
+}
+
+/// Replaces the matches of `pattern` (all, or only the first) in `file`; at least one must exist.
+void RegexReplace(const fs::path& file, const std::string& pattern, const std::string& to,
+                  bool first_only = false) {
+    const std::string text = ReadFile(file);
+    const std::regex re(pattern);
+    if (!std::regex_search(text, re)) {
+        throw std::runtime_error("test setup: /" + pattern + "/ matches nothing in " +
+                                 file.string());
+    }
+    WriteFile(file, std::regex_replace(text, re, to,
+                                       first_only ? std::regex_constants::format_first_only
+                                                  : std::regex_constants::format_default));
+}
+
+using Fields = std::vector<std::string>;
+
+/// Rewrites the data lines of a TUM file (blank and '#' lines are kept as they are).
+void TransformTum(const fs::path& file, const std::function<void(std::vector<Fields>&)>& edit) {
+    std::istringstream in(ReadFile(file));
+    std::vector<std::string> lines;
+    std::vector<std::size_t> data_at;
+    std::vector<Fields> poses;
+    for (std::string line; std::getline(in, line);) {
+        if (!line.empty() && line[0] != '#') {
+            std::istringstream fields(line);
+            poses.emplace_back(std::istream_iterator<std::string>(fields),
+                               std::istream_iterator<std::string>());
+            data_at.push_back(lines.size());
+        }
+        lines.push_back(line);
+    }
+    edit(poses);
+    if (poses.size() != data_at.size()) throw std::logic_error("TransformTum keeps the pose count");
+    std::string out;
+    for (std::size_t i = 0, p = 0; i < lines.size(); ++i) {
+        if (p < data_at.size() && data_at[p] == i) {
+            std::string joined;
+            for (const std::string& f : poses[p++]) joined += (joined.empty() ? "" : " ") + f;
+            out += joined + "\n";
+        } else {
+            out += lines[i] + "\n";
+        }
+    }
+    WriteFile(file, out);
+}
+
+/// Applies `edit` to the fields of line `line_no` (1-based) of a TUM file; it must be a data line.
+void EditTumLine(const fs::path& file, std::size_t line_no,
+                 const std::function<void(Fields&)>& edit) {
+    std::istringstream in(ReadFile(file));
+    std::string out, line;
+    for (std::size_t n = 1; std::getline(in, line); ++n) {
+        if (n == line_no) {
+            if (line.empty() || line[0] == '#')
+                throw std::runtime_error("test setup: not a data line");
+            std::istringstream fields(line);
+            Fields f{std::istream_iterator<std::string>(fields),
+                     std::istream_iterator<std::string>()};
+            edit(f);
+            line.clear();
+            for (const std::string& s : f) line += (line.empty() ? "" : " ") + s;
+        }
+        out += line + "\n";
+    }
+    WriteFile(file, out);
+}
+
+/// Throws unless `text` occurs in `file`.
+void Require(const fs::path& file, const std::string& text) {
+    if (ReadFile(file).find(text) == std::string::npos) {
+        throw std::runtime_error("test setup: '" + text + "' is not in " + file.string());
+    }
+}
+
+/// Keeps the first `n` lines of a file.
+void KeepLines(const fs::path& file, std::size_t n) {
+    std::istringstream in(ReadFile(file));
+    std::string out, line;
+    for (std::size_t i = 0; i < n && std::getline(in, line); ++i) out += line + "\n";
+    WriteFile(file, out);
+}
+
+// ---- running the CLI --------------------------------------------------------------------------
+
+std::string ShellQuote(const std::string& s) {
+    std::string out = "'";
+    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+struct RunResult {
+    int exit_code = -1;  ///< WEXITSTATUS; 128 + signal when the program crashed; 124 on timeout
+    std::string out, err;
+    std::string command;
+};
+
+/// Runs `program args...` with stdout and stderr captured into files in `capture_dir`.
+RunResult RunProgram(const std::string& program, const std::vector<std::string>& args,
+                     const fs::path& capture_dir) {
+    RunResult r;
+    r.command = ShellQuote(program);
+    for (const std::string& a : args) r.command += " " + ShellQuote(a);
+    const fs::path out = capture_dir / "stdout.txt", err = capture_dir / "stderr.txt";
+    const std::string shell = "timeout 120 " + r.command + " </dev/null >" +
+                              ShellQuote(out.string()) + " 2>" + ShellQuote(err.string());
+    const int status = std::system(shell.c_str());
+    if (status != -1 && WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+    r.out = ReadFile(out);
+    r.err = ReadFile(err);
+    return r;
+}
+
+/// The message lines of a stderr text: progress lines ("[driftcorr] ...") dropped, and after a
+/// usage error the usage text (a blank line, then "usage: ..." to the end).
+std::vector<std::string> MessageLines(const std::string& err) {
+    std::vector<std::string> lines, messages;
+    std::istringstream in(err);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        if (lines[i].rfind("[driftcorr]", 0) == 0) continue;
+        if (lines[i].empty() && i + 1 < lines.size() && lines[i + 1].rfind("usage:", 0) == 0) break;
+        messages.push_back(lines[i]);
+    }
+    return messages;
+}
+
+std::vector<std::string> FolderEntries(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+    return names;
+}
+
+// ---- cases ------------------------------------------------------------------------------------
+
+/// Where one case works: a fresh copy of the valid scenario, and an empty output folder.
+struct CaseDirs {
+    fs::path scenario;  ///< copy of the valid scenario folder, to be broken
+    fs::path out_dir;   ///< empty; only the output may appear here
+    fs::path output;    ///< out_dir / "corrected.tum", the -o path
+    fs::path params;    ///< where a case may write a parameter file (outside both folders)
+};
+
+/// Changes one thing in the copy and returns the CLI arguments.
+using Mutation = std::function<std::vector<std::string>(const CaseDirs&)>;
+
+std::vector<std::string> Correct(const CaseDirs& c, const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> args = {"correct", c.scenario.string(), "-o", c.output.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+}
+
+/// Edits the scenario copy and runs `driftcorr correct <copy> -o <output>`.
+Mutation Edit(std::function<void(const fs::path& scenario)> edit) {
+    return [edit](const CaseDirs& c) {
+        edit(c.scenario);
+        return Correct(c);
+    };
+}
+
+/// Runs the valid scenario with a parameter file holding `yaml`.
+Mutation WithParams(std::string yaml) {
+    return [yaml](const CaseDirs& c) {
+        WriteFile(c.params, yaml);
+        return Correct(c, {"--config", c.params.string()});
+    };
+}
+
+Mutation EditEstimateLine(std::size_t line_no, std::function<void(Fields&)> edit) {
+    return Edit([=](const fs::path& s) { EditTumLine(s / "estimate.tum", line_no, edit); });
+}
+
+struct BadInputCase {
+    const char* name;
+    Mutation mutate;
+    int exit_code;
+    /// ECMAScript regexes that the one message line must each contain (std::regex_search).
+    std::vector<std::string> message;
+    /// Write "sentinel\n" to the output first; it must be left byte-identical.
+    bool sentinel = false;
+};
+
+void PrintTo(const BadInputCase& c, std::ostream* os) { *os << c.name; }
+
+std::vector<BadInputCase> BadInputCases() {
+    const std::string kNothingWritten = "nothing written";
+    constexpr bool kSentinelKept = true;  // BadInputCase::sentinel
+    return {
+        // ---- estimate.tum (data lines start at line 1; line 5 is the fifth pose) ----
+        {"EstimateSevenNumbers",
+         EditEstimateLine(5, [](Fields& f) { f.pop_back(); }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: expected 8 numbers, found 7 fields)"},
+         kSentinelKept},
+        {"EstimateShortLine",
+         EditEstimateLine(5, [](Fields& f) { f.resize(3); }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: expected 8 numbers, found 3 fields)"}},
+        {"EstimateNonNumber",
+         EditEstimateLine(5, [](Fields& f) { f[2] = "12.x"; }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: field 3 '12\.x' is not a number)"}},
+        {"EstimateNaN",
+         EditEstimateLine(5, [](Fields& f) { f[1] = "nan"; }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: field 2 'nan' is not finite)"}},
+        {"EstimateInf",
+         EditEstimateLine(5, [](Fields& f) { f[3] = "-inf"; }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: field 4 '-inf' is not finite)"}},
+        {"EstimateTimestampBackwards",
+         EditEstimateLine(5, [](Fields& f) { f[0] = "999.0"; }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: timestamp 999 does not increase)"}},
+        {"EstimateTimestampRepeated",
+         EditEstimateLine(5, [](Fields& f) { f[0] = "1000.3"; }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: timestamp 1000\.3 does not increase)"}},
+        {"EstimateZeroQuaternion",
+         EditEstimateLine(5, [](Fields& f) { f[4] = f[5] = f[6] = f[7] = "0"; }),
+         kExitBadInput,
+         {R"(estimate\.tum:5: quaternion has zero norm)"}},
+        {"EstimateTwoPoses",
+         Edit([](const fs::path& s) { KeepLines(s / "estimate.tum", 2); }),
+         kExitBadInput,
+         {R"(estimate\.tum: has 2 poses, need at least 3)"}},
+        {"EstimateEmpty",
+         Edit([](const fs::path& s) { WriteFile(s / "estimate.tum", ""); }),
+         kExitBadInput,
+         {R"(estimate\.tum: has 0 poses, need at least 3)"},
+         kSentinelKept},
+        {"EstimateMissing",
+         Edit([](const fs::path& s) { fs::remove(s / "estimate.tum"); }),
+         kExitBadInput,
+         {R"(estimate\.tum: cannot open file)"}},
+        {"GroundTruthPoseCount",
+         Edit([](const fs::path& s) { KeepLines(s / "ground_truth.tum", 501); }),
+         kExitBadInput,
+         {R"(ground_truth\.tum: ground truth has 501 poses, the estimate 601)"},
+         kSentinelKept},
+
+        // ---- scenario.yaml ----
+        {"ScenarioUnknownFormat",
+         Edit([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "path: estimate.tum\n  format: tum",
+                     "path: estimate.tum\n  format: csv");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: estimate\.format: unknown value 'csv')"},
+         kSentinelKept},
+        {"ScenarioUnknownFrame",
+         Edit([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "\nframe: enu\n", "\nframe: ned\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: frame: unknown value 'ned')"}},
+        {"ScenarioUnknownMode",
+         Edit([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "\nmode: road2d\n", "\nmode: road3d\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: mode: unknown value 'road3d')"}},
+        {"ScenarioAnchorLatWithoutLon",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "scenario.yaml", "\n  lon_deg: [^\n]*", "");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: anchor\.lon_deg: missing required key)"}},
+        {"ScenarioNoAnchor",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "scenario.yaml", "\nanchor:\n(  [^\n]*\n)+", "\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: anchor: missing required key)"}},
+        {"ScenarioAnchorLat95",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "scenario.yaml", "\n  lat_deg: [^\n]*", "\n  lat_deg: 95");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: anchor\.lat_deg: must be within \[-90, 90\])"}},
+        {"ScenarioMapListEmpty",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "scenario.yaml", "\nmap:\n(  [^\n]*\n)+", "\nmap: []\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: map: must list at least one layer)"}},
+        {"ScenarioMissingEstimate",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "scenario.yaml", "\nestimate:\n(  [^\n]*\n)+", "\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: estimate: missing required key)"}},
+        {"ScenarioYamlSyntaxError",
+         Edit([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "\nframe: enu\n", "\nframe: [enu\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: YAML error)"},
+         kSentinelKept},
+        {"ScenarioGeoJsonLayerInRoadMode",
+         Edit([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "  - path: map.osm\n    format: osm",
+                     "  - path: map.osm\n    format: geojson");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml: map: road2d mode reads OpenStreetMap layers only)"}},
+        {"ScenarioFolderWithoutYaml",
+         Edit([](const fs::path& s) { fs::remove(s / "scenario.yaml"); }),
+         kExitBadInput,
+         {R"(scenario\.yaml: scenario folder has no scenario\.yaml)"}},
+        {"ScenarioFileNotYaml",
+         [](const CaseDirs& c) {
+             fs::rename(c.scenario / "scenario.yaml", c.scenario / "scenario.txt");
+             return std::vector<std::string>{"correct", (c.scenario / "scenario.txt").string(),
+                                             "-o", c.output.string()};
+         },
+         kExitBadInput,
+         {R"(scenario\.txt: expected a scenario folder or a \.yaml/\.yml file)"}},
+
+        // ---- map.osm ----
+        {"OsmOnlyFootways",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "map.osm", R"(<tag k="highway" v="[^"]*"/>)",
+                          R"(<tag k="highway" v="footway"/>)");
+         }),
+         kExitBadInput,
+         {R"(map\.osm: no usable roads)", "'vehicle' profile"},
+         kSentinelKept},
+        {"OsmNoHighwayWays",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "map.osm", R"(<tag k="highway")", R"(<tag k="landuse")");
+         }),
+         kExitBadInput,
+         {R"(map\.osm: no usable roads: 0 highway way)"}},
+        {"OsmTruncated",
+         Edit([](const fs::path& s) {
+             const std::string xml = ReadFile(s / "map.osm");
+             WriteFile(s / "map.osm", xml.substr(0, xml.size() / 2));
+         }),
+         kExitBadInput,
+         {R"(map\.osm:\d+: malformed XML)"},
+         kSentinelKept},
+        {"OsmNodeLat95",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "map.osm", R"re((<node id="\d+" lat=)"[^"]*")re", R"re($1"95")re",
+                          true);
+         }),
+         kExitBadInput,
+         {R"(map\.osm:\d+: lat: node \d+: '95' is outside \[-90, 90\])"}},
+        {"OsmMissing",
+         Edit([](const fs::path& s) { fs::remove(s / "map.osm"); }),
+         kExitBadInput,
+         {R"(map\.osm: cannot open)"}},
+
+        // ---- params.yaml via --config ----
+        {"ParamsUnknownKey",
+         WithParams("model: {step_sigmaa_m: 1}\n"),
+         kExitBadInput,
+         {R"(params\.yaml:1: model\.step_sigmaa_m: unknown parameter)"},
+         kSentinelKept},
+        {"ParamsNegativeSigma",
+         WithParams("model: {step_sigma_m: -1}\n"),
+         kExitBadInput,
+         {R"(params\.yaml:1: model\.step_sigma_m: must be > 0)"}},
+        {"ParamsWeightTwo",
+         WithParams("model:\n  map_weight: 2\n"),
+         kExitBadInput,
+         {R"(params\.yaml:2: model\.map_weight: must be in \(0, 1\])"}},
+        {"ParamsNonNumber",
+         WithParams("model: {step_sigma_m: abc}\n"),
+         kExitBadInput,
+         {R"(params\.yaml:1: model\.step_sigma_m: must be a number)"}},
+        {"ParamsUnknownSection",
+         WithParams("modle: {step_sigma_m: 1}\n"),
+         kExitBadInput,
+         {R"(params\.yaml:1: modle: unknown section)"}},
+        {"ParamsKeyGivenTwice",
+         WithParams("model:\n  map_weight: 0.5\n  map_weight: 0.7\n"),
+         kExitBadInput,
+         {R"(params\.yaml:3: model\.map_weight: key given twice)"}},
+        {"ParamsListAsKey",
+         WithParams("model: {[step_sigma_m]: 1}\n"),
+         kExitBadInput,
+         {R"(params\.yaml:1: model: keys must be plain names)"}},
+        {"ParamsProfileList",
+         WithParams("roads: {profile: [vehicle]}\n"),
+         kExitBadInput,
+         {R"(params\.yaml:1: roads\.profile: must be vehicle, pedestrian or all)"}},
+        {"ParamsUnknownProfile",
+         WithParams("roads:\n  profile: tank\n"),
+         kExitBadInput,
+         {R"(params\.yaml:2: roads\.profile: must be .*'tank')"}},
+        {"ParamsYamlSyntaxError",
+         WithParams("model: {step_sigma_m: 1\n"),
+         kExitBadInput,
+         {R"(params\.yaml:\d+: YAML syntax error)"}},
+        {"ParamsMissingFile",
+         [](const CaseDirs& c) {
+             return Correct(c, {"--config", c.params.string()});
+         },
+         kExitBadInput,
+         {R"(params\.yaml: cannot open the parameter file)"}},
+
+        // ---- command line ----
+        {"NoArguments",
+         [](const CaseDirs&) { return std::vector<std::string>{}; },
+         kExitUsage,
+         {"^driftcorr: missing command$"}},
+        {"UnknownCommand",
+         [](const CaseDirs& c) {
+             return std::vector<std::string>{"fix", c.scenario.string(), "-o", c.output.string()};
+         },
+         kExitUsage,
+         {"^driftcorr: unknown command 'fix'$"}},
+        {"MissingOutput",
+         [](const CaseDirs& c) {
+             return std::vector<std::string>{"correct", c.scenario.string()};
+         },
+         kExitUsage,
+         {"^driftcorr: missing -o"}},
+        {"UnknownOption",
+         [](const CaseDirs& c) { return Correct(c, {"--fast"}); },
+         kExitUsage,
+         {"^driftcorr: unknown option --fast$"},
+         kSentinelKept},
+        {"OptionWithoutValue",
+         [](const CaseDirs& c) { return Correct(c, {"--config"}); },
+         kExitUsage,
+         {"^driftcorr: --config needs a value$"}},
+        {"NonexistentScenario",
+         [](const CaseDirs& c) {
+             return std::vector<std::string>{"correct", (c.scenario / "no_such_scenario").string(),
+                                             "-o", c.output.string()};
+         },
+         kExitBadInput,
+         {R"(no_such_scenario: no such file or folder)"},
+         kSentinelKept},
+        {"OutputFolderMissing",
+         [](const CaseDirs& c) {
+             return std::vector<std::string>{"correct", c.scenario.string(), "-o",
+                                             (c.out_dir / "missing" / "corrected.tum").string()};
+         },
+         kExitBadInput,
+         {R"(missing/corrected\.tum: -o: folder '.*missing' does not exist)"}},
+        {"OutputIsAFolder",
+         [](const CaseDirs& c) {
+             return std::vector<std::string>{"correct", c.scenario.string(), "-o",
+                                             c.out_dir.string()};
+         },
+         kExitBadInput,
+         {R"(: -o: is a folder)"}},
+        // The GeoJSON path is bad: the corrected trajectory must not be written either.
+        {"GeoJsonFolderMissing",
+         [](const CaseDirs& c) {
+             return Correct(c, {"--geojson", (c.out_dir / "missing" / "tracks.geojson").string()});
+         },
+         kExitBadInput,
+         {R"(tracks\.geojson: --geojson: folder '.*missing' does not exist)"},
+         kSentinelKept},
+
+        // ---- the solver does not produce a usable correction ----
+        // One Ipopt iteration for the final refinement: it stops at the iteration limit (also
+        // when re-solved without the hard corridor), so there is no usable correction.
+        {"RefineStopsAtMaxIterations",
+         WithParams("corrector: {refine_max_iterations: 1}\n"),
+         kExitSolver,
+         {"^driftcorr: ", "max_iterations", kNothingWritten},
+         kSentinelKept},
+        // Every window stops after one iteration and there is no refinement to rescue them.
+        {"WindowsStopAtMaxIterations",
+         WithParams("corrector: {refine: false, window_max_iterations: 1}\n"),
+         kExitSolver,
+         {"^driftcorr: ", "window\\(s\\) failed", kNothingWritten}},
+    };
+}
+
+struct ValidCase {
+    const char* name;
+    Mutation mutate;
+};
+
+void PrintTo(const ValidCase& c, std::ostream* os) { *os << c.name; }
+
+/// The vehicle stops at pose `first` for `count` poses: poses first..first+count-1 repeat pose
+/// `first`, later poses are the original ones shifted by count-1 (the drive resumes where it
+/// stopped), timestamps unchanged, the last count-1 poses dropped.
+void InsertStop(std::vector<Fields>& poses, std::size_t first, std::size_t count) {
+    std::vector<Fields> out = poses;
+    for (std::size_t i = first; i < poses.size(); ++i) {
+        const std::size_t src = i < first + count ? first : i - (count - 1);
+        for (std::size_t k = 1; k < 8; ++k) out[i][k] = poses[src][k];
+    }
+    poses = out;
+}
+
+/// Moves the last `count` poses `dx_m` along the frame's x axis (east for an enu frame, yaw 0).
+void ShiftTail(std::vector<Fields>& poses, std::size_t count, double dx_m) {
+    for (std::size_t i = poses.size() - count; i < poses.size(); ++i) {
+        char buf[64];
+        std::snprintf(buf, sizeof(buf), "%.6f", std::stod(poses[i][1]) + dx_m);
+        poses[i][1] = buf;
+    }
+}
+
+std::vector<ValidCase> ValidCases() {
+    return {
+        {"LongStop", Edit([](const fs::path& s) {
+             for (const char* f : {"estimate.tum", "ground_truth.tum"}) {
+                 TransformTum(s / f, [](std::vector<Fields>& p) { InsertStop(p, 200, 30); });
+             }
+         })},
+        {"LeavesMapExtent", Edit([](const fs::path& s) {
+             // +x is east because the trajectory frame is enu with yaw 0.
+             Require(s / "scenario.yaml", "\nframe: enu\n");
+             Require(s / "scenario.yaml", "\n  yaw_deg: 0.0\n");
+             for (const char* f : {"estimate.tum", "ground_truth.tum"}) {
+                 TransformTum(s / f, [](std::vector<Fields>& p) { ShiftTail(p, 50, 3000.0); });
+             }
+         })},
+        {"ScenarioYamlPath",
+         [](const CaseDirs& c) {
+             return std::vector<std::string>{"correct", (c.scenario / "scenario.yaml").string(),
+                                             "-o", c.output.string()};
+         }},
+        {"WithGeoJsonAndConfig",
+         [](const CaseDirs& c) {
+             WriteFile(c.params, "model:\n  map_weight: 0.8\nroads: {profile: vehicle}\n");
+             return Correct(c, {"--config", c.params.string(), "--geojson",
+                                (c.out_dir / "tracks.geojson").string()});
+         }},
+    };
+}
+
+// ---- fixture ----------------------------------------------------------------------------------
+
+class CliTest : public ::testing::Test {
+protected:
+    /// Generates the valid scenario once per suite, in a folder of this process.
+    static void SetUpTestSuite() {
+        root_ = fs::path(DRIFTCORR_TEST_TMPDIR) / ("test_cli_" + std::to_string(::getpid()));
+        fs::remove_all(root_);
+        fs::create_directories(root_);
+        base_ = root_ / "valid_scenario";
+        const RunResult gen = RunProgram(kGenerator, {base_.string(), "--duration-s", "60"}, root_);
+        base_error_.clear();
+        if (gen.exit_code != 0 || !fs::exists(base_ / "scenario.yaml")) {
+            base_error_ = "generating the scenario failed (exit " + std::to_string(gen.exit_code) +
+                          "): " + gen.command + "\n" + gen.err;
+        }
+    }
+    /// Keeps the folder for inspection when a test failed.
+    static void TearDownTestSuite() {
+        const auto* suite = ::testing::UnitTest::GetInstance()->current_test_suite();
+        if (suite == nullptr || suite->Passed()) fs::remove_all(root_);
+    }
+
+    void SetUp() override { ASSERT_TRUE(base_error_.empty()) << base_error_; }
+
+    /// A fresh copy of the valid scenario and an empty output folder for the case `name`.
+    static CaseDirs MakeCase(const std::string& name) {
+        CaseDirs c;
+        const fs::path dir = root_ / name;
+        fs::remove_all(dir);
+        c.scenario = dir / "scenario";
+        c.out_dir = dir / "out";
+        c.output = c.out_dir / "corrected.tum";
+        c.params = dir / "params.yaml";
+        fs::create_directories(c.out_dir);
+        fs::copy(base_, c.scenario, fs::copy_options::recursive);
+        return c;
+    }
+
+    static inline fs::path root_, base_;
+    static inline std::string base_error_;
+};
+
+class CliBadInput : public CliTest, public ::testing::WithParamInterface<BadInputCase> {};
+class CliValidInput : public CliTest, public ::testing::WithParamInterface<ValidCase> {};
+
+TEST_P(CliBadInput, OneMessageRightExitCodeNothingWritten) {
+    const BadInputCase& tc = GetParam();
+    const CaseDirs c = MakeCase(tc.name);
+    const std::vector<std::string> args = tc.mutate(c);
+    const std::string kSentinel = "sentinel\n";
+    if (tc.sentinel) WriteFile(c.output, kSentinel);
+
+    const RunResult r = RunProgram(kCli, args, c.out_dir.parent_path());
+    SCOPED_TRACE("command: " + r.command + "\nstderr:\n" + r.err);
+
+    EXPECT_EQ(r.exit_code, tc.exit_code);
+    const std::vector<std::string> messages = MessageLines(r.err);
+    ASSERT_EQ(messages.size(), 1u) << "expected exactly one message line on stderr";
+    const std::string& message = messages.front();
+    std::cout << "  [" << tc.name << "] exit " << r.exit_code << ": " << message << "\n";
+    EXPECT_EQ(message.rfind("driftcorr: ", 0), 0u) << message;
+    EXPECT_EQ(message.find('\r'), std::string::npos);
+    for (const std::string& pattern : tc.message) {
+        EXPECT_TRUE(std::regex_search(message, std::regex(pattern)))
+            << "message '" << message << "' does not contain /" << pattern << "/";
+    }
+    EXPECT_EQ(message.find("internal error"), std::string::npos) << message;
+    if (tc.exit_code == kExitUsage) {
+        EXPECT_NE(r.err.find("usage: driftcorr correct"), std::string::npos);
+    }
+
+    // Nothing written: the output folder holds nothing new (no output, no temporary).
+    const std::vector<std::string> entries = FolderEntries(c.out_dir);
+    if (tc.sentinel) {
+        EXPECT_EQ(entries, std::vector<std::string>{"corrected.tum"});
+        const std::string now = ReadFile(c.output);
+        EXPECT_TRUE(now == kSentinel) << "the pre-existing output was clobbered: now " << now.size()
+                                      << " bytes, starting '" << now.substr(0, 60) << "'";
+    } else {
+        EXPECT_TRUE(entries.empty())
+            << "output folder holds " << entries.size() << " file(s), e.g. "
+            << (entries.empty() ? "" : entries.front());
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, CliBadInput, ::testing::ValuesIn(BadInputCases()),
+                         [](const ::testing::TestParamInfo<BadInputCase>& p) {
+                             return std::string(p.param.name);
+                         });
+
+TEST_P(CliValidInput, SucceedsWithOnePosePerEstimatePose) {
+    const ValidCase& tc = GetParam();
+    const CaseDirs c = MakeCase(tc.name);
+    const std::vector<std::string> args = tc.mutate(c);
+    WriteFile(c.output, "sentinel\n");  // an existing output is replaced
+
+    const RunResult r = RunProgram(kCli, args, c.out_dir.parent_path());
+    SCOPED_TRACE("command: " + r.command + "\nstderr:\n" + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    EXPECT_TRUE(MessageLines(r.err).empty()) << "only progress lines expected on stderr";
+    EXPECT_NE(r.out.find("wrote"), std::string::npos) << r.out;
+
+    const driftcorr::Trajectory estimate =
+        driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
+    const driftcorr::Trajectory corrected = driftcorr::io::ReadTum(c.output.string());
+    ASSERT_EQ(corrected.size(), estimate.size());
+    for (std::size_t i = 0; i < estimate.size(); ++i) {
+        ASSERT_NEAR(corrected.t_s[i], estimate.t_s[i], 1e-3) << "pose " << i;
+    }
+    for (std::size_t i = 0; i + 1 < args.size(); ++i) {
+        if (args[i] == "--geojson") {
+            EXPECT_GT(fs::file_size(args[i + 1]), 0u) << args[i + 1];
+        }
+    }
+    for (const std::string& name : FolderEntries(c.out_dir)) {
+        EXPECT_EQ(name.find(".tmp."), std::string::npos) << "temporary left behind: " << name;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, CliValidInput, ::testing::ValuesIn(ValidCases()),
+                         [](const ::testing::TestParamInfo<ValidCase>& p) {
+                             return std::string(p.param.name);
+                         });
+
+}  // namespace
