@@ -643,3 +643,30 @@ TEST(GeoJson, NonFiniteCoordinateWritesNothing) {
 
 }  // namespace
 }  // namespace driftcorr::io
+
+namespace {
+
+// A misspelt optional key is not fatal (FORMAT.md allows extensions) but must be reported.
+TEST(ScenarioWarnings, UnknownKeysAreReportedWithLine) {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / ("warn_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::ofstream(dir / "scenario.yaml") << "mode: road2d\n"
+                                            "estimate: {path: e.tum, format: tum}\n"
+                                            "frame: enu\n"
+                                            "anchor:\n"
+                                            "  lat_deg: 48.9\n"
+                                            "  lon_deg: 8.3\n"
+                                            "  yaw_dge: 30\n"
+                                            "map:\n"
+                                            "  - {path: map.osm, format: osm, widht: 3}\n"
+                                            "colour: blue\n";
+    const driftcorr::io::Scenario s = driftcorr::io::LoadScenario(dir.string());
+    ASSERT_EQ(s.warnings.size(), 3u);
+    EXPECT_NE(s.warnings[0].find("scenario.yaml:10: colour: unknown key"), std::string::npos) << s.warnings[0];
+    EXPECT_NE(s.warnings[1].find("scenario.yaml:7: anchor.yaw_dge: unknown key"), std::string::npos) << s.warnings[1];
+    EXPECT_NE(s.warnings[2].find("map[0].widht: unknown key"), std::string::npos) << s.warnings[2];
+    fs::remove_all(dir);
+}
+
+}  // namespace

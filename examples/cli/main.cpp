@@ -140,6 +140,7 @@ int RunCorrect(const Args& a) {
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
     pipeline::CorrectionRun run = pipeline::RunCorrection(a.scenario, cfg, MakeProgress(a.quiet));
+    for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     if (!Usable(run.result.status)) {
         PrintSummary(run, "");
         std::fprintf(stderr, "driftcorr: the solver did not produce a correction: %s (%s); nothing written\n",

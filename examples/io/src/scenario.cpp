@@ -80,6 +80,20 @@ public:
     bool Has(const std::string& key) const { return Find(key).has_value(); }
     const std::string& file() const { return file_; }
 
+    /// One warning per key not in `known` ("file:line: key: unknown key, ignored"): FORMAT.md
+    /// allows extensions, but a misspelt optional key (yaw_dge) must not pass unnoticed.
+    void WarnUnknownKeys(std::initializer_list<const char*> known,
+                         std::vector<std::string>& warnings) const {
+        for (const auto& entry : node_) {
+            const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "?";
+            const bool is_known = std::any_of(known.begin(), known.end(),
+                                              [&](const char* k) { return key == k; });
+            if (is_known) continue;
+            warnings.push_back(file_ + ":" + std::to_string(LineOf(entry.first)) + ": " +
+                               Key(key) + ": unknown key, ignored");
+        }
+    }
+
 private:
     /// yaml-cpp keeps the first of two equal keys; a repeated key is almost surely a mistake.
     void CheckNoDuplicateKeys() const {
@@ -168,11 +182,13 @@ std::string ResolvePath(const fs::path& dir, const std::string& path) {
     return (p.is_absolute() ? p : dir / p).lexically_normal().string();
 }
 
-TrajectorySource ParseSource(const Block& block, const fs::path& dir) {
+TrajectorySource ParseSource(const Block& block, const fs::path& dir,
+                             std::vector<std::string>& warnings) {
     TrajectorySource src;
     src.path = ResolvePath(dir, block.String("path"));
     src.format = ParseChoice<TrajectoryFormat>(
         block, "format", {{"kitti", TrajectoryFormat::kKitti}, {"tum", TrajectoryFormat::kTum}});
+    block.WarnUnknownKeys({"path", "format", "rate_hz", "times"}, warnings);
     src.rate_hz = block.OptDouble("rate_hz");
     const std::optional<std::string> times = block.OptString("times");
     if (times) src.times_path = ResolvePath(dir, *times);
@@ -204,7 +220,10 @@ void ParseGridAnchor(const Block& block, AnchorSpec& anchor) {
     anchor.northing_m = block.Double("northing_m");
 }
 
-AnchorSpec ParseAnchor(const Block& block) {
+AnchorSpec ParseAnchor(const Block& block, std::vector<std::string>& warnings) {
+    block.WarnUnknownKeys(
+        {"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m", "yaw_deg", "z_m"},
+        warnings);
     const bool geographic = block.Has("lat_deg") || block.Has("lon_deg") || block.Has("alt_m");
     const bool grid = block.Has("crs") || block.Has("easting_m") || block.Has("northing_m");
     if (geographic && grid) {
@@ -245,7 +264,9 @@ MapFormat ParseMapFormat(const Block& block, const std::string& path) {
     block.Fail("format", "missing, and the extension of '" + path + "' names no known map format");
 }
 
-MapLayerSpec ParseLayer(const Block& block, const fs::path& dir) {
+MapLayerSpec ParseLayer(const Block& block, const fs::path& dir,
+                        std::vector<std::string>& warnings) {
+    block.WarnUnknownKeys({"path", "format", "role", "floor_z_m"}, warnings);
     MapLayerSpec layer;
     const std::string path = block.String("path");
     layer.path = ResolvePath(dir, path);
@@ -259,31 +280,36 @@ MapLayerSpec ParseLayer(const Block& block, const fs::path& dir) {
     return layer;
 }
 
-std::vector<MapLayerSpec> ParseMap(const Block& root, const fs::path& dir) {
+std::vector<MapLayerSpec> ParseMap(const Block& root, const fs::path& dir,
+                                   std::vector<std::string>& warnings) {
     const YAML::Node list = root.Get("map");
     if (!list.IsSequence()) root.Fail("map", "must be a list of layers");
     if (list.size() == 0) root.Fail("map", "must list at least one layer");
     std::vector<MapLayerSpec> layers;
     for (std::size_t i = 0; i < list.size(); ++i) {
         const Block layer(root.file(), list[i], "map[" + std::to_string(i) + "]", LineOf(list));
-        layers.push_back(ParseLayer(layer, dir));
+        layers.push_back(ParseLayer(layer, dir, warnings));
     }
     return layers;
 }
 
 void ParseRoot(const Block& root, Scenario& s) {
     const fs::path dir(s.dir);
+    root.WarnUnknownKeys(
+        {"name", "mode", "estimate", "ground_truth", "frame", "anchor", "map"}, s.warnings);
     s.name = root.OptString("name").value_or(dir.filename().string());
     s.mode = ParseChoice<ScenarioMode>(
         root, "mode", {{"road2d", ScenarioMode::kRoad2d}, {"indoor3d", ScenarioMode::kIndoor3d}});
-    s.estimate = ParseSource(root.Child("estimate"), dir);
-    if (root.Has("ground_truth")) s.ground_truth = ParseSource(root.Child("ground_truth"), dir);
+    s.estimate = ParseSource(root.Child("estimate"), dir, s.warnings);
+    if (root.Has("ground_truth")) {
+        s.ground_truth = ParseSource(root.Child("ground_truth"), dir, s.warnings);
+    }
     const std::string frame = root.String("frame");
     const std::optional<FrameAxes> axes = ParseFrameAxes(frame);
     if (!axes) root.Fail("frame", "unknown value '" + frame + "' (expected kitti_camera | enu)");
     s.frame = *axes;
-    s.anchor = ParseAnchor(root.Child("anchor"));
-    s.map = ParseMap(root, dir);
+    s.anchor = ParseAnchor(root.Child("anchor"), s.warnings);
+    s.map = ParseMap(root, dir, s.warnings);
 }
 
 }  // namespace

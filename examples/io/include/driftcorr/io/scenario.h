@@ -49,6 +49,8 @@ struct Scenario {
     FrameAxes frame = FrameAxes::kEnu;
     AnchorSpec anchor;
     std::vector<MapLayerSpec> map;
+    /// Non-fatal findings, one line each ("file:line: key: unknown key, ignored").
+    std::vector<std::string> warnings;
 };
 
 /// Loads `path` (a scenario folder containing scenario.yaml, or a .yaml file). Throws
