@@ -431,3 +431,68 @@ TEST(ScaleRandomWalkRobust, MatchesGaussianNearZeroAndCentralDifferences) {
 }
 
 }  // namespace
+
+namespace {
+
+// Central-difference gradient and Hessian (of the analytic gradient) of any term with an
+// Evaluate(x, grad, hess) of fixed size.
+template <typename Term, typename Vec, typename Mat>
+void ExpectDerivativesMatch(const Term& term, const Vec& x, double tol) {
+    Vec g;
+    Mat h;
+    term.Evaluate(x, &g, &h);
+    const double eps = 1e-6;
+    for (int k = 0; k < x.size(); ++k) {
+        Vec xp = x, xm = x;
+        xp[k] += eps;
+        xm[k] -= eps;
+        Vec gp, gm;
+        const double fd = (term.Evaluate(xp, &gp, nullptr) - term.Evaluate(xm, &gm, nullptr)) / (2 * eps);
+        EXPECT_NEAR(g[k], fd, tol * (1.0 + std::abs(fd))) << "gradient " << k;
+        const Vec hfd = (gp - gm) / (2 * eps);
+        for (int r = 0; r < x.size(); ++r) {
+            EXPECT_NEAR(h(r, k), hfd[r], tol * (1.0 + std::abs(hfd[r]))) << "hessian " << r << "," << k;
+        }
+    }
+}
+
+TEST(StepLengthRobust, DerivativesAndOutlierDownweighting) {
+    std::mt19937 rng(20261122);
+    std::uniform_real_distribution<double> u(-3.0, 3.0);
+    const driftcorr::StepLengthTerm robust{1.2, 0.1, 0.03, 0.8, 3.0};
+    for (int n = 0; n < 30; ++n) {
+        driftcorr::StepVector x;
+        for (int k = 0; k < x.size(); ++k) x[k] = u(rng);
+        x[driftcorr::kScale] = 1.0 + 0.1 * u(rng);
+        ExpectDerivativesMatch<driftcorr::StepLengthTerm, driftcorr::StepVector,
+                               driftcorr::StepMatrix>(robust, x, 1e-5);
+    }
+    // A dropped step (observed 0 m, moved 1.2 m = 40 sigma) costs far less than under a Gaussian.
+    const driftcorr::StepLengthTerm dropped_robust{0.0, 0.0, 0.03, 1.0, 3.0};
+    const driftcorr::StepLengthTerm dropped_gauss{0.0, 0.0, 0.03, 1.0};
+    driftcorr::StepVector moved = driftcorr::StepVector::Zero();
+    moved[driftcorr::kXb] = 1.2;
+    moved[driftcorr::kScale] = 1.0;
+    EXPECT_LT(dropped_robust.Evaluate(moved, nullptr, nullptr),
+              0.05 * dropped_gauss.Evaluate(moved, nullptr, nullptr));  // 23.3 vs 800
+}
+
+TEST(SpeedChange, ZeroAtConstantSpeedAndDerivatives) {
+    // Three poses moving east at 8 m/s, 0.1 s apart: no speed change.
+    driftcorr::SpeedVector x = driftcorr::SpeedVector::Zero();
+    x[4] = 0.8, x[8] = 1.6;
+    const driftcorr::SpeedChangeTerm term{0.0, 0.1, 0.0, 0.1, 0.5, 1.0};
+    driftcorr::SpeedVector g;
+    EXPECT_NEAR(term.Evaluate(x, &g, nullptr), 0.0, 1e-12);
+    EXPECT_NEAR(g.norm(), 0.0, 1e-9);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-2.0, 2.0);
+    const driftcorr::SpeedChangeTerm curved{0.05, 0.1, -0.03, 0.12, 0.5, 0.9};
+    for (int n = 0; n < 30; ++n) {
+        for (int k = 0; k < x.size(); ++k) x[k] = u(rng);
+        ExpectDerivativesMatch<driftcorr::SpeedChangeTerm, driftcorr::SpeedVector,
+                               driftcorr::SpeedMatrix>(curved, x, 1e-5);
+    }
+}
+
+}  // namespace

@@ -19,6 +19,22 @@ double Gaussian(double r, const Eigen::Matrix<double, N, 1>& j,
     return 0.5 * k * r * r;
 }
 
+// Accumulates w * k^2 / 2 * log(1 + (r / sigma)^2 / k^2) given r, its gradient J and Hessian Hr.
+template <int N>
+double Cauchy(double r, const Eigen::Matrix<double, N, 1>& j,
+              const Eigen::Matrix<double, N, N>* hr, double sigma, double k, double weight,
+              Eigen::Matrix<double, N, 1>* grad, Eigen::Matrix<double, N, N>* hess) {
+    const double z = r / sigma, k2 = k * k, q = 1.0 + z * z / k2;
+    const double rho_z = weight * z / q;                          // d rho / d z
+    const double rho_zz = weight * (1.0 - z * z / k2) / (q * q);  // d2 rho / d z2
+    if (grad) *grad = (rho_z / sigma) * j;
+    if (hess) {
+        *hess = (rho_zz / (sigma * sigma)) * j * j.transpose();
+        if (hr) *hess += (rho_z / sigma) * (*hr);
+    }
+    return 0.5 * weight * k2 * std::log(q);
+}
+
 // Displacement and direction angle of a step block.
 struct StepGeometry {
     double dx, dy, c, s;
@@ -55,7 +71,50 @@ double StepLengthTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatri
     hr(kYawA, kYb) = hr(kYb, kYawA) = g.c;
     hr(kYawA, kXa) = hr(kXa, kYawA) = g.s;
     hr(kYawA, kYa) = hr(kYa, kYawA) = -g.c;
-    return Gaussian<9>(r, j, &hr, sigma_m, weight, grad, hess);
+    if (robust_k <= 0.0) return Gaussian<9>(r, j, &hr, sigma_m, weight, grad, hess);
+    return Cauchy<9>(r, j, &hr, sigma_m, robust_k, weight, grad, hess);
+}
+
+namespace {
+
+// Along-track displacement of one step, with gradient and Hessian over 8 variables
+// [x_a, y_a, z_a, yaw_a, x_b, y_b, z_b, yaw_b] (only x, y, yaw_a enter).
+struct Along {
+    double value;
+    Eigen::Matrix<double, 8, 1> j;
+    Eigen::Matrix<double, 8, 8> h;
+};
+
+Along AlongTrack(const double* v, double direction_rad) {
+    const double phi = v[3] + direction_rad, c = std::cos(phi), s = std::sin(phi);
+    const double dx = v[4] - v[0], dy = v[5] - v[1];
+    Along a;
+    a.value = c * dx + s * dy;
+    const double side = -s * dx + c * dy;
+    a.j.setZero();
+    a.j[0] = -c, a.j[1] = -s, a.j[4] = c, a.j[5] = s, a.j[3] = side;
+    a.h.setZero();
+    a.h(3, 3) = -a.value;
+    a.h(3, 4) = a.h(4, 3) = -s;
+    a.h(3, 5) = a.h(5, 3) = c;
+    a.h(3, 0) = a.h(0, 3) = s;
+    a.h(3, 1) = a.h(1, 3) = -c;
+    return a;
+}
+
+}  // namespace
+
+double SpeedChangeTerm::Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const {
+    const Along ab = AlongTrack(x.data(), direction_ab_rad);
+    const Along bc = AlongTrack(x.data() + 4, direction_bc_rad);
+    const double r = bc.value / dt_bc_s - ab.value / dt_ab_s;
+    SpeedVector j = SpeedVector::Zero();
+    j.segment<8>(0) -= ab.j / dt_ab_s;
+    j.segment<8>(4) += bc.j / dt_bc_s;
+    SpeedMatrix hr = SpeedMatrix::Zero();
+    hr.block<8, 8>(0, 0) -= ab.h / dt_ab_s;
+    hr.block<8, 8>(4, 4) += bc.h / dt_bc_s;
+    return Gaussian<12>(r, j, &hr, sigma_mps, weight, grad, hess);
 }
 
 double StepDirectionTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {

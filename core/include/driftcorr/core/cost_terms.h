@@ -18,9 +18,25 @@ enum StepVar : int { kXa = 0, kYa, kZa, kYawA, kXb, kYb, kZb, kYawB, kScale, kSt
 
 /// Step length along the observed step direction: r = u(yaw_a + direction) . (p_b - p_a) - s * L.
 /// Smooth at zero length, so stationary steps (L = 0) need no special case.
+/// With robust_k > 0 the likelihood is heavy-tailed (Cauchy, width k sigmas):
+///   rho = w * k^2 / 2 * log(1 + (r / sigma)^2 / k^2),
+/// so a step the odometry dropped (frame-to-frame registration returning ~0 while the platform
+/// moved) is an outlier the other terms can overrule, instead of a hard pull to zero.
 struct StepLengthTerm {
     double length_m, direction_rad, sigma_m, weight;
+    double robust_k = 0.0;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
+};
+
+/// Speed continuity over two consecutive steps (poses a, b, c): the along-track speed changes
+/// little from one step to the next, r = along_bc / dt_bc - along_ab / dt_ab [m/s], Gaussian
+/// with sigma_mps. Variables [x_a, y_a, z_a, yaw_a, x_b, y_b, z_b, yaw_b, x_c, y_c, z_c, yaw_c];
+/// along_ab = u(yaw_a + direction_ab) . (p_b - p_a), likewise along_bc.
+using SpeedVector = Eigen::Matrix<double, 12, 1>;
+using SpeedMatrix = Eigen::Matrix<double, 12, 12>;
+struct SpeedChangeTerm {
+    double direction_ab_rad, dt_ab_s, direction_bc_rad, dt_bc_s, sigma_mps, weight;
+    double Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const;
 };
 
 /// Sideways motion relative to the observed step direction: r = n(yaw_a + direction) . (p_b - p_a),
