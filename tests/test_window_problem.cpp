@@ -156,18 +156,24 @@ struct WindowCase {
     std::size_t first, last;
     bool fix_height;
     unsigned seed;
+    bool all_terms = false;  ///< also the robust step length and the speed-continuity terms
 };
 
 // Readable (and stable) parameter names in ctest output.
 void PrintTo(const WindowCase& c, std::ostream* os) {
     *os << "poses [" << c.first << ", " << c.last << "]"
-        << (c.fix_height ? " planar" : " free height") << ", seed " << c.seed;
+        << (c.fix_height ? " planar" : " free height") << ", seed " << c.seed
+        << (c.all_terms ? ", all terms" : "");
 }
 
 class WindowDerivatives : public ::testing::TestWithParam<WindowCase> {
 protected:
     void SetUp() override {
         model_ = Model();
+        if (GetParam().all_terms) {
+            model_.step_robust_k = 3.0;
+            model_.accel_sigma_mps2 = 2.0;
+        }
         field_ = Field(3.5);
         state_ = StateFrom(Curve(), model_, GetParam().fix_height);
     }
@@ -276,11 +282,13 @@ INSTANTIATE_TEST_SUITE_P(
     Windows, WindowDerivatives,
     ::testing::Values(WindowCase{1, 29, true, 101u}, WindowCase{1, 29, false, 102u},
                       WindowCase{12, 25, true, 103u}, WindowCase{12, 25, false, 104u},
-                      WindowCase{14, 17, true, 105u}),  // a short window around the stop
+                      WindowCase{14, 17, true, 105u},  // a short window around the stop
+                      WindowCase{1, 29, true, 106u, true}, WindowCase{12, 25, false, 107u, true},
+                      WindowCase{2, 5, true, 108u, true}),
     [](const ::testing::TestParamInfo<WindowCase>& param_info) {
         const WindowCase& c = param_info.param;
         return "poses_" + std::to_string(c.first) + "_" + std::to_string(c.last) +
-               (c.fix_height ? "_planar" : "_free_height");
+               (c.fix_height ? "_planar" : "_free_height") + (c.all_terms ? "_all_terms" : "");
     });
 
 TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {

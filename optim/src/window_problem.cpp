@@ -49,15 +49,47 @@ int WindowProblem::ScaleVar(int segment) const {
     return 4 * static_cast<int>(last_ - first_ + 1) + (segment - seg_first_);
 }
 
+int WindowProblem::Slot(std::unordered_map<std::int64_t, int>& slots, int r, int c) {
+    if (r < c) std::swap(r, c);
+    const std::int64_t key = (std::int64_t(r) << 32) | std::int64_t(c);
+    auto [it, inserted] = slots.emplace(key, static_cast<int>(hess_.size()));
+    if (inserted) hess_.emplace_back(r, c);
+    return it->second;
+}
+
+bool WindowProblem::IsJump(std::size_t i) const {
+    const StepObservation& o = state_.obs[i];
+    return o.length_m > cfg_.max_speed_mps * std::max(o.dt_s, 1e-9);
+}
+
+bool WindowProblem::HasSpeedTerm(std::size_t i) const {
+    return cfg_.accel_sigma_mps2 > 0.0 && i >= 2 && !IsJump(i) && !IsJump(i - 1);
+}
+
+SpeedChangeTerm WindowProblem::SpeedTerm(std::size_t i) const {
+    const StepObservation &a = state_.obs[i - 1], &b = state_.obs[i];
+    const double sigma = cfg_.accel_sigma_mps2 * 0.5 * (a.dt_s + b.dt_s);
+    return SpeedChangeTerm{a.direction_rad, a.dt_s, b.direction_rad, b.dt_s, sigma,
+                           cfg_.speed_weight};
+}
+
+SpeedVector WindowProblem::GatherSpeed(const double* x, std::size_t i) const {
+    SpeedVector v;
+    for (int k = 0; k < 3; ++k) {
+        const std::size_t pose = i - 2 + k;
+        const PoseState& fixed = state_.poses[pose];
+        const double values[4] = {fixed.p.x(), fixed.p.y(), fixed.p.z(), fixed.yaw_rad};
+        for (int c = 0; c < 4; ++c) {
+            const int var = PoseVar(pose, c);
+            v[4 * k + c] = var >= 0 ? x[var] : values[c];
+        }
+    }
+    return v;
+}
+
 void WindowProblem::BuildStructure() {
     std::unordered_map<std::int64_t, int> slots;
-    auto slot = [&](int r, int c) {
-        if (r < c) std::swap(r, c);
-        const std::int64_t key = (std::int64_t(r) << 32) | std::int64_t(c);
-        auto [it, inserted] = slots.emplace(key, static_cast<int>(hess_.size()));
-        if (inserted) hess_.emplace_back(r, c);
-        return it->second;
-    };
+    auto slot = [&](int r, int c) { return Slot(slots, r, c); };
     steps_.resize(last_ - first_ + 1);
     for (std::size_t i = first_; i <= last_; ++i) {
         StepSlots& s = steps_[i - first_];
@@ -65,8 +97,21 @@ void WindowProblem::BuildStructure() {
             s.var[c] = PoseVar(i - 1, c);
             s.var[4 + c] = PoseVar(i, c);
         }
-        s.var[kScale] = ScaleVar(state_.scale_segment[i]);
+        s.var[kScale] = IsJump(i) ? -1 : ScaleVar(state_.scale_segment[i]);
         for (int r = 0; r < kStepVars; ++r) {
+            for (int c = 0; c <= r; ++c) {
+                s.hess_slot[r][c] = (s.var[r] >= 0 && s.var[c] >= 0) ? slot(s.var[r], s.var[c]) : -1;
+            }
+        }
+    }
+    speeds_.resize(last_ - first_ + 1);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        if (!HasSpeedTerm(i)) continue;
+        SpeedSlots& s = speeds_[i - first_];
+        for (int k = 0; k < 3; ++k) {
+            for (int c = 0; c < 4; ++c) s.var[4 * k + c] = PoseVar(i - 2 + k, c);
+        }
+        for (int r = 0; r < 12; ++r) {
             for (int c = 0; c <= r; ++c) {
                 s.hess_slot[r][c] = (s.var[r] >= 0 && s.var[c] >= 0) ? slot(s.var[r], s.var[c]) : -1;
             }
@@ -117,7 +162,8 @@ StepVector WindowProblem::GatherStep(const double* x, std::size_t i) const {
     const double fixed_a[4] = {a.p.x(), a.p.y(), a.p.z(), a.yaw_rad};
     for (int c = 0; c < 4; ++c) v[c] = s.var[c] >= 0 ? x[s.var[c]] : fixed_a[c];
     for (int c = 4; c < 8; ++c) v[c] = x[s.var[c]];
-    v[kScale] = s.var[kScale] >= 0 ? x[s.var[kScale]] : state_.scales[state_.scale_segment[i]];
+    v[kScale] = s.var[kScale] >= 0 ? x[s.var[kScale]]
+                : (IsJump(i) ? 1.0 : state_.scales[state_.scale_segment[i]]);
     return v;
 }
 
@@ -141,7 +187,9 @@ double WindowProblem::StepCost(std::size_t i, const StepVector& v, StepVector* g
         if (g) *g += gt;
         if (h) *h += ht;
     };
-    add(StepLengthTerm{o.length_m, o.direction_rad, len_sigma, cfg_.step_weight}.Evaluate(v, gp, hp));
+    const double robust_k = IsJump(i) ? 0.0 : cfg_.step_robust_k;
+    add(StepLengthTerm{o.length_m, o.direction_rad, len_sigma, cfg_.step_weight, robust_k}
+            .Evaluate(v, gp, hp));
     add(StepDirectionTerm{o.direction_rad, lat_sigma, cfg_.step_weight}.Evaluate(v, gp, hp));
     add(HeadingChangeTerm{o.dheading_rad, head_sigma, cfg_.heading_weight}.Evaluate(v, gp, hp));
     add(HeadingPreservationTerm{cfg_.preservation_sigma_rad, cfg_.preservation_weight}.Evaluate(v, gp, hp));
@@ -180,6 +228,7 @@ double WindowProblem::Objective(const double* x) const {
     const auto& samples = Samples(x);
     for (std::size_t i = first_; i <= last_; ++i) {
         f += StepCost(i, GatherStep(x, i), nullptr, nullptr);
+        if (HasSpeedTerm(i)) f += SpeedTerm(i).Evaluate(GatherSpeed(x, i), nullptr, nullptr);
         if (const auto& s = samples[i - first_]) {
             f += map.Evaluate(s->centre.value, s->centre.gradient, s->centre.hessian, nullptr, nullptr);
         }
@@ -201,6 +250,12 @@ void WindowProblem::Gradient(const double* x, double* grad) const {
         StepCost(i, GatherStep(x, i), &g, nullptr);
         const StepSlots& s = steps_[i - first_];
         for (int r = 0; r < kStepVars; ++r) if (s.var[r] >= 0) grad[s.var[r]] += g[r];
+        if (HasSpeedTerm(i)) {
+            SpeedVector gs;
+            SpeedTerm(i).Evaluate(GatherSpeed(x, i), &gs, nullptr);
+            const SpeedSlots& sp = speeds_[i - first_];
+            for (int r = 0; r < 12; ++r) if (sp.var[r] >= 0) grad[sp.var[r]] += gs[r];
+        }
         if (const auto& fs = samples[i - first_]) {
             Eigen::Vector3d gm;
             map.Evaluate(fs->centre.value, fs->centre.gradient, fs->centre.hessian, &gm, nullptr);
@@ -243,6 +298,15 @@ void WindowProblem::HessianValues(const double* x, double obj_factor, const doub
         for (int r = 0; r < kStepVars; ++r) {
             for (int c = 0; c <= r; ++c) {
                 if (s.hess_slot[r][c] >= 0) values[s.hess_slot[r][c]] += obj_factor * h(r, c);
+            }
+        }
+        if (!HasSpeedTerm(i)) continue;
+        SpeedMatrix hs;
+        SpeedTerm(i).Evaluate(GatherSpeed(x, i), nullptr, &hs);
+        const SpeedSlots& sp = speeds_[i - first_];
+        for (int r = 0; r < 12; ++r) {
+            for (int c = 0; c <= r; ++c) {
+                if (sp.hess_slot[r][c] >= 0) values[sp.hess_slot[r][c]] += obj_factor * hs(r, c);
             }
         }
     }

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -70,8 +71,19 @@ private:
         int var[kStepVars];
         int hess_slot[kStepVars][kStepVars];  // lower triangle, -1 if not a variable pair
     };
+    struct SpeedSlots {
+        int var[12];
+        int hess_slot[12][12];  // lower triangle, -1 if not a variable pair
+    };
     int PoseVar(std::size_t pose, int component) const;
     ScaleRandomWalkTerm ScaleTerm(int segment) const;
+    /// A step faster than max_speed_mps is a discontinuity of the estimate (a relocalisation, a
+    /// reset), not odometry: its length is not scaled and no speed continuity spans it.
+    bool IsJump(std::size_t i) const;
+    bool HasSpeedTerm(std::size_t i) const;
+    SpeedVector GatherSpeed(const double* x, std::size_t i) const;
+    SpeedChangeTerm SpeedTerm(std::size_t i) const;
+    int Slot(std::unordered_map<std::int64_t, int>& slots, int r, int c);
     int ScaleVar(int segment) const;
     StepVector GatherStep(const double* x, std::size_t i) const;
     double StepCost(std::size_t i, const StepVector& v, StepVector* g, StepMatrix* h) const;
@@ -88,6 +100,7 @@ private:
     int seg_first_ = 0, seg_last_ = 0, n_vars_ = 0;
     std::vector<std::size_t> constraint_pose_;
     std::vector<StepSlots> steps_;
+    std::vector<SpeedSlots> speeds_;  // per step i in [first, last]; used when HasSpeedTerm(i)
     std::vector<std::pair<int, int>> jac_, hess_;
     std::vector<std::array<int, 6>> pose_hess_slot_;
     std::vector<std::array<int, 3>> scale_hess_slot_;
