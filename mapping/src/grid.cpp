@@ -11,14 +11,15 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // One 1-D pass on squared distances in cell units: f (input, kInf where no site) -> d.
 // Scratch buffers v (site indices) and z (envelope boundaries) have n and n + 1 entries.
-void Edt1d(const float* f, int n, float* d, int* v, float* z) {
+// `w` weighs the squared step along this axis (anisotropic grids: (dz / resolution)^2).
+void Edt1d(const float* f, int n, float* d, int* v, float* z, float w = 1.0f) {
     int k = -1;
     for (int q = 0; q < n; ++q) {
         if (f[q] == kInf) continue;
         float s = 0.0f;
         while (k >= 0) {
             const int p = v[k];
-            s = ((f[q] + float(q) * q) - (f[p] + float(p) * p)) / (2.0f * (q - p));
+            s = ((f[q] + w * float(q) * q) - (f[p] + w * float(p) * p)) / (2.0f * w * (q - p));
             if (s > z[k]) break;
             --k;
         }
@@ -35,7 +36,7 @@ void Edt1d(const float* f, int n, float* d, int* v, float* z) {
     for (int q = 0; q < n; ++q) {
         while (z[j + 1] < q) ++j;
         const float dq = float(q - v[j]);
-        d[q] = dq * dq + f[v[j]];
+        d[q] = w * dq * dq + f[v[j]];
     }
 }
 
@@ -48,6 +49,8 @@ void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
     const int lines_b = axis == 2 ? s.ny : s.nz;
     std::vector<float> f(n), d(n), z(n + 1);
     std::vector<int> v(n);
+    const float ratio = axis == 2 ? float(s.dz() / s.resolution_m) : 1.0f;
+    const float w = ratio * ratio;
     for (int b = 0; b < lines_b; ++b) {
         for (int a = 0; a < lines_a; ++a) {
             std::size_t base;
@@ -55,7 +58,7 @@ void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
             else if (axis == 1) base = s.Index(a, 0, b);
             else base = s.Index(a, b, 0);
             for (int q = 0; q < n; ++q) f[q] = g[base + q * stride];
-            Edt1d(f.data(), n, d.data(), v.data(), z.data());
+            Edt1d(f.data(), n, d.data(), v.data(), z.data(), w);
             for (int q = 0; q < n; ++q) g[base + q * stride] = d[q];
         }
     }

@@ -1,5 +1,6 @@
 #include "driftcorr/mapping/interpolated_field.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 
@@ -53,7 +54,7 @@ bool MakeStencil(const GridSpec& s, const Eigen::Vector3d& p, Stencil& st) {
         return false;
     }
     st.planar = s.planar();
-    if (!st.planar && !Locate(p.z(), s.origin_m.z(), s.resolution_m, s.nz, st.k0, tz)) {
+    if (!st.planar && !Locate(p.z(), s.origin_m.z(), s.dz(), s.nz, st.k0, tz)) {
         return false;
     }
     st.bx = CubicBSpline(tx);
@@ -92,11 +93,11 @@ void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& s
             hzz += r * wy * ddz;
         }
     }
-    const double inv = 1.0 / s.resolution_m, inv2 = inv * inv;
+    const double inv = 1.0 / s.resolution_m, invz = 1.0 / s.dz(), inv2 = inv * inv;
     out.value = val;
-    out.gradient = Eigen::Vector3d(gx, gy, gz) * inv;
-    out.hessian << hxx, hxy, hxz, hxy, hyy, hyz, hxz, hyz, hzz;
-    out.hessian *= inv2;
+    out.gradient = Eigen::Vector3d(gx * inv, gy * inv, gz * invz);
+    out.hessian << hxx * inv2, hxy * inv2, hxz * inv * invz, hxy * inv2, hyy * inv2,
+        hyz * inv * invz, hxz * inv * invz, hyz * inv * invz, hzz * invz * invz;
 }
 
 }  // namespace
@@ -124,6 +125,52 @@ bool InterpolatedField::QueryMany(const std::vector<const InterpolatedField*>& f
         Accumulate(fields[f]->spec_, fields[f]->values_, st, out[f]);
     }
     return true;
+}
+
+namespace {
+
+// Cell and fraction of a coordinate for linear interpolation; false outside [0, n - 1].
+bool LocateLinear(double coord, double origin, double res, int n, int& i0, double& t) {
+    const double g = (coord - origin) / res;
+    if (n < 2 || !(g >= 0.0) || !(g <= n - 1.0)) return false;
+    i0 = std::min(static_cast<int>(std::floor(g)), n - 2);
+    t = g - i0;
+    return true;
+}
+
+}  // namespace
+
+std::optional<FieldSample> InterpolatedField::QueryBilinear(const Eigen::Vector3d& p) const {
+    const GridSpec& s = spec_;
+    int i0 = 0, j0 = 0, k0 = 0;
+    double tx = 0.0, ty = 0.0, tz = 0.0;
+    if (s.size() == 0 || !LocateLinear(p.x(), s.origin_m.x(), s.resolution_m, s.nx, i0, tx) ||
+        !LocateLinear(p.y(), s.origin_m.y(), s.resolution_m, s.ny, j0, ty)) {
+        return std::nullopt;
+    }
+    const bool planar = s.planar();
+    if (!planar && !LocateLinear(p.z(), s.origin_m.z(), s.dz(), s.nz, k0, tz)) {
+        return std::nullopt;
+    }
+    double val = 0.0;
+    Eigen::Vector3d grad = Eigen::Vector3d::Zero();
+    for (int c = 0; c < (planar ? 1 : 2); ++c) {
+        const double wz = planar ? 1.0 : (c ? tz : 1.0 - tz), dz = planar ? 0.0 : (c ? 1.0 : -1.0);
+        for (int b = 0; b < 2; ++b) {
+            const double wy = b ? ty : 1.0 - ty, dy = b ? 1.0 : -1.0;
+            for (int a = 0; a < 2; ++a) {
+                const double wx = a ? tx : 1.0 - tx, dx = a ? 1.0 : -1.0;
+                const double v = values_[s.Index(i0 + a, j0 + b, k0 + c)];
+                val += wx * wy * wz * v;
+                grad += v * Eigen::Vector3d(dx * wy * wz, wx * dy * wz, wx * wy * dz);
+            }
+        }
+    }
+    FieldSample out;
+    out.value = val;
+    out.gradient = Eigen::Vector3d(grad.x() / s.resolution_m, grad.y() / s.resolution_m,
+                                   grad.z() / s.dz());
+    return out;
 }
 
 }  // namespace driftcorr

@@ -6,12 +6,18 @@
 
 namespace driftcorr {
 
-/// A regular grid of samples: sample (i, j, k) sits at origin_m + resolution_m * (i, j, k).
-/// A planar grid has nz == 1 (the road case); its samples ignore the height coordinate.
+/// A regular grid of samples: sample (i, j, k) sits at origin_m + (resolution_m * i,
+/// resolution_m * j, dz() * k). A planar grid has nz == 1 (the road case); its samples ignore the
+/// height coordinate. The vertical spacing may differ from the horizontal one (indoor fields:
+/// fine in plan, coarse in height); resolution_z_m == 0 means isotropic.
 struct GridSpec {
     Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
     double resolution_m = 0.5;
     int nx = 0, ny = 0, nz = 1;
+    double resolution_z_m = 0.0;  ///< vertical spacing [m]; 0: the same as resolution_m
+
+    /// The vertical spacing [m].
+    double dz() const { return resolution_z_m > 0.0 ? resolution_z_m : resolution_m; }
 
     std::size_t size() const {
         return static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) *
@@ -21,7 +27,7 @@ struct GridSpec {
         return (static_cast<std::size_t>(k) * ny + j) * static_cast<std::size_t>(nx) + i;
     }
     Eigen::Vector3d Position(int i, int j, int k = 0) const {
-        return origin_m + resolution_m * Eigen::Vector3d(i, j, k);
+        return origin_m + Eigen::Vector3d(resolution_m * i, resolution_m * j, dz() * k);
     }
     bool planar() const { return nz == 1; }
 };

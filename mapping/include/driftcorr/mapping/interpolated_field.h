@@ -32,6 +32,13 @@ public:
     /// Like Query but several fields sharing one spec are evaluated with one set of weights.
     static bool QueryMany(const std::vector<const InterpolatedField*>& fields,
                           const Eigen::Vector3d& p, std::vector<FieldSample>& out);
+    /// The samples interpolated (bi)linearly instead of by the B-spline: bilinear in (x, y) for a
+    /// planar grid (p.z() ignored), trilinear otherwise. The value is continuous, the gradient is
+    /// piecewise constant (it jumps at cell borders) and the Hessian is returned as zero. This is
+    /// the plain grid interpolation of the paper's reference method (optim/paper_solver.h), not
+    /// meant for Newton-type solvers. std::nullopt outside [origin, origin + (n - 1) * res] or for
+    /// an empty grid.
+    std::optional<FieldSample> QueryBilinear(const Eigen::Vector3d& p) const;
 
     const GridSpec& spec() const { return spec_; }
     const std::vector<float>& values() const { return values_; }

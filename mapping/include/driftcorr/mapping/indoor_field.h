@@ -1,0 +1,88 @@
+#pragma once
+// The indoor map prior as a 3D field: where a person's device can be in a building of several
+// floors. Built as voxel fields (exact 3D EDT), B-spline interpolated: value and gradient are
+// continuous. The result is a TraversableField with nz > 1, the same interface as the planar
+// road field (which is its one-slice case).
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "driftcorr/mapping/traversable_field.h"
+
+namespace driftcorr {
+
+/// A polygon with holes in the local East-North frame [m].
+struct FloorPolygon {
+    std::vector<Eigen::Vector2d> outer_en;
+    std::vector<std::vector<Eigen::Vector2d>> holes_en;
+};
+
+/// One floor of the building, in the local East-North frame [m].
+struct IndoorFloor {
+    /// Height of the floor in the map's height datum [m] (the scenario's `floor_z_m`).
+    double floor_z_m = 0.0;
+    std::vector<std::vector<Eigen::Vector2d>> walkways_en;  ///< walkway centre lines
+    std::vector<FloorPolygon> walkable;  ///< rooms, corridors, balconies: a person can stand here
+    std::vector<FloorPolygon> doors;     ///< walkable, and cut back into walls (doors join rooms)
+    std::vector<FloorPolygon> stairs;    ///< walkable, and join this floor to its neighbours
+    std::vector<FloorPolygon> lifts;     ///< walkable, and join this floor to its neighbours
+    std::vector<FloorPolygon> walls;     ///< not walkable: cut out of the walkable polygons
+};
+
+/// Config of the indoor field. Heights: the traversable surface of floor f lies at
+/// floor_z_m + device_height_m. The scenario's `floor_z_m` is the height at which the
+/// trajectory runs on that floor (for hcu_eight the surveyed waypoint heights; its ground truth
+/// keeps z = 19.6 m = floor_z_m of the 4OG throughout), so the default device_height_m is 0.
+/// Set it to the height of the device above the floor when the layers give floor-slab heights.
+struct IndoorFieldConfig {
+    double resolution_m = 0.1;     ///< horizontal grid spacing [m]
+    double resolution_z_m = 0.5;   ///< vertical grid spacing [m]
+    double device_height_m = 0.0;  ///< traversable surface above floor_z_m [m]
+    /// The walkable layer spans the surface +/- this [m] (PDR and barometric heights wander by
+    /// about half a metre; a hand-held device is not always at one height). Must be >=
+    /// resolution_z_m: the cubic B-spline at a sample height weighs the samples one layer above
+    /// and below by 1/6 each, so a one-voxel layer would read about 2/3 of the horizontal
+    /// distance at the surface; with at least three layers it reads the horizontal distance.
+    double vertical_tolerance_m = 0.5;
+    double walkway_half_width_m = 0.5;  ///< traversable within this distance of a walkway line [m]
+    double margin_m = 2.0;              ///< grid extends this far around the map (horizontal) [m]
+    double vertical_margin_m = 1.5;     ///< and this far below the lowest, above the highest floor
+    double truncation_m = 5.0;          ///< distances are capped at this value [m]
+    double exact_band_m = 1.0;      ///< exact walkway distances within this band; EDT beyond [m]
+    double max_memory_mb = 1024.0;  ///< refuse fields larger than this [MB]
+
+    /// Empty if valid, else a message naming the bad field.
+    std::string Validate() const;
+};
+
+/// What was built.
+struct IndoorFieldStats {
+    std::size_t voxels = 0;
+    std::vector<double> walkable_area_m2;  ///< per floor (input order): traversable area of its
+                                           ///< layer (polygons, walkway buffers, connectors)
+    std::size_t connector_voxels = 0;      ///< stair and lift voxels between floors
+};
+
+/// Builds the field over the floors' extent grown by margin_m.
+/// Traversable set: on each floor's layer (the voxels within vertical_tolerance_m of
+/// floor_z_m + device_height_m, at least the nearest one), (walkable polygons minus walls) plus
+/// doors, stairs, lifts, and every point within walkway_half_width_m of a walkway line. Stairs
+/// and lifts of floor f are traversable over the whole vertical column from the next floor below
+/// to the next floor above (a staircase is not ramped: the whole stairwell counts); nothing else
+/// joins floors.
+///  - corridor: outside the set, the 3D distance to it; inside, minus the horizontal distance to
+///    the set's edge at that height (as the planar road field: how far from the walls). Zero
+///    level between the last inside and the first outside voxel; truncated at +/- truncation_m.
+///  - centre: 3D distance to the nearest walkway centre line (on its floor's surface), exact
+///    within exact_band_m; a floor without walkways contributes its walkable area at the surface
+///    height instead;
+///    stair and lift columns count as centres of vertical motion. Truncated at truncation_m.
+/// Throws std::invalid_argument when the config is invalid, there is no floor, no floor has
+/// anything traversable, or the grid would exceed max_memory_mb (the message names the
+/// horizontal resolution that would fit).
+TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
+                                  const IndoorFieldConfig& config,
+                                  IndoorFieldStats* stats = nullptr);
+
+}  // namespace driftcorr

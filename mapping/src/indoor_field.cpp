@@ -1,0 +1,360 @@
+#include "driftcorr/mapping/indoor_field.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "driftcorr/mapping/grid.h"
+
+namespace driftcorr {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+using Mask = std::vector<std::uint8_t>;
+
+// The horizontal plane of a 3D spec (nz = 1): slice k of the 3D grid is contiguous in memory and
+// indexed like this plane.
+GridSpec PlaneOf(const GridSpec& s) {
+    GridSpec p = s;
+    p.nz = 1;
+    p.resolution_z_m = 0.0;
+    return p;
+}
+
+// Scanline fill (even-odd rule over the outer ring and the holes) of the samples whose centre
+// lies inside the polygon: one pass over the edges per row, no per-sample point-in-polygon test.
+void FillPolygon(const GridSpec& s, const FloorPolygon& poly, std::uint8_t value, Mask& mask) {
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> edges;
+    double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+    auto add_ring = [&](const std::vector<Eigen::Vector2d>& ring) {
+        for (std::size_t k = 0; k < ring.size(); ++k) {
+            const Eigen::Vector2d& a = ring[k];
+            const Eigen::Vector2d& b = ring[(k + 1) % ring.size()];
+            if (a.y() != b.y()) edges.emplace_back(a, b);
+            y_lo = std::min(y_lo, a.y());
+            y_hi = std::max(y_hi, a.y());
+        }
+    };
+    add_ring(poly.outer_en);
+    for (const auto& hole : poly.holes_en) add_ring(hole);
+    if (edges.empty()) return;
+    const double res = s.resolution_m, ox = s.origin_m.x(), oy = s.origin_m.y();
+    // Samples on the boundary count as inside (the 1e-9 absorbs rounding of (x - origin) / res).
+    const int j0 = std::max(0, int(std::ceil((y_lo - oy) / res - 1e-9)));
+    const int j1 = std::min(s.ny - 1, int(std::floor((y_hi - oy) / res + 1e-9)));
+    std::vector<double> xs;
+    for (int j = j0; j <= j1; ++j) {
+        const double y = oy + res * j;
+        xs.clear();
+        for (const auto& [a, b] : edges) {
+            if ((a.y() <= y) != (b.y() <= y)) {
+                xs.push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
+            }
+        }
+        std::sort(xs.begin(), xs.end());
+        std::uint8_t* row = &mask[s.Index(0, j)];
+        for (std::size_t q = 0; q + 1 < xs.size(); q += 2) {
+            const int i0 = std::max(0, int(std::ceil((xs[q] - ox) / res - 1e-9)));
+            const int i1 = std::min(s.nx - 1, int(std::floor((xs[q + 1] - ox) / res + 1e-9)));
+            if (i1 >= i0) std::memset(row + i0, value, std::size_t(i1 - i0 + 1));
+        }
+    }
+}
+
+double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                            const Eigen::Vector2d& b) {
+    const Eigen::Vector2d ab = b - a;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    return (a + t * ab - p).norm();
+}
+
+// Marks the samples within half_width of the segment as traversable and records exact
+// distances within `reach` (>= half_width) in `exact`.
+void RasteriseWalkway(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                      double half_width, double reach, Mask& mask, std::vector<float>& exact) {
+    const double res = s.resolution_m;
+    const Eigen::Vector2d lo = a.cwiseMin(b).array() - reach, hi = a.cwiseMax(b).array() + reach;
+    const int i0 = std::max(0, int(std::floor((lo.x() - s.origin_m.x()) / res)));
+    const int j0 = std::max(0, int(std::floor((lo.y() - s.origin_m.y()) / res)));
+    const int i1 = std::min(s.nx - 1, int(std::ceil((hi.x() - s.origin_m.x()) / res)));
+    const int j1 = std::min(s.ny - 1, int(std::ceil((hi.y() - s.origin_m.y()) / res)));
+    for (int j = j0; j <= j1; ++j) {
+        for (int i = i0; i <= i1; ++i) {
+            const double d = PointSegmentDistance(s.Position(i, j).head<2>(), a, b);
+            if (d > reach) continue;
+            const std::size_t idx = s.Index(i, j);
+            exact[idx] = std::min(exact[idx], float(d));
+            if (d <= half_width) mask[idx] = 1;
+        }
+    }
+}
+
+// One floor on the horizontal plane.
+struct FloorRaster {
+    double surface_z_m = 0.0;
+    int k_surface = 0;                 // voxel layer nearest the surface
+    int k_lo = 0, k_hi = 0;            // the walkable layer
+    int k_conn_lo = 0, k_conn_hi = 0;  // the stair and lift columns
+    Mask walkable;                     // traversable on the layer
+    Mask connector;                    // stairs and lifts
+    std::vector<float> walkway_exact;  // exact distance to the walkway lines, kInf beyond the band
+    bool has_walkways = false;
+};
+
+FloorRaster RasteriseFloor(const GridSpec& plane, const IndoorFloor& f,
+                           const IndoorFieldConfig& c) {
+    FloorRaster r;
+    r.walkable.assign(plane.size(), 0);
+    r.connector.assign(plane.size(), 0);
+    r.walkway_exact.assign(plane.size(), kInf);
+    for (const auto& p : f.walkable) FillPolygon(plane, p, 1, r.walkable);
+    for (const auto& p : f.walls) FillPolygon(plane, p, 0, r.walkable);
+    for (const auto& p : f.doors) FillPolygon(plane, p, 1, r.walkable);
+    for (const auto& p : f.stairs) FillPolygon(plane, p, 1, r.connector);
+    for (const auto& p : f.lifts) FillPolygon(plane, p, 1, r.connector);
+    const double reach = std::max(c.walkway_half_width_m, c.exact_band_m);
+    for (const auto& line : f.walkways_en) {
+        for (std::size_t k = 1; k < line.size(); ++k) {
+            RasteriseWalkway(plane, line[k - 1], line[k], c.walkway_half_width_m, reach, r.walkable,
+                             r.walkway_exact);
+            r.has_walkways = true;
+        }
+    }
+    for (std::size_t i = 0; i < plane.size(); ++i) r.walkable[i] |= r.connector[i];
+    return r;
+}
+
+Eigen::AlignedBox2d FloorsBounds(const std::vector<IndoorFloor>& floors) {
+    Eigen::AlignedBox2d box;
+    auto add = [&box](const std::vector<FloorPolygon>& ps) {
+        for (const auto& p : ps)
+            for (const auto& q : p.outer_en) box.extend(q);
+    };
+    for (const auto& f : floors) {
+        add(f.walkable);
+        add(f.doors);
+        add(f.stairs);
+        add(f.lifts);
+        for (const auto& l : f.walkways_en)
+            for (const auto& q : l) box.extend(q);
+    }
+    return box;
+}
+
+GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
+                  const IndoorFieldConfig& c) {
+    GridSpec s;
+    s.resolution_m = c.resolution_m;
+    s.resolution_z_m = c.resolution_z_m;
+    const int kz = std::max(2, int(std::ceil(c.vertical_margin_m / c.resolution_z_m)));
+    s.origin_m = Eigen::Vector3d(box.min().x() - c.margin_m, box.min().y() - c.margin_m,
+                                 z_lo - kz * c.resolution_z_m);
+    s.nx = int(std::ceil((box.sizes().x() + 2.0 * c.margin_m) / c.resolution_m)) + 1;
+    s.ny = int(std::ceil((box.sizes().y() + 2.0 * c.margin_m) / c.resolution_m)) + 1;
+    s.nz = int(std::ceil((z_hi - z_lo) / c.resolution_z_m - 1e-9)) + 2 * kz + 1;
+    s.nx = std::max(s.nx, 4);
+    s.ny = std::max(s.ny, 4);
+    // Peak bytes per voxel: centre and corridor (4 + 4), the EDT's buffer (4), two masks.
+    const double mb = double(s.size()) * 14.0 / (1024.0 * 1024.0);
+    if (mb > c.max_memory_mb) {
+        const double fit = c.resolution_m * std::sqrt(mb / c.max_memory_mb) * 1.01;
+        std::ostringstream msg;
+        msg << "indoor distance field of " << s.nx << " x " << s.ny << " x " << s.nz
+            << " voxels at " << c.resolution_m << " m (vertical " << c.resolution_z_m
+            << " m) needs about " << int(mb) << " MB, more than max_memory_mb = " << c.max_memory_mb
+            << "; a horizontal resolution of " << std::ceil(fit * 100.0) / 100.0
+            << " m or coarser would fit (or coarsen resolution_z_m, shrink margin_m)";
+        throw std::invalid_argument(msg.str());
+    }
+    return s;
+}
+
+// Minus the horizontal distance from each inside voxel of slice `k` to the nearest outside
+// voxel (plus half a cell), written into `corridor`. The EDT runs on the bounding box of the
+// inside voxels grown by one cell: the nearest outside voxel of an inside one is never beyond it
+// (clamping a far outside voxel onto the box gives a nearer one, still outside).
+void InsideSlice(const GridSpec& s, const Mask& inside, int k, std::vector<float>& corridor) {
+    const std::size_t base = s.Index(0, 0, k);
+    int i0 = s.nx, i1 = -1, j0 = s.ny, j1 = -1;
+    for (int j = 0; j < s.ny; ++j) {
+        const std::uint8_t* row = &inside[base + std::size_t(j) * s.nx];
+        for (int i = 0; i < s.nx; ++i) {
+            if (!row[i]) continue;
+            i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
+        }
+    }
+    if (i1 < 0) return;
+    i0 = std::max(0, i0 - 1), j0 = std::max(0, j0 - 1);
+    i1 = std::min(s.nx - 1, i1 + 1), j1 = std::min(s.ny - 1, j1 + 1);
+    GridSpec sub;
+    sub.resolution_m = s.resolution_m;
+    sub.nx = i1 - i0 + 1;
+    sub.ny = j1 - j0 + 1;
+    Mask outside(sub.size());
+    for (int j = 0; j < sub.ny; ++j) {
+        for (int i = 0; i < sub.nx; ++i)
+            outside[sub.Index(i, j)] = !inside[s.Index(i0 + i, j0 + j, k)];
+    }
+    const std::vector<float> d = EuclideanDistanceTransform(sub, outside);
+    const float half = 0.5f * float(s.resolution_m);
+    for (int j = 0; j < sub.ny; ++j) {
+        for (int i = 0; i < sub.nx; ++i) {
+            const std::size_t idx = s.Index(i0 + i, j0 + j, k);
+            if (inside[idx]) corridor[idx] = -(std::min(d[sub.Index(i, j)], 1e6f) - half);
+        }
+    }
+}
+
+std::vector<float> CorridorField(const GridSpec& s, const Mask& inside, float trunc) {
+    std::vector<float> corridor = EuclideanDistanceTransform(s, inside);
+    const float half = 0.5f * float(s.resolution_m);
+    for (float& v : corridor) v = v - half;  // outside; inside voxels are overwritten below
+    const std::size_t plane = std::size_t(s.nx) * s.ny;
+    for (int k = 0; k < s.nz; ++k) {
+        const std::size_t base = s.Index(0, 0, k);
+        const bool same = k > 0 && std::memcmp(&inside[base], &inside[base - plane], plane) == 0;
+        if (same) {  // stair and lift columns repeat one slice many times
+            for (std::size_t i = 0; i < plane; ++i) {
+                if (inside[base + i]) corridor[base + i] = corridor[base - plane + i];
+            }
+        } else {
+            InsideSlice(s, inside, k, corridor);
+        }
+    }
+    for (float& v : corridor) v = std::clamp(v, -trunc, trunc);
+    return corridor;
+}
+
+}  // namespace
+
+std::string IndoorFieldConfig::Validate() const {
+    if (!(resolution_m > 0.0)) return "indoor.resolution_m: must be > 0";
+    if (!(resolution_z_m > 0.0)) return "indoor.resolution_z_m: must be > 0";
+    if (!std::isfinite(device_height_m)) return "indoor.device_height_m: must be finite";
+    if (!(vertical_tolerance_m >= resolution_z_m)) {
+        return "indoor.vertical_tolerance_m: must be >= resolution_z_m (a thinner layer is one "
+               "voxel thick and the B-spline would mix the outside samples above and below into "
+               "the value at the surface)";
+    }
+    if (!(walkway_half_width_m >= 0.0)) return "indoor.walkway_half_width_m: must be >= 0";
+    if (!(margin_m >= 0.0)) return "indoor.margin_m: must be >= 0";
+    if (!(vertical_margin_m >= 0.0)) return "indoor.vertical_margin_m: must be >= 0";
+    if (!(truncation_m > 0.0)) return "indoor.truncation_m: must be > 0";
+    if (!(exact_band_m >= 0.0)) return "indoor.exact_band_m: must be >= 0";
+    if (!(max_memory_mb > 0.0)) return "indoor.max_memory_mb: must be > 0";
+    return "";
+}
+
+TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
+                                  const IndoorFieldConfig& config, IndoorFieldStats* stats) {
+    if (const std::string err = config.Validate(); !err.empty()) throw std::invalid_argument(err);
+    if (floors.empty()) throw std::invalid_argument("the indoor map has no floor");
+    const Eigen::AlignedBox2d box = FloorsBounds(floors);
+    if (box.isEmpty()) throw std::invalid_argument("the indoor map has no walkable geometry");
+    // Floors in ascending height.
+    std::vector<std::size_t> order(floors.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return floors[a].floor_z_m < floors[b].floor_z_m;
+    });
+    const double z_lo = floors[order.front()].floor_z_m + config.device_height_m;
+    const double z_hi = floors[order.back()].floor_z_m + config.device_height_m;
+    const GridSpec s = MakeSpec(box, z_lo, z_hi, config);
+    const GridSpec plane = PlaneOf(s);
+    const double dz = s.dz();
+    auto layer_of = [&](double z) {
+        return std::clamp(int(std::lround((z - s.origin_m.z()) / dz)), 0, s.nz - 1);
+    };
+
+    std::vector<FloorRaster> rasters(floors.size());
+    for (std::size_t n = 0; n < order.size(); ++n) {
+        FloorRaster& r = rasters[n];
+        r = RasteriseFloor(plane, floors[order[n]], config);
+        r.surface_z_m = floors[order[n]].floor_z_m + config.device_height_m;
+        r.k_surface = layer_of(r.surface_z_m);
+        // The layer: voxels within vertical_tolerance_m of the surface, at least the nearest.
+        const double g_lo = (r.surface_z_m - config.vertical_tolerance_m - s.origin_m.z()) / dz;
+        const double g_hi = (r.surface_z_m + config.vertical_tolerance_m - s.origin_m.z()) / dz;
+        r.k_lo = std::clamp(std::min(r.k_surface, int(std::ceil(g_lo - 1e-9))), 0, s.nz - 1);
+        r.k_hi = std::clamp(std::max(r.k_surface, int(std::floor(g_hi + 1e-9))), 0, s.nz - 1);
+    }
+    for (std::size_t n = 0; n < rasters.size(); ++n) {
+        rasters[n].k_conn_lo = n > 0 ? rasters[n - 1].k_surface : rasters[n].k_surface;
+        rasters[n].k_conn_hi =
+            n + 1 < rasters.size() ? rasters[n + 1].k_surface : rasters[n].k_surface;
+    }
+
+    // The traversable set and the centre seeds.
+    const std::size_t np = plane.size();
+    Mask inside(s.size(), 0), seeds(s.size(), 0);
+    const float half = 0.5f * float(s.resolution_m);
+    std::size_t connector_voxels = 0;
+    for (const FloorRaster& r : rasters) {
+        for (int k = r.k_lo; k <= r.k_hi; ++k) {
+            std::uint8_t* slice = &inside[s.Index(0, 0, k)];
+            for (std::size_t i = 0; i < np; ++i) slice[i] |= r.walkable[i];
+        }
+        for (int k = r.k_conn_lo; k <= r.k_conn_hi; ++k) {
+            std::uint8_t* slice = &inside[s.Index(0, 0, k)];
+            std::uint8_t* seed = &seeds[s.Index(0, 0, k)];
+            for (std::size_t i = 0; i < np; ++i) {
+                if (!r.connector[i]) continue;
+                connector_voxels += (k < r.k_lo || k > r.k_hi) && !slice[i];
+                slice[i] = 1;
+                seed[i] = 1;
+            }
+        }
+        std::uint8_t* seed = &seeds[s.Index(0, 0, r.k_surface)];
+        for (std::size_t i = 0; i < np; ++i) {
+            seed[i] |= r.has_walkways ? std::uint8_t(r.walkway_exact[i] <= half) : r.walkable[i];
+        }
+    }
+    const float trunc = float(config.truncation_m);
+    std::vector<float> corridor = CorridorField(s, inside, trunc);
+    inside.clear();
+    inside.shrink_to_fit();
+
+    std::vector<float> centre = EuclideanDistanceTransform(s, seeds);
+    seeds.clear();
+    seeds.shrink_to_fit();
+    // Exact distances to the walkway lines near each floor's surface.
+    const double band = config.exact_band_m;
+    for (const FloorRaster& r : rasters) {
+        if (!r.has_walkways) continue;
+        for (int k = 0; k < s.nz; ++k) {
+            const double dzk = s.origin_m.z() + k * dz - r.surface_z_m;
+            if (std::abs(dzk) > band) continue;
+            float* slice = &centre[s.Index(0, 0, k)];
+            for (std::size_t i = 0; i < np; ++i) {
+                const float e = r.walkway_exact[i];
+                if (e == kInf) continue;
+                const float d = std::sqrt(e * e + float(dzk * dzk));
+                if (d <= band) slice[i] = d;
+            }
+        }
+    }
+    for (float& v : centre) v = std::min(v, trunc);
+
+    if (stats) {
+        stats->voxels = s.size();
+        stats->connector_voxels = connector_voxels;
+        stats->walkable_area_m2.assign(floors.size(), 0.0);
+        for (std::size_t n = 0; n < order.size(); ++n) {
+            const auto& w = rasters[n].walkable;
+            stats->walkable_area_m2[order[n]] =
+                double(std::count(w.begin(), w.end(), std::uint8_t(1))) * s.resolution_m *
+                s.resolution_m;
+        }
+    }
+    return TraversableField(InterpolatedField(s, std::move(centre)),
+                            InterpolatedField(s, std::move(corridor)), config.truncation_m);
+}
+
+}  // namespace driftcorr
