@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "commands.h"
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/trajectory_io.h"
@@ -22,15 +23,22 @@ constexpr int kExitUsage = 1, kExitBadInput = 2, kExitSolver = 3, kExitInternal 
 
 const char* kUsage =
     "usage: driftcorr correct <scenario dir | scenario.yaml> -o <corrected.tum>\n"
-    "                         [--config params.yaml] [--geojson tracks.geojson] [--quiet]\n"
+    "                         [--config params.yaml] [--geojson tracks.geojson]\n"
+    "                         [--solver driftcorr|paper] [--quiet]\n"
+    "       driftcorr eval <scenario dirs...> [-o report_dir] [--config params.yaml] [--quiet]\n"
+    "       driftcorr stream <scenario dir | scenario.yaml> [--replay] [--rate-hz R] [--sync]\n"
+    "                        [--config params.yaml] [--smoothed-out smoothed.tum]\n"
     "\n"
     "Corrects the scenario's drifting estimate against its map and writes the corrected\n"
     "trajectory as TUM (t x y z qx qy qz qw) in the estimate's own frame and timestamps.\n"
     "--geojson also writes estimate and corrected track (and ground truth) as WGS84 GeoJSON.\n"
+    "--solver paper runs the paper's epoch-wise gradient descent (a reference) instead.\n"
+    "eval compares the uncorrected estimate, the paper's method and driftcorr (see eval -h).\n"
     "Exit codes: 0 ok, 1 usage, 2 bad input, 3 solver failure (nothing written), 4 internal.\n";
 
 struct Args {
     std::string scenario, output, config, geojson;
+    std::string solver = "driftcorr";
     bool quiet = false;
 };
 
@@ -49,6 +57,13 @@ bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
         if (arg == "-o" || arg == "--output") { if (!value(a.output)) return false; }
         else if (arg == "--config") { if (!value(a.config)) return false; }
         else if (arg == "--geojson") { if (!value(a.geojson)) return false; }
+        else if (arg == "--solver") {
+            if (!value(a.solver)) return false;
+            if (a.solver != "driftcorr" && a.solver != "paper") {
+                err = "--solver must be driftcorr or paper, not '" + a.solver + "'";
+                return false;
+            }
+        }
         else if (arg == "--quiet" || arg == "-q") a.quiet = true;
         else if (arg == "-h" || arg == "--help") { err = ""; return false; }
         else if (!arg.empty() && arg[0] == '-') { err = "unknown option " + arg; return false; }
@@ -83,16 +98,22 @@ void PrintMetricsRow(const char* label, const driftcorr::ErrorMetrics& m) {
                 label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
 }
 
-void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::string& out) {
+void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::string& out,
+                  driftcorr::pipeline::Solver solver) {
     const auto& r = run.result;
     const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
     std::printf("scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
                 driftcorr::io::ToString(run.scenario.mode).c_str(), run.estimate.size());
     std::printf("map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
                 run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
-    std::printf("solver     %s (%s); %zu windows, %d Ipopt iterations, %zu poses on hard corridor,"
-                " scale %.3f..%.3f\n", driftcorr::ToString(r.status).c_str(), r.message.c_str(),
-                r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
+    if (solver == driftcorr::pipeline::Solver::kPaper) {
+        std::printf("solver     paper: %s (%s)\n", driftcorr::ToString(r.status).c_str(),
+                    r.message.c_str());
+    } else {
+        std::printf("solver     %s (%s); %zu windows, %d Ipopt iterations, %zu poses on hard corridor,"
+                    " scale %.3f..%.3f\n", driftcorr::ToString(r.status).c_str(), r.message.c_str(),
+                    r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
+    }
     std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
                 " incremental %.3f, refine %.3f)\n", total, run.timings.load_s, run.timings.map_s,
                 run.timings.solve_s, run.estimate.size() / std::max(1e-9, run.timings.solve_s),
@@ -139,10 +160,11 @@ int RunCorrect(const Args& a) {
     }
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
+    cfg.solver = a.solver == "paper" ? pipeline::Solver::kPaper : pipeline::Solver::kDriftcorr;
     pipeline::CorrectionRun run = pipeline::RunCorrection(a.scenario, cfg, MakeProgress(a.quiet));
     for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     if (!Usable(run.result.status)) {
-        PrintSummary(run, "");
+        PrintSummary(run, "", cfg.solver);
         std::fprintf(stderr, "driftcorr: the solver did not produce a correction: %s (%s); nothing written\n",
                      ToString(run.result.status).c_str(), run.result.message.c_str());
         return kExitSolver;
@@ -157,13 +179,32 @@ int RunCorrect(const Args& a) {
         io::WriteGeoJsonTracks(a.geojson, tracks);
     }
     io::WriteTum(a.output, run.corrected_frame);
-    PrintSummary(run, a.output);
+    PrintSummary(run, a.output, cfg.solver);
     return 0;
 }
 
 }  // namespace
 
+namespace {
+
+// Subcommands with their own source file (commands.h), one line each; `correct` is handled below.
+struct Command {
+    const char* name;
+    int (*run)(int argc, char** argv);
+};
+const Command kCommands[] = {
+    {"eval", &driftcorr::cli::RunEvalCommand},
+    {"stream", &driftcorr::cli::RunStreamCommand},
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
+    if (argc >= 2) {
+        for (const Command& c : kCommands) {
+            if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 1, argv + 1);
+        }
+    }
     Args args;
     std::string err;
     if (!ParseArgs(argc, argv, args, err)) {

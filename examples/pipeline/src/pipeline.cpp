@@ -82,16 +82,19 @@ GeoPoint WorldFrame::ToGeo(const Eigen::Vector2d& en) const {
     return impl_->crs->ToGeo(en + impl_->crs_origin);
 }
 
-CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
-                            const ProgressCallback& progress) {
-    CorrectionRun run;
+std::string ToString(Solver solver) {
+    return solver == Solver::kPaper ? "paper" : "driftcorr";
+}
+
+PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config) {
+    PreparedScenario ps;
     auto t0 = std::chrono::steady_clock::now();
-    run.scenario = io::LoadScenario(scenario_path);
-    const io::Scenario& sc = run.scenario;
+    ps.scenario = io::LoadScenario(scenario_path);
+    const io::Scenario& sc = ps.scenario;
     if (sc.mode != io::ScenarioMode::kRoad2d) {
         throw InputError(sc.yaml_path, 0, "mode", "indoor3d scenarios are not supported yet");
     }
-    run.estimate_frame = io::LoadTrajectory(sc.estimate);
+    ps.estimate_frame = io::LoadTrajectory(sc.estimate);
     WorldFrame world = [&] {
         try {
             return WorldFrame(sc.anchor);
@@ -99,42 +102,60 @@ CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConf
             throw InputError(sc.yaml_path, 0, e.key(), e.what());
         }
     }();
-    run.estimate = ToPlanar(run.estimate_frame, sc.frame, world.planar_anchor());
+    ps.anchor = world.planar_anchor();
+    ps.estimate = ToPlanar(ps.estimate_frame, sc.frame, ps.anchor);
     if (sc.ground_truth) {
         const Trajectory gt = io::LoadTrajectory(*sc.ground_truth);
-        if (gt.size() != run.estimate_frame.size()) {
+        if (gt.size() != ps.estimate_frame.size()) {
             throw InputError(sc.ground_truth->path, 0, "",
                              "ground truth has " + std::to_string(gt.size()) + " poses, the estimate " +
-                                 std::to_string(run.estimate_frame.size()));
+                                 std::to_string(ps.estimate_frame.size()));
         }
-        run.ground_truth = ToPlanar(gt, sc.frame, world.planar_anchor());
+        ps.ground_truth = ToPlanar(gt, sc.frame, ps.anchor);
     }
-    run.timings.load_s = Since(t0);
+    ps.timings.load_s = Since(t0);
 
     t0 = std::chrono::steady_clock::now();
-    run.network = LoadRoads(sc, world, config.roads);
-    TraversableField field;
+    ps.network = LoadRoads(sc, world, config.roads);
     try {
-        field = RasteriseRoads(run.network, BoundsOf(run.estimate), config.field);
+        ps.field = RasteriseRoads(ps.network, BoundsOf(ps.estimate), config.field);
     } catch (const std::invalid_argument& e) {
         throw InputError(sc.yaml_path, 0, "map", e.what());
     }
-    run.map_grid_cells = field.spec().size();
-    run.timings.map_s = Since(t0);
+    ps.timings.map_s = Since(t0);
+    return ps;
+}
 
-    t0 = std::chrono::steady_clock::now();
-    run.result = CorrectTrajectory(run.estimate, &field, config.corrector, progress);
-    run.timings.solve_s = Since(t0);
-    if (Usable(run.result.status)) {
-        run.corrected_frame = FromPlanar(run.result.corrected, run.estimate, run.estimate_frame,
-                                         sc.frame, world.planar_anchor());
-        if (run.ground_truth) {
-            run.before = ComputeMetrics(run.estimate, *run.ground_truth);
-            run.after = ComputeMetrics(run.result.corrected, *run.ground_truth);
-        }
-    } else if (run.ground_truth) {
-        run.before = ComputeMetrics(run.estimate, *run.ground_truth);
+CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& config,
+                         const ProgressCallback& progress) {
+    if (config.solver == Solver::kPaper) {
+        return CorrectWithPaperMethod(ps.estimate, &ps.field, config.paper, progress);
     }
+    return CorrectTrajectory(ps.estimate, &ps.field, config.corrector, progress);
+}
+
+CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
+                            const ProgressCallback& progress) {
+    PreparedScenario ps = PrepareScenario(scenario_path, config);
+    CorrectionRun run;
+    run.timings = ps.timings;
+    run.map_grid_cells = ps.field.spec().size();
+
+    const auto t0 = std::chrono::steady_clock::now();
+    run.result = Correct(ps, config, progress);
+    run.timings.solve_s = Since(t0);
+    const io::Scenario& sc = ps.scenario;
+    if (Usable(run.result.status)) {
+        run.corrected_frame = FromPlanar(run.result.corrected, ps.estimate, ps.estimate_frame,
+                                         sc.frame, ps.anchor);
+        if (ps.ground_truth) run.after = ComputeMetrics(run.result.corrected, *ps.ground_truth);
+    }
+    if (ps.ground_truth) run.before = ComputeMetrics(ps.estimate, *ps.ground_truth);
+    run.scenario = std::move(ps.scenario);
+    run.estimate_frame = std::move(ps.estimate_frame);
+    run.estimate = std::move(ps.estimate);
+    run.ground_truth = std::move(ps.ground_truth);
+    run.network = std::move(ps.network);
     return run;
 }
 

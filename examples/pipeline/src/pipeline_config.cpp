@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -61,6 +62,10 @@ std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
     };
     num("step_sigma_m", &m.step_sigma_m);
     num("step_sigma_rel", &m.step_sigma_rel);
+    num("step_robust_k", &m.step_robust_k);
+    num("accel_sigma_mps2", &m.accel_sigma_mps2);
+    num("speed_weight", &m.speed_weight);
+    num("max_speed_mps", &m.max_speed_mps);
     num("lateral_sigma_m", &m.lateral_sigma_m);
     num("lateral_sigma_rel", &m.lateral_sigma_rel);
     num("heading_rw_rad_per_sqrt_s", &m.heading_rw_rad_per_sqrt_s);
@@ -93,9 +98,17 @@ std::map<std::string, Setter> CorrectorSetters(const Context& c, CorrectorConfig
     };
     auto count = [&](const char* name, auto* field) {
         s[name] = [&c, field](const YAML::Node& n, const std::string& k) {
+            using Count = std::remove_pointer_t<decltype(field)>;
+            // 2^digits is the first whole number Count cannot hold; casting a double at or above
+            // it is undefined behaviour, so it is rejected before the cast (found by fuzzing).
+            const double limit = std::ldexp(1.0, std::numeric_limits<Count>::digits);
             const double v = Number(c, n, k);
-            if (v < 0 || v != std::floor(v)) throw InputError(c.file, Line(n), k, "must be a whole number >= 0");
-            *field = static_cast<std::remove_pointer_t<decltype(field)>>(v);
+            if (v < 0 || v != std::floor(v) || !(v < limit)) {
+                throw InputError(c.file, Line(n), k,
+                                 "must be a whole number in [0, " +
+                                     std::to_string(std::numeric_limits<Count>::max()) + "]");
+            }
+            *field = static_cast<Count>(v);
         };
     };
     num("chunk_m", &cc.chunk_m);
@@ -121,6 +134,33 @@ std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f)
     num("truncation_m", &f.truncation_m);
     num("exact_band_m", &f.exact_band_m);
     num("max_memory_mb", &f.max_memory_mb);
+    return s;
+}
+
+std::map<std::string, Setter> PaperSetters(const Context& c, PaperSolverConfig& p) {
+    std::map<std::string, Setter> s;
+    auto num = [&](const char* name, double* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
+    };
+    num("learning_rate", &p.learning_rate);
+    num("turn_weight", &p.turn_weight);
+    num("step_weight", &p.step_weight);
+    num("map_weight", &p.map_weight);
+    num("preservation_weight", &p.preservation_weight);
+    num("turn_sigma_rad", &p.turn_sigma_rad);
+    num("step_sigma_m", &p.step_sigma_m);
+    num("map_sigma_m", &p.map_sigma_m);
+    num("preservation_sigma_rad", &p.preservation_sigma_rad);
+    num("map_truncation_m", &p.map_truncation_m);
+    num("min_step_m", &p.min_step_m);
+    num("stationary_m", &p.stationary_m);
+    s["iterations_per_epoch"] = [&c, &p](const YAML::Node& n, const std::string& k) {
+        const double v = Number(c, n, k);
+        if (v != std::floor(v) || v < 1 || v > 1e6) {
+            throw InputError(c.file, Line(n), k, "must be an integer in [1, 1000000]");
+        }
+        p.iterations_per_epoch = static_cast<int>(v);
+    };
     return s;
 }
 
@@ -205,13 +245,15 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
             ApplySection(c, kv.first, body, section, ModelSetters(c, cfg.corrector.model));
         } else if (section == "corrector") {
             ApplySection(c, kv.first, body, section, CorrectorSetters(c, cfg.corrector));
+        } else if (section == "paper") {
+            ApplySection(c, kv.first, body, section, PaperSetters(c, cfg.paper));
         } else if (section == "roads") {
             ApplySection(c, kv.first, body, section, RoadSetters(c, cfg.roads));
         } else if (section == "field") {
             ApplySection(c, kv.first, body, section, FieldSetters(c, cfg.field));
         } else {
             throw InputError(c.file, Line(kv.first), section,
-                             "unknown section (model, corrector, roads, field)");
+                             "unknown section (model, corrector, paper, roads, field)");
         }
     }
     if (std::string m = cfg.Validate(); !m.empty()) {
@@ -224,6 +266,7 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
 
 std::string PipelineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;
+    if (std::string m = paper.Validate(); !m.empty()) return "paper." + m;
     if (std::string m = roads.Validate(); !m.empty()) return "roads." + RoadsKeyInFile(m);
     if (std::string m = field.Validate(); !m.empty()) return m;
     return "";

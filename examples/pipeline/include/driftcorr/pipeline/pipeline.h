@@ -11,19 +11,27 @@
 #include "driftcorr/io/scenario.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/corrector.h"
+#include "driftcorr/optim/paper_solver.h"
 
 namespace driftcorr::pipeline {
 
+/// Which solver corrects the estimate: driftcorr's batch corrector (optim/corrector.h) or the
+/// paper's epoch-wise gradient descent, kept as a reference (optim/paper_solver.h).
+enum class Solver { kDriftcorr, kPaper };
+std::string ToString(Solver solver);
+
 /// Every parameter of a run; defaults written once, in the member structs.
 struct PipelineConfig {
-    CorrectorConfig corrector;
+    Solver solver = Solver::kDriftcorr;
+    CorrectorConfig corrector;   ///< used by Solver::kDriftcorr
+    PaperSolverConfig paper;     ///< used by Solver::kPaper (params.yaml section `paper`)
     RoadClassConfig roads;
     RoadFieldConfig field;
 
     std::string Validate() const;
 };
 
-/// Reads a params.yaml (sections `model`, `corrector`, `roads`, `field`). Unknown keys are errors
+/// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`). Unknown keys are errors
 /// (a misspelt parameter must not be ignored). Throws InputError naming file, line and key.
 PipelineConfig LoadPipelineConfig(const std::string& path);
 
@@ -61,8 +69,29 @@ struct CorrectionRun {
     Timings timings;
 };
 
-/// Runs the whole correction. Throws InputError for bad input (files, anchor, map with no usable
-/// roads, field too large). Solver outcomes are reported in run.result, never thrown.
+/// A scenario read and placed in the world, with its map field: everything a solver needs.
+/// Lets several solvers run on one loaded scenario (driftcorr eval).
+struct PreparedScenario {
+    io::Scenario scenario;
+    Trajectory estimate_frame;          ///< as read
+    PlanarTrajectory estimate;          ///< in the world plane
+    std::optional<PlanarTrajectory> ground_truth;
+    PlanarAnchor anchor;
+    RoadNetwork network;
+    TraversableField field;
+    Timings timings;                    ///< load_s and map_s
+};
+
+/// Loads the scenario, its trajectories and its map field. Throws InputError for bad input
+/// (files, anchor, an unsupported mode, map with no usable roads, field too large).
+PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config);
+
+/// Runs config.solver on a prepared scenario. Solver outcomes are in the result, never thrown.
+CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig& config,
+                         const ProgressCallback& progress = {});
+
+/// Runs the whole correction (PrepareScenario, then Correct, then metrics). Throws InputError for
+/// bad input. Solver outcomes are reported in run.result, never thrown.
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress = {});
 

@@ -1,0 +1,138 @@
+// `driftcorr eval <scenario dirs...> [-o report_dir]`: the uncorrected estimate, the paper's
+// method and driftcorr on every scenario, a table on stdout, a report folder on request.
+//
+// Exit codes: 0 every scenario and method ran, 1 usage error, 2 at least one scenario (or a
+// method on it) failed (the others still ran and are reported), 4 internal error (the report
+// could not be written).
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "driftcorr/core/errors.h"
+#include "driftcorr/eval/evaluation.h"
+#include "driftcorr/eval/report.h"
+
+namespace driftcorr::cli {
+namespace {
+
+constexpr int kExitOk = 0, kExitUsage = 1, kExitFailed = 2, kExitInternal = 4;
+
+const char* kEvalUsage =
+    "usage: driftcorr eval <scenario dir | scenario.yaml>... [-o report_dir]\n"
+    "                      [--config params.yaml] [--quiet]\n"
+    "\n"
+    "Runs the uncorrected estimate, the paper's method (--solver paper) and driftcorr on each\n"
+    "scenario and prints ATE / final error (and solver time, poses/s) per scenario and method.\n"
+    "-o also writes report_dir/summary.md, results.json, <scenario>_map.svg and\n"
+    "<scenario>_error.svg. A scenario that fails is reported and does not stop the others.\n"
+    "Exit codes: 0 all ran, 1 usage, 2 at least one scenario or method failed, 4 internal.\n";
+
+struct EvalArgs {
+    std::vector<std::string> scenarios;
+    std::string report_dir, config;
+    bool quiet = false;
+};
+
+// A regular file that is not a .yaml: not a scenario (folders and .yaml files are, and
+// missing paths are left to the evaluation to report).
+bool IsNonScenarioFile(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return false;
+    const std::string ext = std::filesystem::path(path).extension().string();
+    return ext != ".yaml" && ext != ".yml";
+}
+
+bool ParseEvalArgs(int argc, char** argv, EvalArgs& a, std::string& err) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        auto value = [&](std::string& out) {
+            if (i + 1 >= argc) { err = arg + " needs a value"; return false; }
+            out = argv[++i];
+            return true;
+        };
+        if (arg == "-o" || arg == "--output") { if (!value(a.report_dir)) return false; }
+        else if (arg == "--config") { if (!value(a.config)) return false; }
+        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
+        else if (arg == "-h" || arg == "--help") { err = ""; return false; }
+        else if (!arg.empty() && arg[0] == '-') { err = "unknown option " + arg; return false; }
+        else if (IsNonScenarioFile(arg)) {
+            // A shell glob over a datasets folder also matches its README.md / FORMAT.md.
+            std::fprintf(stderr, "driftcorr: skipping %s (not a scenario folder or .yaml file)\n",
+                         arg.c_str());
+        } else a.scenarios.push_back(arg);
+    }
+    if (a.scenarios.empty()) err = "missing scenario folder(s)";
+    return err.empty();
+}
+
+// Progress bar on stderr: rewritten in place on a terminal, one line per stage otherwise.
+eval::EvalProgressCallback MakeEvalProgress(bool quiet) {
+    if (quiet) return {};
+    const bool tty = ::isatty(STDERR_FILENO);
+    return [tty, last = std::string()](const eval::EvalProgress& p) mutable {
+        const std::string head = "[eval] " + std::to_string(p.scenario_index + 1) + "/" +
+                                 std::to_string(p.scenario_count) + " " + p.label;
+        if (!tty) {
+            const std::string key = head + " " + p.stage;
+            if (key != last && p.stage != "done") std::fprintf(stderr, "%s: %s\n", head.c_str(), p.stage.c_str());
+            last = key;
+            return;
+        }
+        constexpr int kBar = 24;
+        const int filled = std::clamp(int(p.fraction * kBar + 0.5), 0, kBar);
+        std::fprintf(stderr, "\r\033[K%-45s %-10s [%s%s] %3d %%", head.c_str(), p.stage.c_str(),
+                     std::string(filled, '#').c_str(), std::string(kBar - filled, '.').c_str(),
+                     int(100 * p.fraction));
+        if (p.stage == "done") std::fputc('\n', stderr);
+        std::fflush(stderr);
+    };
+}
+
+}  // namespace
+
+int RunEvalCommand(int argc, char** argv) {
+    EvalArgs args;
+    std::string err;
+    if (!ParseEvalArgs(argc, argv, args, err)) {
+        if (!err.empty()) std::fprintf(stderr, "driftcorr: %s\n\n", err.c_str());
+        std::fputs(kEvalUsage, err.empty() ? stdout : stderr);
+        return err.empty() ? kExitOk : kExitUsage;
+    }
+    eval::EvalConfig config;
+    try {
+        if (!args.config.empty()) config.pipeline = pipeline::LoadPipelineConfig(args.config);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "driftcorr: %s\n", e.what());
+        return kExitFailed;
+    }
+    const std::vector<eval::ScenarioEvaluation> evals =
+        eval::EvaluateScenarios(args.scenarios, config, MakeEvalProgress(args.quiet));
+    std::fputs(eval::FormatTable(evals).c_str(), stdout);
+    if (!args.report_dir.empty()) {
+        try {
+            eval::WriteReport(args.report_dir, evals);
+            std::printf("wrote      %s/ (summary.md, results.json, plots)\n", args.report_dir.c_str());
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "driftcorr: cannot write the report: %s\n", e.what());
+            return kExitInternal;
+        }
+    }
+    const bool any_failed = std::any_of(evals.begin(), evals.end(),
+                                        [](const eval::ScenarioEvaluation& e) { return e.AnyFailed(); });
+    if (any_failed) {
+        std::fprintf(stderr, "driftcorr: %zu of %zu scenario(s) failed (see the table)\n",
+                     static_cast<std::size_t>(std::count_if(
+                         evals.begin(), evals.end(),
+                         [](const eval::ScenarioEvaluation& e) { return e.AnyFailed(); })),
+                     evals.size());
+    }
+    return any_failed ? kExitFailed : kExitOk;
+}
+
+}  // namespace driftcorr::cli

@@ -1,0 +1,27 @@
+#pragma once
+// One TUM pose line ("t x y z qx qy qz qw"), for streams read line by line.
+#include <string>
+#include <string_view>
+
+#include "driftcorr/core/types.h"
+
+namespace driftcorr::io {
+
+struct TumLine {
+    enum class Kind { kPose, kSkip, kError };
+    Kind kind = Kind::kError;  ///< kSkip: blank line or '#' comment
+    std::string error;         ///< kError: why, e.g. "expected 8 numbers, found 3 fields"
+    double t_s = 0.0;
+    Eigen::Vector3d p_frame = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond q_frame_body = Eigen::Quaterniond::Identity();  ///< normalised
+};
+
+/// Parses one line (without its newline). Errors: wrong field count, a field that is not a
+/// number, NaN/inf, a zero-norm quaternion. Same rules as ReadTum, per line.
+TumLine ParseTumLine(std::string_view line);
+
+/// Formats a pose as ReadTum/WriteTum do (timestamps and positions %.6f, quaternion %.9f), with a
+/// trailing newline.
+std::string FormatTumLine(double t_s, const Eigen::Vector3d& p, const Eigen::Quaterniond& q);
+
+}  // namespace driftcorr::io

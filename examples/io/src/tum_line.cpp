@@ -1,0 +1,61 @@
+#include "driftcorr/io/tum_line.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "parse_number.h"
+
+namespace driftcorr::io {
+namespace {
+
+TumLine Error(std::string message) {
+    TumLine out;
+    out.error = std::move(message);
+    return out;
+}
+
+}  // namespace
+
+TumLine ParseTumLine(std::string_view line) {
+    line = internal::Trim(line);
+    if (line.empty() || line.front() == '#') {
+        TumLine skip;
+        skip.kind = TumLine::Kind::kSkip;
+        return skip;
+    }
+    double v[8];
+    std::size_t n = 0, pos = 0;
+    while (pos < line.size()) {
+        const std::size_t begin = line.find_first_not_of(" \t", pos);
+        if (begin == std::string_view::npos) break;
+        std::size_t end = std::min(line.find_first_of(" \t", begin), line.size());
+        const std::string_view field = line.substr(begin, end - begin);
+        pos = end;
+        if (++n > 8) continue;  // counted for the message below
+        const std::optional<double> value = internal::ParseDouble(field);
+        const std::string which = "field " + std::to_string(n) + " '" + std::string(field) + "'";
+        if (!value) return Error(which + " is not a number");
+        if (!std::isfinite(*value)) return Error(which + " is not finite");
+        v[n - 1] = *value;
+    }
+    if (n != 8) return Error("expected 8 numbers, found " + std::to_string(n) + " fields");
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // line order: qx qy qz qw
+    const double norm = q.norm();
+    if (!(norm > 1e-12)) return Error("quaternion has zero norm");
+    TumLine out;
+    out.kind = TumLine::Kind::kPose;
+    out.t_s = v[0];
+    out.p_frame = Eigen::Vector3d(v[1], v[2], v[3]);
+    out.q_frame_body = Eigen::Quaterniond(q.coeffs() / norm);
+    return out;
+}
+
+std::string FormatTumLine(double t_s, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+    char buf[256];
+    std::snprintf(buf, sizeof(buf), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", t_s, p.x(), p.y(),
+                  p.z(), q.x(), q.y(), q.z(), q.w());
+    return buf;
+}
+
+}  // namespace driftcorr::io

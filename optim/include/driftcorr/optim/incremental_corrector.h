@@ -1,0 +1,86 @@
+#pragma once
+// The incremental machinery shared by the batch corrector (CorrectTrajectory) and the online
+// corrector (OnlineCorrector): a growing trajectory state, solved chunk by chunk.
+//
+// One chunk step (SolveChunk): the scale segments first entered by the new poses start from the
+// latest scale estimate, the new poses are dead-reckoned by composing the odometry observations
+// onto the corrected end, and a trailing window of about window_m of path is re-solved with the
+// soft terms (Ipopt), restarting from other step-length scale hypotheses when the solution lands in
+// a poor basin. Refine() then solves the whole trajectory with the hard corridor constraints.
+//
+// What a window keeps of the poses before it (they are not re-solved): pose first-1 is held fixed
+// and anchors the window through the step and heading terms of step `first`; the step-length scale
+// of the segments before the window is held fixed and the scale random walk ties the window's first
+// scale segment to it. No marginalisation prior (covariance) is carried: the boundary pose is
+// treated as exact.
+//
+// No I/O, no threads: the caller decides when to solve. Not thread-safe.
+#include <cstddef>
+#include <vector>
+
+#include "driftcorr/optim/corrector.h"
+#include "driftcorr/optim/window_problem.h"
+
+namespace driftcorr {
+
+class IncrementalCorrector {
+public:
+    /// Starts from a whole trajectory's initial state (the batch case): `state` holds every pose,
+    /// observation and scale segment; poses [0, 0] count as corrected. `field` may be null
+    /// (odometry only) and must outlive this object.
+    IncrementalCorrector(TrajectoryState state, const TraversableField* field,
+                         const CorrectorConfig& config);
+    /// Starts from a single known pose 0 (the online case); poses are added with Append.
+    IncrementalCorrector(const PoseState& pose0, bool fix_height, const TraversableField* field,
+                         const CorrectorConfig& config);
+
+    /// Appends pose i = size() with its observation (the step from pose i-1) and its initial
+    /// value (only its height is used, in planar mode; position and heading are dead-reckoned).
+    void Append(const PoseState& initial, const StepObservation& step);
+
+    std::size_t size() const { return state_.poses.size(); }
+    /// Poses [0, done()] are corrected.
+    std::size_t done() const { return done_; }
+    /// First pose of the last solved window (poses before it were not changed by that solve).
+    std::size_t last_window_first() const { return window_first_; }
+    /// Path length from pose 0 to pose i along the estimate [m].
+    double PathLength(std::size_t i) const { return dist_[i]; }
+
+    /// True when the chunk starting after done() is complete at pose `end` (the batch rule:
+    /// chunk_m of path or max_chunk_poses poses). Precondition: done() < end < size().
+    bool ChunkCompleteAt(std::size_t end) const;
+    /// End of the next chunk of the batch rule, or the last pose. Precondition: done()+1 < size().
+    std::size_t NextChunkEnd() const;
+    /// Initialises poses (done(), end] by odometry and solves the trailing window ending at `end`.
+    /// Precondition: done() < end < size().
+    void SolveChunk(std::size_t end);
+    /// Solves chunks until every appended pose is corrected.
+    void SolveRemaining(const ProgressCallback& progress = {});
+    /// Final whole-trajectory solve with the hard corridor (if config.refine) and the outcome.
+    /// `t_s`: the timestamp of every pose. Precondition: size() >= 3, done()+1 == size().
+    CorrectionResult Finish(const std::vector<double>& t_s, const ProgressCallback& progress = {});
+
+    const TrajectoryState& state() const { return state_; }
+    /// Window statistics so far (windows, restarts, iterations, ...).
+    const CorrectionResult& stats() const { return stats_; }
+
+private:
+    TrajectoryState state_;
+    const TraversableField* field_;
+    CorrectorConfig cfg_;
+    std::vector<double> dist_;
+    std::size_t done_ = 0;
+    std::size_t window_first_ = 1;
+    CorrectionResult stats_;
+};
+
+/// Dead reckoning of one step: pose `a` moved by observation `step` with step-length `scale`.
+/// The height follows dup_m unless `fix_height`, when it stays `up_fixed_m`.
+PoseState ComposeStep(const PoseState& a, const StepObservation& step, double scale,
+                      bool fix_height, double up_fixed_m);
+
+/// The initial state of a whole estimate (observations, scale segments, poses at the estimate).
+TrajectoryState InitialState(const PlanarTrajectory& estimate, const CorrectorConfig& config,
+                             bool fix_height);
+
+}  // namespace driftcorr

@@ -1,0 +1,244 @@
+// The online corrector: causal and smoothed quality against the batch corrector on a synthetic
+// scenario, every kind of bad input, and `driftcorr stream` through a real pipe.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/io/tum_line.h"
+#include "driftcorr/pipeline/online.h"
+
+namespace fs = std::filesystem;
+using namespace driftcorr;
+
+namespace {
+
+std::string TmpDir(const std::string& name) {
+    const fs::path dir =
+        fs::path(DRIFTCORR_TEST_TMPDIR) / ("online_" + std::to_string(::getpid())) / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir.parent_path());
+    return dir.string();
+}
+
+std::string Generate(const std::string& name, const std::string& args) {
+    const std::string dir = TmpDir(name);
+    const std::string cmd = std::string(DRIFTCORR_BINARY_DIR) +
+                            "/datasets/driftcorr_make_road_scenario " + dir + " " + args +
+                            " > /dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return dir;
+}
+
+PlanarPose At(const PlanarTrajectory& t, std::size_t i) {
+    return PlanarPose{t.t_s[i], t.p_en[i], t.up_m[i], t.yaw_rad[i]};
+}
+
+struct OnlineOutcome {
+    PlanarTrajectory causal;
+    CorrectionResult smoothed;
+};
+
+OnlineOutcome RunOnline(const PlanarTrajectory& est, const TraversableField& field, bool sync) {
+    OnlineConfig cfg;
+    cfg.synchronous = sync;
+    OnlineCorrector online(&field, cfg);
+    OnlineOutcome out;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        const PushResult r = online.Push(At(est, i));
+        EXPECT_TRUE(r.Accepted()) << r.message;
+        out.causal.t_s.push_back(r.corrected.t_s);
+        out.causal.p_en.push_back(r.corrected.p_en);
+        out.causal.up_m.push_back(r.corrected.up_m);
+    }
+    out.smoothed = online.Finish();
+    return out;
+}
+
+// One synthetic scenario shared by the tests below (generated once).
+class OnlineSynthetic : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        dir_ = new std::string(Generate("synthetic", "--seed 42"));
+        run_ = new pipeline::CorrectionRun(pipeline::RunCorrection(*dir_, {}));
+        setup_ = new pipeline::StreamSetup(pipeline::LoadStreamSetup(*dir_, {}));
+    }
+    static void TearDownTestSuite() {
+        delete setup_;
+        delete run_;
+        delete dir_;
+    }
+    static std::string* dir_;
+    static pipeline::CorrectionRun* run_;
+    static pipeline::StreamSetup* setup_;
+};
+std::string* OnlineSynthetic::dir_ = nullptr;
+pipeline::CorrectionRun* OnlineSynthetic::run_ = nullptr;
+pipeline::StreamSetup* OnlineSynthetic::setup_ = nullptr;
+
+// Tolerances: causal ATE <= 1.5 x batch ATE + 0.5 m (the filter estimate at the head of the
+// window has no future information); smoothed ATE <= batch ATE x 1.05 + 0.05 m (same chunks,
+// same refinement: measured equal to the batch ATE to the printed precision).
+TEST_F(OnlineSynthetic, SynchronousMatchesBatch) {
+    ASSERT_TRUE(Usable(run_->result.status) && run_->after && run_->ground_truth);
+    const double batch = run_->after->ate_m;
+    const OnlineOutcome o = RunOnline(run_->estimate, setup_->field, true);
+    ASSERT_TRUE(Usable(o.smoothed.status)) << o.smoothed.message;
+    const double causal = ComputeMetrics(o.causal, *run_->ground_truth).ate_m;
+    const double smoothed = ComputeMetrics(o.smoothed.corrected, *run_->ground_truth).ate_m;
+    std::printf("synthetic: batch ATE %.3f m, causal %.3f m, smoothed %.3f m\n", batch, causal,
+                smoothed);
+    EXPECT_LE(causal, 1.5 * batch + 0.5);
+    EXPECT_LE(smoothed, 1.05 * batch + 0.05);
+    EXPECT_EQ(o.smoothed.windows, run_->result.windows);
+}
+
+// The worker thread solves the same chunks in the same order, whatever the timing.
+TEST_F(OnlineSynthetic, ThreadedSmoothedMatchesBatch) {
+    const OnlineOutcome o = RunOnline(run_->estimate, setup_->field, false);
+    ASSERT_TRUE(Usable(o.smoothed.status)) << o.smoothed.message;
+    const double smoothed = ComputeMetrics(o.smoothed.corrected, *run_->ground_truth).ate_m;
+    EXPECT_LE(smoothed, 1.05 * run_->after->ate_m + 0.05);
+    EXPECT_EQ(o.smoothed.windows, run_->result.windows);
+}
+
+TEST_F(OnlineSynthetic, BadPosesAreSkippedAndTheStreamGoesOn) {
+    const PlanarTrajectory& est = run_->estimate;
+    OnlineConfig cfg;
+    cfg.synchronous = true;
+    OnlineCorrector online(&setup_->field, cfg);
+    std::size_t accepted = 0;
+    for (std::size_t i = 0; i < 200; ++i) {
+        accepted += online.Push(At(est, i)).Accepted();
+        if (i == 50) {  // repeated timestamp
+            EXPECT_EQ(online.Push(At(est, i)).status, PushStatus::kRejectedTime);
+        }
+        if (i == 60) {  // out of order
+            EXPECT_EQ(online.Push(At(est, i - 5)).status, PushStatus::kRejectedTime);
+        }
+        if (i == 70) {  // NaN position
+            PlanarPose bad = At(est, i + 1);
+            bad.p_en.x() = std::numeric_limits<double>::quiet_NaN();
+            const PushResult r = online.Push(bad);
+            EXPECT_EQ(r.status, PushStatus::kRejectedNonFinite);
+            EXPECT_FALSE(r.message.empty());
+        }
+        if (i == 80) {  // no heading in a stream with headings
+            PlanarPose bad = At(est, i + 1);
+            bad.yaw_rad.reset();
+            EXPECT_EQ(online.Push(bad).status, PushStatus::kRejectedHeading);
+        }
+    }
+    EXPECT_EQ(accepted, 200u);
+    EXPECT_EQ(online.size(), 200u);
+    EXPECT_TRUE(Usable(online.Finish().status));
+    EXPECT_EQ(online.Push(At(est, 200)).status, PushStatus::kRejectedFinished);
+}
+
+TEST_F(OnlineSynthetic, GapAndOutsideMapAreFlagged) {
+    const PlanarTrajectory& est = run_->estimate;
+    OnlineCorrector online(&setup_->field, OnlineConfig{});
+    for (std::size_t i = 0; i < 10; ++i) EXPECT_FALSE(online.Push(At(est, i)).gap);
+    PlanarPose late = At(est, 10);
+    late.t_s += 30.0;
+    const PushResult gap = online.Push(late);
+    EXPECT_TRUE(gap.Accepted() && gap.gap);
+    EXPECT_NE(gap.message.find("gap"), std::string::npos);
+    PlanarPose far = At(est, 11);
+    far.t_s = late.t_s + 0.1;
+    far.p_en += Eigen::Vector2d(1e6, 0.0);  // a jump far off the map
+    const PushResult off = online.Push(far);
+    EXPECT_TRUE(off.Accepted() && off.outside_map);
+    EXPECT_TRUE(off.corrected.p_en.allFinite());
+}
+
+TEST(Online, TooFewPosesIsAStatusNotACrash) {
+    OnlineCorrector online(nullptr, OnlineConfig{});
+    online.Push(PlanarPose{0.0, {0.0, 0.0}, 0.0, 0.0});
+    const CorrectionResult r = online.Finish();
+    EXPECT_FALSE(Usable(r.status));
+    EXPECT_NE(r.message.find("at least 3"), std::string::npos);
+}
+
+// Without headings the heading of a pose is the direction of the step into it (causal).
+TEST(Online, WithoutHeadingsStraightLineIsKept) {
+    OnlineConfig cfg;
+    cfg.synchronous = true;
+    OnlineCorrector online(nullptr, cfg);
+    for (int i = 0; i < 300; ++i) {
+        const PushResult r = online.Push(PlanarPose{0.1 * i, {1.0 * i, 2.0}, 0.0, std::nullopt});
+        ASSERT_TRUE(r.Accepted());
+        EXPECT_NEAR((r.corrected.p_en - Eigen::Vector2d(1.0 * i, 2.0)).norm(), 0.0, 0.5) << i;
+    }
+    EXPECT_TRUE(Usable(online.Finish().status));
+}
+
+TEST(TumLine, ParsesAndRejects) {
+    const io::TumLine ok = io::ParseTumLine(" 1.5 1 2 3 0 0 0 2\r");
+    ASSERT_EQ(ok.kind, io::TumLine::Kind::kPose);
+    EXPECT_DOUBLE_EQ(ok.t_s, 1.5);
+    EXPECT_DOUBLE_EQ(ok.q_frame_body.w(), 1.0);
+    EXPECT_EQ(io::ParseTumLine("# comment").kind, io::TumLine::Kind::kSkip);
+    EXPECT_EQ(io::ParseTumLine("   ").kind, io::TumLine::Kind::kSkip);
+    for (const char* bad : {"1 2 3", "1 2 3 4 5 6 7 8 9", "1 2 x 4 0 0 0 1", "1 nan 3 4 0 0 0 1",
+                            "1 2 3 4 0 0 0 0", "garbage"}) {
+        const io::TumLine r = io::ParseTumLine(bad);
+        EXPECT_EQ(r.kind, io::TumLine::Kind::kError) << bad;
+        EXPECT_FALSE(r.error.empty()) << bad;
+    }
+}
+
+std::string Slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+std::size_t CountLines(const std::string& text) {
+    return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+// Valid lines, a garbage line, a NaN line, a repeated timestamp, more valid lines and a truncated
+// last line through `driftcorr stream`: one output line per valid input line, each bad line named
+// on stderr, and the smoothed output written at the end.
+TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
+    const Trajectory est = io::LoadTrajectory(run_->scenario.estimate);
+    std::string input;
+    auto line = [&](std::size_t i) {
+        return io::FormatTumLine(est.t_s[i], est.p_frame[i], est.q_frame_body[i]);
+    };
+    for (std::size_t i = 0; i < 20; ++i) input += line(i);
+    input += "this is not a pose\n";                 // line 21
+    input += "99 nan 0 0 0 0 0 1\n";                 // line 22
+    input += line(19);                               // line 23: repeated timestamp
+    for (std::size_t i = 20; i < 40; ++i) input += line(i);
+    std::string last = line(40);
+    input += last.substr(0, last.size() / 2);       // line 44: ends mid-line
+    const std::string dir = TmpDir("pipe");
+    fs::create_directories(dir);
+    std::ofstream(dir + "/in.tum") << input;
+    const std::string cmd = "cat " + dir + "/in.tum | " + std::string(DRIFTCORR_BINARY_DIR) +
+                            "/examples/driftcorr stream " + *dir_ + " --smoothed-out " + dir +
+                            "/smoothed.tum > " + dir + "/out.tum 2> " + dir + "/err.txt";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << Slurp(dir + "/err.txt");
+    const std::string err = Slurp(dir + "/err.txt");
+    EXPECT_EQ(CountLines(Slurp(dir + "/out.tum")), 40u) << err;
+    EXPECT_NE(err.find("line 21"), std::string::npos) << err;
+    EXPECT_NE(err.find("line 22"), std::string::npos) << err;
+    EXPECT_NE(err.find("line 23"), std::string::npos) << err;
+    EXPECT_NE(err.find("line 44"), std::string::npos) << err;
+    EXPECT_EQ(io::ReadTum(dir + "/out.tum").size(), 40u);
+    EXPECT_EQ(io::ReadTum(dir + "/smoothed.tum").size(), 40u);
+}
+
+}  // namespace
