@@ -93,14 +93,17 @@ driftcorr::ProgressCallback MakeProgress(bool quiet) {
     };
 }
 
-void PrintMetricsRow(const char* label, const driftcorr::ErrorMetrics& m) {
-    std::printf("  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%\n",
+void PrintMetricsRow(const char* label, const driftcorr::ErrorMetrics& m, bool floors) {
+    std::printf("  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
                 label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
+    if (floors) std::printf("   right floor %5.1f %%", 100.0 * m.floor_accuracy);
+    std::printf("\n");
 }
 
 void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::string& out,
                   driftcorr::pipeline::Solver solver) {
     const auto& r = run.result;
+    const bool indoor = run.scenario.mode == driftcorr::io::ScenarioMode::kIndoor3d;
     const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
     std::printf("scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
                 driftcorr::io::ToString(run.scenario.mode).c_str(), run.estimate.size());
@@ -118,8 +121,8 @@ void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::stri
                 " incremental %.3f, refine %.3f)\n", total, run.timings.load_s, run.timings.map_s,
                 run.timings.solve_s, run.estimate.size() / std::max(1e-9, run.timings.solve_s),
                 r.incremental_s, r.refine_s);
-    if (run.before) PrintMetricsRow("estimate", *run.before);
-    if (run.after) PrintMetricsRow("corrected", *run.after);
+    if (run.before) PrintMetricsRow("estimate", *run.before, indoor);
+    if (run.after) PrintMetricsRow("corrected", *run.after, indoor);
     if (!out.empty()) std::printf("wrote      %s\n", out.c_str());
 }
 

@@ -7,6 +7,7 @@
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/geodesy.h"
+#include "driftcorr/mapping/floor_plan.h"
 #include "driftcorr/mapping/osm_reader.h"
 
 namespace driftcorr::pipeline {
@@ -48,7 +49,67 @@ RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world, const Roa
     return net;
 }
 
+// The indoor map of the scenario's GeoJSON layers as a 3D field. Layer files are named in the
+// loader's errors; a field too large for the memory cap names the scenario and the setting.
+TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig& config) {
+    std::vector<IndoorLayerSpec> specs;
+    for (std::size_t i = 0; i < sc.map.size(); ++i) {
+        const io::MapLayerSpec& layer = sc.map[i];
+        const std::string key = "map[" + std::to_string(i) + "]";
+        if (layer.format != io::MapFormat::kGeoJson) {
+            throw InputError(sc.yaml_path, 0, key + ".format",
+                             io::ToString(layer.format) + " layers are not supported in indoor3d "
+                             "mode yet (GeoJSON walkways and floor plans are)");
+        }
+        if (layer.role == io::LayerRole::kNone || !layer.floor_z_m) {
+            throw InputError(sc.yaml_path, 0, key,
+                             "an indoor GeoJSON layer needs role (walkways | floorplan) and floor_z_m");
+        }
+        specs.push_back({layer.path,
+                         layer.role == io::LayerRole::kWalkways ? IndoorLayerRole::kWalkways
+                                                                : IndoorLayerRole::kFloorplan,
+                         *layer.floor_z_m});
+    }
+    IndoorFrame frame;
+    if (sc.anchor.IsGeographic()) {
+        auto world = std::make_shared<WorldFrame>(sc.anchor);
+        frame.geo_to_en = [world](const GeoPoint& g) { return world->ToEn(g); };
+    } else {
+        frame.anchor_crs = NormaliseCrsName(*sc.anchor.crs);
+        const Eigen::Vector2d origin(*sc.anchor.easting_m, *sc.anchor.northing_m);
+        frame.anchor_crs_to_en = [origin](const Eigen::Vector2d& en) { return Eigen::Vector2d(en - origin); };
+    }
+    const IndoorMap map = LoadIndoorMap(specs, frame);
+    try {
+        return BuildIndoorField(map.floors, config);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(sc.yaml_path, 0, "map", std::string(e.what()) + " (indoor_field settings)");
+    }
+}
+
 }  // namespace
+
+CorrectorConfig PedestrianCorrectorDefaults() {
+    CorrectorConfig c;
+    c.chunk_m = 15.0;
+    c.window_m = 60.0;
+    ModelConfig& m = c.model;
+    m.step_sigma_m = 0.05;
+    m.step_sigma_rel = 0.05;
+    m.lateral_sigma_m = 0.05;
+    m.lateral_sigma_rel = 0.05;
+    m.heading_rw_rad_per_sqrt_s = 0.01;
+    m.height_sigma_m = 0.05;
+    m.height_sigma_rel = 0.1;
+    m.map_sigma_m = 0.5;
+    m.map_giveup_m = 3.0;
+    m.scale_segment_m = 30.0;
+    m.scale_rw_sigma = 0.02;
+    m.corridor_gate_m = 1.0;
+    m.max_speed_mps = 10.0;
+    c.restart_offroad_m = 2.0;
+    return c;
+}
 
 struct WorldFrame::Impl {
     std::optional<LocalTangentPlane> ltp;
@@ -91,9 +152,6 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     auto t0 = std::chrono::steady_clock::now();
     ps.scenario = io::LoadScenario(scenario_path);
     const io::Scenario& sc = ps.scenario;
-    if (sc.mode != io::ScenarioMode::kRoad2d) {
-        throw InputError(sc.yaml_path, 0, "mode", "indoor3d scenarios are not supported yet");
-    }
     ps.estimate_frame = io::LoadTrajectory(sc.estimate);
     WorldFrame world = [&] {
         try {
@@ -116,11 +174,15 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     ps.timings.load_s = Since(t0);
 
     t0 = std::chrono::steady_clock::now();
-    ps.network = LoadRoads(sc, world, config.roads);
-    try {
-        ps.field = RasteriseRoads(ps.network, BoundsOf(ps.estimate), config.field);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(sc.yaml_path, 0, "map", e.what());
+    if (sc.mode == io::ScenarioMode::kIndoor3d) {
+        ps.field = LoadIndoorField(sc, config.indoor_field);
+    } else {
+        ps.network = LoadRoads(sc, world, config.roads);
+        try {
+            ps.field = RasteriseRoads(ps.network, BoundsOf(ps.estimate), config.field);
+        } catch (const std::invalid_argument& e) {
+            throw InputError(sc.yaml_path, 0, "map", e.what());
+        }
     }
     ps.timings.map_s = Since(t0);
     return ps;
@@ -131,7 +193,10 @@ CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& confi
     if (config.solver == Solver::kPaper) {
         return CorrectWithPaperMethod(ps.estimate, &ps.field, config.paper, progress);
     }
-    return CorrectTrajectory(ps.estimate, &ps.field, config.corrector, progress);
+    const CorrectorConfig& cfg = ps.scenario.mode == io::ScenarioMode::kIndoor3d
+                                     ? config.indoor_corrector
+                                     : config.corrector;
+    return CorrectTrajectory(ps.estimate, &ps.field, cfg, progress);
 }
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,

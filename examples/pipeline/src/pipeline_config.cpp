@@ -137,6 +137,24 @@ std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f)
     return s;
 }
 
+std::map<std::string, Setter> IndoorFieldSetters(const Context& c, IndoorFieldConfig& f) {
+    std::map<std::string, Setter> s;
+    auto num = [&](const char* name, double* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
+    };
+    num("resolution_m", &f.resolution_m);
+    num("resolution_z_m", &f.resolution_z_m);
+    num("device_height_m", &f.device_height_m);
+    num("vertical_tolerance_m", &f.vertical_tolerance_m);
+    num("walkway_half_width_m", &f.walkway_half_width_m);
+    num("margin_m", &f.margin_m);
+    num("vertical_margin_m", &f.vertical_margin_m);
+    num("truncation_m", &f.truncation_m);
+    num("exact_band_m", &f.exact_band_m);
+    num("max_memory_mb", &f.max_memory_mb);
+    return s;
+}
+
 std::map<std::string, Setter> PaperSetters(const Context& c, PaperSolverConfig& p) {
     std::map<std::string, Setter> s;
     auto num = [&](const char* name, double* field) {
@@ -245,6 +263,12 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
             ApplySection(c, kv.first, body, section, ModelSetters(c, cfg.corrector.model));
         } else if (section == "corrector") {
             ApplySection(c, kv.first, body, section, CorrectorSetters(c, cfg.corrector));
+        } else if (section == "indoor_model") {
+            ApplySection(c, kv.first, body, section, ModelSetters(c, cfg.indoor_corrector.model));
+        } else if (section == "indoor_corrector") {
+            ApplySection(c, kv.first, body, section, CorrectorSetters(c, cfg.indoor_corrector));
+        } else if (section == "indoor_field") {
+            ApplySection(c, kv.first, body, section, IndoorFieldSetters(c, cfg.indoor_field));
         } else if (section == "paper") {
             ApplySection(c, kv.first, body, section, PaperSetters(c, cfg.paper));
         } else if (section == "roads") {
@@ -253,7 +277,8 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
             ApplySection(c, kv.first, body, section, FieldSetters(c, cfg.field));
         } else {
             throw InputError(c.file, Line(kv.first), section,
-                             "unknown section (model, corrector, paper, roads, field)");
+                             "unknown section (model, corrector, paper, roads, field, indoor_model, "
+                             "indoor_corrector, indoor_field)");
         }
     }
     if (std::string m = cfg.Validate(); !m.empty()) {
@@ -269,6 +294,8 @@ std::string PipelineConfig::Validate() const {
     if (std::string m = paper.Validate(); !m.empty()) return "paper." + m;
     if (std::string m = roads.Validate(); !m.empty()) return "roads." + RoadsKeyInFile(m);
     if (std::string m = field.Validate(); !m.empty()) return m;
+    if (std::string m = indoor_corrector.Validate(); !m.empty()) return "indoor_" + m;
+    if (std::string m = indoor_field.Validate(); !m.empty()) return "indoor_field." + m;
     return "";
 }
 

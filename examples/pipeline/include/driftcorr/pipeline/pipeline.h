@@ -9,6 +9,7 @@
 
 #include "driftcorr/core/metrics.h"
 #include "driftcorr/io/scenario.h"
+#include "driftcorr/mapping/indoor_field.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/paper_solver.h"
@@ -20,10 +21,18 @@ namespace driftcorr::pipeline {
 enum class Solver { kDriftcorr, kPaper };
 std::string ToString(Solver solver);
 
+/// The corrector's defaults for a pedestrian indoors (mode indoor3d): steps of ~0.7 m at ~2 Hz
+/// from pedestrian dead reckoning (step-length errors of several percent), corridors a few metres
+/// wide, heights free (the height-change term and the 3D field decide the floor).
+CorrectorConfig PedestrianCorrectorDefaults();
+
 /// Every parameter of a run; defaults written once, in the member structs.
 struct PipelineConfig {
     Solver solver = Solver::kDriftcorr;
-    CorrectorConfig corrector;   ///< used by Solver::kDriftcorr
+    CorrectorConfig corrector;   ///< road2d, Solver::kDriftcorr (sections `model`, `corrector`)
+    /// indoor3d, Solver::kDriftcorr (sections `indoor_model`, `indoor_corrector`)
+    CorrectorConfig indoor_corrector = PedestrianCorrectorDefaults();
+    IndoorFieldConfig indoor_field;  ///< indoor3d map field (section `indoor_field`)
     PaperSolverConfig paper;     ///< used by Solver::kPaper (params.yaml section `paper`)
     RoadClassConfig roads;
     RoadFieldConfig field;
@@ -31,7 +40,8 @@ struct PipelineConfig {
     std::string Validate() const;
 };
 
-/// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`). Unknown keys are errors
+/// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`, `indoor_model`,
+/// `indoor_corrector`, `indoor_field`). Unknown keys are errors
 /// (a misspelt parameter must not be ignored). Throws InputError naming file, line and key.
 PipelineConfig LoadPipelineConfig(const std::string& path);
 
