@@ -75,7 +75,7 @@ TEST_F(EvalReport, EveryScenarioIsEvaluatedOrReportedAsFailed) {
     ASSERT_TRUE(good.ok()) << good.error;
     EXPECT_EQ(good.label, "synth");
     EXPECT_EQ(good.poses, 601u);
-    ASSERT_EQ(good.methods.size(), 3u);
+    ASSERT_EQ(good.methods.size(), 4u);  // estimate, paper, driftcorr, online
     for (const MethodResult& m : good.methods) {
         EXPECT_TRUE(m.ok) << ToString(m.method) << ": " << m.message;
         ASSERT_TRUE(m.metrics.has_value());
@@ -84,6 +84,7 @@ TEST_F(EvalReport, EveryScenarioIsEvaluatedOrReportedAsFailed) {
     }
     // driftcorr corrects the 60 s drive (tolerance: better than the estimate's ATE).
     EXPECT_LT(good.Find(Method::kDriftcorr)->metrics->ate_m, good.Find(Method::kEstimate)->metrics->ate_m);
+    EXPECT_LT(good.Find(Method::kOnline)->metrics->ate_m, good.Find(Method::kEstimate)->metrics->ate_m);
 
     const ScenarioEvaluation& broken = evals_[1];
     EXPECT_FALSE(broken.ok());

@@ -107,7 +107,8 @@ void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::stri
     const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
     std::printf("scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
                 driftcorr::io::ToString(run.scenario.mode).c_str(), run.estimate.size());
-    std::printf("map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
+    std::printf(indoor ? "map        %zu walkways on the walk's floor, %.1f km, field %zu cells\n"
+                       : "map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
                 run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
     if (solver == driftcorr::pipeline::Solver::kPaper) {
         std::printf("solver     paper: %s (%s)\n", driftcorr::ToString(r.status).c_str(),

@@ -92,6 +92,7 @@ const char* MethodColour(Method m) {
         case Method::kEstimate: return "#d62728";   // red
         case Method::kPaper: return "#ff7f0e";      // orange
         case Method::kDriftcorr: return "#1f77b4";  // blue
+        case Method::kOnline: return "#2ca02c";     // green
     }
     return "#9467bd";
 }

@@ -119,7 +119,9 @@ Eigen::Quaterniond KittiRotation(const double* v, const std::string& path, long 
     rot << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
     const double det = rot.determinant();
     const double ortho_error = (rot.transpose() * rot - Eigen::Matrix3d::Identity()).norm();
-    if (std::abs(det - 1.0) > 0.1 || ortho_error > 0.1) {
+    // Written so that NaN fails: entries near 1e200 overflow R^T R and det to inf - inf = NaN,
+    // which a "> 0.1" test would let through (Eigen then returns an arbitrary orientation).
+    if (!(std::abs(det - 1.0) <= 0.1 && ortho_error <= 0.1)) {
         char msg[160];
         std::snprintf(msg, sizeof(msg),
                       "rotation part is not a rotation matrix (det %.4g, |R^T R - I| %.4g)", det,
@@ -175,7 +177,8 @@ Trajectory ReadTum(const std::string& path, std::size_t min_poses) {
         ParseNumbers(lines, 8, path, fields, v);
         CheckIncreasing(traj.t_s, v[0], path, lines.number());
         const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order: qx qy qz qw
-        const double norm = q.norm();
+        // stableNorm: q.norm() overflows to inf for components near 1e200, and q / inf is zero.
+        const double norm = q.coeffs().stableNorm();
         if (!(norm > 1e-12)) throw InputError(path, lines.number(), "", "quaternion has zero norm");
         traj.t_s.push_back(v[0]);
         traj.p_frame.emplace_back(v[1], v[2], v[3]);
@@ -205,6 +208,9 @@ Trajectory ReadKitti(const std::string& path, const std::optional<std::string>& 
     } else {
         traj.t_s.resize(traj.p_frame.size());
         for (std::size_t i = 0; i < traj.t_s.size(); ++i) traj.t_s[i] = i / *rate_hz;
+        if (!traj.t_s.empty() && !std::isfinite(traj.t_s.back())) {  // rate_hz 1e-320, say
+            throw InputError(path, 0, "rate_hz", "is so small that the timestamps overflow");
+        }
     }
     return traj;
 }

@@ -1,6 +1,8 @@
 #include "driftcorr/pipeline/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include "driftcorr/core/angles.h"
@@ -49,9 +51,23 @@ RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world, const Roa
     return net;
 }
 
-// The indoor map of the scenario's GeoJSON layers as a 3D field. Layer files are named in the
-// loader's errors; a field too large for the memory cap names the scenario and the setting.
-TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig& config) {
+// The walkways of the floor nearest to `up_m`, as a network for pictures and summaries.
+RoadNetwork WalkwaysNear(const IndoorMap& map, double up_m, double half_width_m) {
+    RoadNetwork net;
+    const IndoorFloor* best = nullptr;
+    for (const IndoorFloor& f : map.floors) {
+        if (!best || std::abs(f.floor_z_m - up_m) < std::abs(best->floor_z_m - up_m)) best = &f;
+    }
+    if (!best) return net;
+    for (const auto& line : best->walkways_en) net.roads.push_back({0, "walkway", half_width_m, line});
+    return net;
+}
+
+// The indoor map of the scenario's GeoJSON layers as a 3D field (and, in `walkways`, the walkway
+// lines of the floor nearest to `up_m`). Layer files are named in the loader's errors; a field
+// too large for the memory cap names the scenario and the setting.
+TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig& config,
+                                 double up_m, RoadNetwork& walkways) {
     std::vector<IndoorLayerSpec> specs;
     for (std::size_t i = 0; i < sc.map.size(); ++i) {
         const io::MapLayerSpec& layer = sc.map[i];
@@ -80,6 +96,7 @@ TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig
         frame.anchor_crs_to_en = [origin](const Eigen::Vector2d& en) { return Eigen::Vector2d(en - origin); };
     }
     const IndoorMap map = LoadIndoorMap(specs, frame);
+    walkways = WalkwaysNear(map, up_m, config.walkway_half_width_m);
     try {
         return BuildIndoorField(map.floors, config);
     } catch (const std::invalid_argument& e) {
@@ -175,7 +192,9 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
 
     t0 = std::chrono::steady_clock::now();
     if (sc.mode == io::ScenarioMode::kIndoor3d) {
-        ps.field = LoadIndoorField(sc, config.indoor_field);
+        std::vector<double> up = ps.estimate.up_m;
+        std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
+        ps.field = LoadIndoorField(sc, config.indoor_field, up[up.size() / 2], ps.network);
     } else {
         ps.network = LoadRoads(sc, world, config.roads);
         try {

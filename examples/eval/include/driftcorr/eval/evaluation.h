@@ -17,7 +17,10 @@ namespace driftcorr::eval {
 /// Hook for the online corrector: once optim/ has it, add `kOnline` here, its name in ToString,
 /// a case in RunMethod (evaluation.cpp) and it to DefaultMethods(); the report writer iterates
 /// over whatever methods a ScenarioEvaluation holds, so the table, JSON and plots follow.
-enum class Method { kEstimate, kPaper, kDriftcorr };
+/// kOnline is the causal (per-epoch) output of the online corrector (optim/online_corrector.h),
+/// run synchronously: each pose's estimate is what Push returned for it, every window solved
+/// before the next pose arrives (what the threaded mode gives when solves keep up with the input).
+enum class Method { kEstimate, kPaper, kDriftcorr, kOnline };
 std::string ToString(Method method);
 /// estimate, paper, driftcorr (batch).
 std::vector<Method> DefaultMethods();
