@@ -10,7 +10,7 @@ mode=${1:-demo}
 build_dir=${BUILD_DIR:-build}
 packages=(build-essential cmake pkg-config libeigen3-dev coinor-libipopt-dev liblapack-dev
           libblas-dev libyaml-cpp-dev libgeographiclib-dev libproj-dev libexpat1-dev
-          libgtest-dev libbenchmark-dev)
+          libgtest-dev libbenchmark-dev libpcl-dev liboctomap-dev)
 
 install_missing() {
     local missing=()

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "driftcorr/mapping/grid.h"
+#include "voxel_corridor.h"
 
 namespace driftcorr {
 namespace {
@@ -176,62 +177,6 @@ GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
     return s;
 }
 
-// Minus the horizontal distance from each inside voxel of slice `k` to the nearest outside
-// voxel (plus half a cell), written into `corridor`. The EDT runs on the bounding box of the
-// inside voxels grown by one cell: the nearest outside voxel of an inside one is never beyond it
-// (clamping a far outside voxel onto the box gives a nearer one, still outside).
-void InsideSlice(const GridSpec& s, const Mask& inside, int k, std::vector<float>& corridor) {
-    const std::size_t base = s.Index(0, 0, k);
-    int i0 = s.nx, i1 = -1, j0 = s.ny, j1 = -1;
-    for (int j = 0; j < s.ny; ++j) {
-        const std::uint8_t* row = &inside[base + std::size_t(j) * s.nx];
-        for (int i = 0; i < s.nx; ++i) {
-            if (!row[i]) continue;
-            i0 = std::min(i0, i), i1 = std::max(i1, i), j0 = std::min(j0, j), j1 = std::max(j1, j);
-        }
-    }
-    if (i1 < 0) return;
-    i0 = std::max(0, i0 - 1), j0 = std::max(0, j0 - 1);
-    i1 = std::min(s.nx - 1, i1 + 1), j1 = std::min(s.ny - 1, j1 + 1);
-    GridSpec sub;
-    sub.resolution_m = s.resolution_m;
-    sub.nx = i1 - i0 + 1;
-    sub.ny = j1 - j0 + 1;
-    Mask outside(sub.size());
-    for (int j = 0; j < sub.ny; ++j) {
-        for (int i = 0; i < sub.nx; ++i)
-            outside[sub.Index(i, j)] = !inside[s.Index(i0 + i, j0 + j, k)];
-    }
-    const std::vector<float> d = EuclideanDistanceTransform(sub, outside);
-    const float half = 0.5f * float(s.resolution_m);
-    for (int j = 0; j < sub.ny; ++j) {
-        for (int i = 0; i < sub.nx; ++i) {
-            const std::size_t idx = s.Index(i0 + i, j0 + j, k);
-            if (inside[idx]) corridor[idx] = -(std::min(d[sub.Index(i, j)], 1e6f) - half);
-        }
-    }
-}
-
-std::vector<float> CorridorField(const GridSpec& s, const Mask& inside, float trunc) {
-    std::vector<float> corridor = EuclideanDistanceTransform(s, inside);
-    const float half = 0.5f * float(s.resolution_m);
-    for (float& v : corridor) v = v - half;  // outside; inside voxels are overwritten below
-    const std::size_t plane = std::size_t(s.nx) * s.ny;
-    for (int k = 0; k < s.nz; ++k) {
-        const std::size_t base = s.Index(0, 0, k);
-        const bool same = k > 0 && std::memcmp(&inside[base], &inside[base - plane], plane) == 0;
-        if (same) {  // stair and lift columns repeat one slice many times
-            for (std::size_t i = 0; i < plane; ++i) {
-                if (inside[base + i]) corridor[base + i] = corridor[base - plane + i];
-            }
-        } else {
-            InsideSlice(s, inside, k, corridor);
-        }
-    }
-    for (float& v : corridor) v = std::clamp(v, -trunc, trunc);
-    return corridor;
-}
-
 }  // namespace
 
 std::string IndoorFieldConfig::Validate() const {
@@ -317,7 +262,7 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
         }
     }
     const float trunc = float(config.truncation_m);
-    std::vector<float> corridor = CorridorField(s, inside, trunc);
+    std::vector<float> corridor = internal::CorridorField(s, inside, trunc);
     inside.clear();
     inside.shrink_to_fit();
 

@@ -11,6 +11,7 @@
 #include "driftcorr/mapping/geodesy.h"
 #include "driftcorr/mapping/floor_plan.h"
 #include "driftcorr/mapping/osm_reader.h"
+#include "driftcorr/mapping/surface_io.h"
 
 namespace driftcorr::pipeline {
 namespace {
@@ -61,6 +62,32 @@ RoadNetwork WalkwaysNear(const IndoorMap& map, double up_m, double half_width_m)
     if (!best) return net;
     for (const auto& line : best->walkways_en) net.roads.push_back({0, "walkway", half_width_m, line});
     return net;
+}
+
+bool IsSurfaceLayer(const io::MapLayerSpec& layer) {
+    return layer.format == io::MapFormat::kPcd || layer.format == io::MapFormat::kPly ||
+           layer.format == io::MapFormat::kOctomap;
+}
+
+// The walkable surfaces of the scenario's point-cloud / OctoMap layers as a 3D field. The files
+// hold points in the anchor's local East-North frame (metres from the anchor origin) and heights
+// in the map's datum (the one z_m refers to).
+TraversableField LoadSurfaceField(const io::Scenario& sc, const SurfaceFieldConfig& config) {
+    std::vector<Eigen::Vector3d> points;
+    for (std::size_t i = 0; i < sc.map.size(); ++i) {
+        if (!IsSurfaceLayer(sc.map[i])) {
+            throw InputError(sc.yaml_path, 0, "map[" + std::to_string(i) + "].format",
+                             "indoor3d maps are either point-cloud/OctoMap layers or GeoJSON "
+                             "layers, not both");
+        }
+        const std::vector<Eigen::Vector3d> layer = ReadSurfacePoints(sc.map[i].path);
+        points.insert(points.end(), layer.begin(), layer.end());
+    }
+    try {
+        return BuildSurfaceField(points, config);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(sc.yaml_path, 0, "map", std::string(e.what()) + " (surface_field settings)");
+    }
 }
 
 // The indoor map of the scenario's GeoJSON layers as a 3D field (and, in `walkways`, the walkway
@@ -194,7 +221,11 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     if (sc.mode == io::ScenarioMode::kIndoor3d) {
         std::vector<double> up = ps.estimate.up_m;
         std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
-        ps.field = LoadIndoorField(sc, config.indoor_field, up[up.size() / 2], ps.network);
+        if (IsSurfaceLayer(sc.map.front())) {
+            ps.field = LoadSurfaceField(sc, config.surface_field);
+        } else {
+            ps.field = LoadIndoorField(sc, config.indoor_field, up[up.size() / 2], ps.network);
+        }
     } else {
         ps.network = LoadRoads(sc, world, config.roads);
         try {

@@ -155,6 +155,23 @@ std::map<std::string, Setter> IndoorFieldSetters(const Context& c, IndoorFieldCo
     return s;
 }
 
+std::map<std::string, Setter> SurfaceFieldSetters(const Context& c, SurfaceFieldConfig& f) {
+    std::map<std::string, Setter> s;
+    auto num = [&](const char* name, double* field) {
+        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
+    };
+    num("resolution_m", &f.resolution_m);
+    num("resolution_z_m", &f.resolution_z_m);
+    num("device_height_m", &f.device_height_m);
+    num("vertical_tolerance_m", &f.vertical_tolerance_m);
+    num("wall_clearance_m", &f.wall_clearance_m);
+    num("margin_m", &f.margin_m);
+    num("vertical_margin_m", &f.vertical_margin_m);
+    num("truncation_m", &f.truncation_m);
+    num("max_memory_mb", &f.max_memory_mb);
+    return s;
+}
+
 std::map<std::string, Setter> PaperSetters(const Context& c, PaperSolverConfig& p) {
     std::map<std::string, Setter> s;
     auto num = [&](const char* name, double* field) {
@@ -269,6 +286,8 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
             ApplySection(c, kv.first, body, section, CorrectorSetters(c, cfg.indoor_corrector));
         } else if (section == "indoor_field") {
             ApplySection(c, kv.first, body, section, IndoorFieldSetters(c, cfg.indoor_field));
+        } else if (section == "surface_field") {
+            ApplySection(c, kv.first, body, section, SurfaceFieldSetters(c, cfg.surface_field));
         } else if (section == "paper") {
             ApplySection(c, kv.first, body, section, PaperSetters(c, cfg.paper));
         } else if (section == "roads") {
@@ -278,7 +297,7 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
         } else {
             throw InputError(c.file, Line(kv.first), section,
                              "unknown section (model, corrector, paper, roads, field, indoor_model, "
-                             "indoor_corrector, indoor_field)");
+                             "indoor_corrector, indoor_field, surface_field)");
         }
     }
     if (std::string m = cfg.Validate(); !m.empty()) {
@@ -296,6 +315,7 @@ std::string PipelineConfig::Validate() const {
     if (std::string m = field.Validate(); !m.empty()) return m;
     if (std::string m = indoor_corrector.Validate(); !m.empty()) return "indoor_" + m;
     if (std::string m = indoor_field.Validate(); !m.empty()) return "indoor_field." + m;
+    if (std::string m = surface_field.Validate(); !m.empty()) return "surface_field." + m;
     return "";
 }
 

@@ -10,6 +10,7 @@
 #include "driftcorr/core/metrics.h"
 #include "driftcorr/io/scenario.h"
 #include "driftcorr/mapping/indoor_field.h"
+#include "driftcorr/mapping/surface_field.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/paper_solver.h"
@@ -32,7 +33,9 @@ struct PipelineConfig {
     CorrectorConfig corrector;   ///< road2d, Solver::kDriftcorr (sections `model`, `corrector`)
     /// indoor3d, Solver::kDriftcorr (sections `indoor_model`, `indoor_corrector`)
     CorrectorConfig indoor_corrector = PedestrianCorrectorDefaults();
-    IndoorFieldConfig indoor_field;  ///< indoor3d map field (section `indoor_field`)
+    IndoorFieldConfig indoor_field;  ///< indoor3d GeoJSON map field (section `indoor_field`)
+    /// indoor3d point-cloud / OctoMap map field (section `surface_field`)
+    SurfaceFieldConfig surface_field;
     PaperSolverConfig paper;     ///< used by Solver::kPaper (params.yaml section `paper`)
     RoadClassConfig roads;
     RoadFieldConfig field;

@@ -1,0 +1,76 @@
+#pragma once
+// The map prior from a sampled walkable surface (a point cloud of floors, stairs and lift cabin
+// floors, or the floor voxels of an OctoMap): a 3D TraversableField, the same interface as the
+// floor-plan field of indoor_field.h. Needs no PCL: the points come from any reader (see
+// driftcorr_mapping_pcl, surface_io.h).
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "driftcorr/mapping/traversable_field.h"
+
+namespace driftcorr {
+
+/// Config of the surface field. Heights: a surface point at height z (map frame) is walked at
+/// z + device_height_m. The default 0 matches scenarios whose trajectory heights are floor
+/// heights (the synthetic building's ground truth runs at the floor's height); set it to the
+/// device's height above the floor when the trajectory carries the device height.
+struct SurfaceFieldConfig {
+    /// Horizontal grid spacing [m]. The points must be at least about this dense (every
+    /// resolution_m x resolution_m cell of a walkable area must hold a point), else the gaps read
+    /// as holes; gaps wider than about 1.5 cells (walls) do read as not walkable.
+    double resolution_m = 0.2;
+    double resolution_z_m = 0.25;  ///< vertical grid spacing [m]
+    double device_height_m = 0.0;  ///< walked surface above the sampled surface [m]
+    /// A voxel is traversable when a surface point lies in its column (same horizontal cell)
+    /// within this height [m] of the voxel centre. Must be >= resolution_z_m (at least three
+    /// layers, so that the cubic B-spline reads the horizontal distance at the surface; see
+    /// IndoorFieldConfig::vertical_tolerance_m) and should stay well under half the storey
+    /// height, so that the space between floors is not traversable. Sloped surfaces (stairs,
+    /// ramps) are traversable when the height step between neighbouring cells,
+    /// slope * resolution_m, is under 2 * vertical_tolerance_m (always, for stairs).
+    double vertical_tolerance_m = 0.5;
+    /// A point cloud has no walkway centre lines, so `centre` is the distance to where a person
+    /// walks: on the surface (vertically) and at least wall_clearance_m from the edge of the
+    /// walkable area (horizontally): max(distance to the surface, wall_clearance_m + corridor),
+    /// floored at 0. It is 0 in open space and grows towards walls and beyond them, so the map
+    /// term keeps poses off walls and in the middle of narrow corridors. 0: surface only.
+    double wall_clearance_m = 0.8;
+    double margin_m = 2.0;           ///< grid extends this far around the points (horizontal) [m]
+    double vertical_margin_m = 1.5;  ///< and this far below the lowest, above the highest point [m]
+    double truncation_m = 5.0;       ///< distances are capped at this value [m]
+    double max_memory_mb = 1024.0;   ///< refuse fields larger than this [MB]
+
+    /// Empty if valid, else a message naming the bad field.
+    std::string Validate() const;
+};
+
+/// What was built.
+struct SurfaceFieldStats {
+    std::size_t points = 0;              ///< surface points given
+    std::size_t voxels = 0;              ///< grid size
+    std::size_t surface_voxels = 0;      ///< voxels holding a surface point (the centre seeds)
+    std::size_t traversable_voxels = 0;  ///< the traversable set
+};
+
+/// Builds the field over the points' bounding box grown by margin_m (and vertical_margin_m).
+/// Each point p (map frame, metres) is lifted to p + device_height_m in z and falls into the
+/// voxel column of its nearest horizontal sample; its surface voxel is the nearest layer.
+///  - traversable set: the voxels of the point's column within vertical_tolerance_m of its
+///    height (at least its surface voxel). Floors are layers, stairs sloped bands of layers, a
+///    lift shaft sampled at many cabin heights a column; the space between floors is not
+///    traversable.
+///  - corridor: outside the set, the 3D distance to it; inside, minus the horizontal distance to
+///    the set's edge at that height (walls are gaps in the points). Zero level between the last
+///    inside and the first outside voxel; truncated at +/- truncation_m.
+///  - centre: 3D distance to the nearest surface voxel, truncated at truncation_m.
+/// Both are interpolated by the cubic B-spline of InterpolatedField (value and gradient
+/// continuous). Throws std::invalid_argument when the config is invalid, there is no point, a
+/// point is not finite, or the grid would exceed max_memory_mb (the message names the horizontal
+/// resolution that would fit).
+TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_points_enu,
+                                   const SurfaceFieldConfig& config,
+                                   SurfaceFieldStats* stats = nullptr);
+
+}  // namespace driftcorr

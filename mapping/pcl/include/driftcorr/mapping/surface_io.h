@@ -1,0 +1,51 @@
+#pragma once
+// Readers and writers of walkable-surface maps: point clouds (PCD, PLY; via PCL) and OctoMap
+// occupancy trees (.bt, .ot). Part of the separate target driftcorr_mapping_pcl: PCL and OctoMap
+// are linked PRIVATE there and no type of theirs appears here, only Eigen and std types.
+// All coordinates are metres in the map's local frame (for a scenario: East-North-Up around the
+// anchor, z in the map's height datum); the readers do no transformation.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace driftcorr {
+
+/// The points of a PCD file (ASCII, binary or binary_compressed) as the surface a person walks
+/// on. Only the x, y, z fields are read. Throws driftcorr::InputError naming the file when it
+/// cannot be read or parsed, has no x/y/z fields, has no point, or has a point with a NaN or
+/// infinite coordinate (the message gives how many and the first index).
+std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path);
+
+/// The vertices of a PLY file (ASCII or binary), with the same rules and errors as
+/// ReadSurfacePointsPcd.
+std::vector<Eigen::Vector3d> ReadSurfacePointsPly(const std::string& path);
+
+/// Dispatch on the extension: .pcd, .ply, .bt or .ot (case-insensitive). Throws InputError for
+/// another extension.
+std::vector<Eigen::Vector3d> ReadSurfacePoints(const std::string& path);
+
+/// The floor of an OctoMap occupancy tree (.bt: OcTree::readBinary, .ot: AbstractOcTree::read,
+/// which must hold an OcTree). Floor rule: an occupied leaf voxel (at the finest resolution; a
+/// pruned, coarser occupied leaf counts by its top layer of finest voxels) whose voxel directly
+/// above is NOT occupied, i.e. free or unknown (a scan rarely observes the free space right above
+/// the floor, so unknown must count; a voxel stacked under another occupied one is inside a slab
+/// or wall and is not floor). Returns the top-face centres of the floor voxels: voxel centre +
+/// half a voxel in z, the height a person stands at. Throws InputError naming the file when it
+/// cannot be read or parsed as an OcTree, or has no floor voxel.
+std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path);
+
+/// Writers (used by the synthetic building generator and the tests). Each writes to
+/// path + ".tmp" and renames it when complete; throws std::runtime_error naming the file when
+/// it cannot be written. Points are stored as 32-bit floats (keep coordinates local: a float has
+/// about 0.5 m resolution at UTM northings).
+void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points);
+void WriteSurfacePointsPly(const std::string& path, const std::vector<Eigen::Vector3d>& points);
+
+/// Writes a binary OctoMap (.bt) of resolution resolution_m in which, for every surface point,
+/// the voxel just below it (containing the point minus half a voxel in z) is occupied, so that
+/// its top face is at the surface height up to the voxel quantisation; all other space is
+/// unknown. Precondition: resolution_m > 0.
+void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Vector3d>& points,
+                            double resolution_m);
+
+}  // namespace driftcorr

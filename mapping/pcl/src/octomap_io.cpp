@@ -1,0 +1,93 @@
+// OctoMap occupancy trees (PRIVATE to driftcorr_mapping_pcl): floor voxels out, surface voxels in.
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/surface_io.h"
+
+namespace driftcorr {
+namespace {
+
+std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw InputError(path, 0, "", "OctoMap file does not exist or is not a regular file");
+    }
+    const std::string ext = std::filesystem::path(path).extension().string();
+    if (ext == ".ot" || ext == ".OT") {
+        std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
+        auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
+        if (!tree) {
+            throw InputError(path, 0, "",
+                             any ? "OctoMap file holds a " + any->getTreeType() + ", not an OcTree"
+                                 : "cannot be read or parsed as an OctoMap (.ot) file");
+        }
+        any.release();
+        return std::unique_ptr<octomap::OcTree>(tree);
+    }
+    auto tree = std::make_unique<octomap::OcTree>(0.1);
+    if (!tree->readBinary(path)) {
+        throw InputError(path, 0, "", "cannot be read or parsed as a binary OctoMap (.bt) file");
+    }
+    return tree;
+}
+
+bool OccupiedAt(const octomap::OcTree& tree, double x, double y, double z) {
+    const octomap::OcTreeNode* node = tree.search(x, y, z);
+    return node != nullptr && tree.isNodeOccupied(node);
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
+    const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
+    const double res = tree->getResolution();
+    std::vector<Eigen::Vector3d> floor;
+    for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+        if (!tree->isNodeOccupied(*it)) continue;
+        // A pruned leaf of size n * res: its top layer of n x n finest voxels.
+        const double size = it.getSize();
+        const int n = std::max(1, int(std::lround(size / res)));
+        const octomap::point3d c = it.getCoordinate();
+        const double z_top_centre = c.z() + 0.5 * size - 0.5 * res;
+        for (int a = 0; a < n; ++a) {
+            for (int b = 0; b < n; ++b) {
+                const double x = c.x() - 0.5 * size + res * (a + 0.5);
+                const double y = c.y() - 0.5 * size + res * (b + 0.5);
+                if (OccupiedAt(*tree, x, y, z_top_centre + res)) continue;
+                floor.emplace_back(x, y, z_top_centre + 0.5 * res);
+            }
+        }
+    }
+    if (floor.empty()) {
+        throw InputError(path, 0, "",
+                         "OctoMap has no floor voxel (no occupied voxel with free or unknown "
+                         "space above it)");
+    }
+    return floor;
+}
+
+void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Vector3d>& points,
+                            double resolution_m) {
+    if (!(resolution_m > 0.0)) throw std::logic_error("WriteOctomapFromPoints: resolution_m <= 0");
+    octomap::OcTree tree(resolution_m);
+    for (const Eigen::Vector3d& p : points) {
+        tree.updateNode(
+            octomap::point3d(float(p.x()), float(p.y()), float(p.z() - 0.5 * resolution_m)), true,
+            /*lazy_eval=*/true);
+    }
+    tree.updateInnerOccupancy();
+    const std::string tmp = path + ".tmp";
+    if (!tree.writeBinary(tmp)) throw std::runtime_error(tmp + ": cannot write OctoMap");
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw std::runtime_error(path + ": cannot rename from " + tmp + ": " + ec.message());
+}
+
+}  // namespace driftcorr

@@ -1,0 +1,156 @@
+// PCD and PLY surface clouds through PCL (PRIVATE to driftcorr_mapping_pcl).
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/surface_io.h"
+
+namespace driftcorr {
+namespace {
+
+bool HasField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
+    return std::any_of(cloud.fields.begin(), cloud.fields.end(),
+                       [&](const pcl::PCLPointField& f) { return f.name == name; });
+}
+
+// Checks and converts a cloud read from `path` (`kind` names the format in messages).
+std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
+                                             const std::string& path, const std::string& kind) {
+    for (const char* axis : {"x", "y", "z"}) {
+        if (!HasField(blob, axis)) {
+            throw InputError(path, 0, "", kind + " file has no '" + axis + "' field");
+        }
+    }
+    pcl::PointCloud<pcl::PointXYZ> cloud;
+    pcl::fromPCLPointCloud2(blob, cloud);
+    if (cloud.empty()) throw InputError(path, 0, "", kind + " file has no points");
+    std::vector<Eigen::Vector3d> points;
+    points.reserve(cloud.size());
+    std::size_t bad = 0, first_bad = 0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
+        if (!p.allFinite()) {
+            if (bad++ == 0) first_bad = i;
+            continue;
+        }
+        points.push_back(p);
+    }
+    if (bad > 0) {
+        throw InputError(path, 0, "",
+                         kind + " file has " + std::to_string(bad) + " of " +
+                             std::to_string(cloud.size()) +
+                             " points with a NaN or infinite coordinate (first at index " +
+                             std::to_string(first_bad) + "); a surface map must be dense");
+    }
+    return points;
+}
+
+void RequireReadable(const std::string& path, const std::string& kind) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw InputError(path, 0, "", kind + " file does not exist or is not a regular file");
+    }
+}
+
+void RenameInto(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw std::runtime_error(path + ": cannot rename from " + tmp + ": " + ec.message());
+}
+
+pcl::PointCloud<pcl::PointXYZ> ToCloud(const std::vector<Eigen::Vector3d>& points) {
+    pcl::PointCloud<pcl::PointXYZ> cloud;
+    cloud.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Eigen::Vector3f p = points[i].cast<float>();
+        cloud[i] = pcl::PointXYZ(p.x(), p.y(), p.z());
+    }
+    cloud.width = static_cast<std::uint32_t>(points.size());
+    cloud.height = 1;
+    cloud.is_dense = true;
+    return cloud;
+}
+
+std::string LowerExtension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
+    RequireReadable(path, "PCD");
+    pcl::PCLPointCloud2 blob;
+    pcl::PCDReader reader;
+    // The header first: PCL 1.13's read() crashes on some malformed files (no FIELDS line), so
+    // the body is read only when the header has x, y, z fields and at least one point.
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int version = 0, data_type = 0;
+    unsigned int data_idx = 0;
+    if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_idx) < 0) {
+        throw InputError(path, 0, "", "cannot be read or parsed as a PCD point cloud (header)");
+    }
+    for (const char* axis : {"x", "y", "z"}) {
+        if (!HasField(blob, axis)) {
+            throw InputError(path, 0, "", std::string("PCD file has no '") + axis + "' field");
+        }
+    }
+    if (std::size_t(blob.width) * blob.height == 0) {
+        throw InputError(path, 0, "", "PCD file has no points");
+    }
+    if (reader.read(path, blob) < 0) {
+        throw InputError(path, 0, "", "cannot be read or parsed as a PCD point cloud");
+    }
+    return ToSurfacePoints(blob, path, "PCD");
+}
+
+std::vector<Eigen::Vector3d> ReadSurfacePointsPly(const std::string& path) {
+    RequireReadable(path, "PLY");
+    pcl::PCLPointCloud2 blob;
+    pcl::PLYReader reader;
+    if (reader.read(path, blob) < 0) {
+        throw InputError(path, 0, "", "cannot be read or parsed as a PLY point cloud");
+    }
+    return ToSurfacePoints(blob, path, "PLY");
+}
+
+std::vector<Eigen::Vector3d> ReadSurfacePoints(const std::string& path) {
+    const std::string ext = LowerExtension(path);
+    if (ext == ".pcd") return ReadSurfacePointsPcd(path);
+    if (ext == ".ply") return ReadSurfacePointsPly(path);
+    if (ext == ".bt" || ext == ".ot") return ReadFloorVoxelsOctomap(path);
+    throw InputError(path, 0, "",
+                     "unknown surface map extension '" + ext + "' (expected .pcd, .ply, .bt, .ot)");
+}
+
+void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points) {
+    const std::string tmp = path + ".tmp";
+    if (pcl::io::savePCDFileBinary(tmp, ToCloud(points)) < 0) {
+        throw std::runtime_error(tmp + ": cannot write PCD");
+    }
+    RenameInto(tmp, path);
+}
+
+void WriteSurfacePointsPly(const std::string& path, const std::vector<Eigen::Vector3d>& points) {
+    const std::string tmp = path + ".tmp";
+    if (pcl::io::savePLYFileBinary(tmp, ToCloud(points)) < 0) {
+        throw std::runtime_error(tmp + ": cannot write PLY");
+    }
+    RenameInto(tmp, path);
+}
+
+}  // namespace driftcorr

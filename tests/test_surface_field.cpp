@@ -1,0 +1,383 @@
+// Surface-map sources: the PCD/PLY/OctoMap readers (driftcorr_mapping_pcl), BuildSurfaceField on
+// hand-computable geometry, and the synthetic building generator (determinism; the three map
+// formats give the same field).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/surface_field.h"
+#include "driftcorr/mapping/surface_io.h"
+
+namespace driftcorr {
+namespace {
+
+namespace fs = std::filesystem;
+using Points = std::vector<Eigen::Vector3d>;
+
+const std::string kGenerator = DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario";
+
+fs::path TestDir(const std::string& name) {
+    const fs::path dir =
+        fs::path(DRIFTCORR_TEST_TMPDIR) / ("surface_" + name + "_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string WriteText(const fs::path& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+    return path.string();
+}
+
+std::string AsciiPcd(const std::vector<std::string>& rows) {
+    std::string s = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+    s += "WIDTH " + std::to_string(rows.size()) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n";
+    s += "POINTS " + std::to_string(rows.size()) + "\nDATA ascii\n";
+    for (const auto& r : rows) s += r + "\n";
+    return s;
+}
+
+std::string AsciiPly(const std::vector<std::string>& rows) {
+    std::string s = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(rows.size()) + "\n";
+    s += "property float x\nproperty float y\nproperty float z\nend_header\n";
+    for (const auto& r : rows) s += r + "\n";
+    return s;
+}
+
+// Points on the lattice (spacing (i + 0.5)) of an axis-aligned rectangle at height z(x).
+template <typename ZOfX>
+void AddRect(double x0, double y0, double x1, double y1, ZOfX z, Points& out,
+             double spacing = 0.1) {
+    for (double y = y0 + 0.5 * spacing; y < y1; y += spacing)
+        for (double x = x0 + 0.5 * spacing; x < x1; x += spacing) out.emplace_back(x, y, z(x));
+}
+
+// Expects `fn` to throw InputError whose message names `path` and contains `needle`.
+template <typename Fn>
+void ExpectInputError(Fn fn, const std::string& path, const std::string& needle) {
+    try {
+        fn();
+        FAIL() << "no InputError for " << path;
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+}
+
+// --- readers -------------------------------------------------------------------------------
+
+TEST(SurfaceReaders, AsciiPcdAndPlyRoundTrip) {
+    const fs::path dir = TestDir("readers");
+    const std::vector<std::string> rows = {"1 2 3", "-1.5 0.25 4", "0 0 8"};
+    const Points pcd = ReadSurfacePointsPcd(WriteText(dir / "a.pcd", AsciiPcd(rows)));
+    const Points ply = ReadSurfacePointsPly(WriteText(dir / "a.ply", AsciiPly(rows)));
+    ASSERT_EQ(pcd.size(), 3u);
+    ASSERT_EQ(ply.size(), 3u);
+    EXPECT_EQ(pcd[1], Eigen::Vector3d(-1.5, 0.25, 4.0));
+    EXPECT_EQ(ply[1], Eigen::Vector3d(-1.5, 0.25, 4.0));
+    // The writers (binary) round-trip exactly for float-representable points.
+    WriteSurfacePointsPcd((dir / "b.pcd").string(), pcd);
+    WriteSurfacePointsPly((dir / "b.ply").string(), pcd);
+    EXPECT_EQ(ReadSurfacePoints((dir / "b.pcd").string()), pcd);
+    EXPECT_EQ(ReadSurfacePoints((dir / "b.ply").string()), pcd);
+    EXPECT_FALSE(fs::exists(dir / "b.pcd.tmp"));
+}
+
+TEST(SurfaceReaders, EmptyCloudIsAnInputErrorNamingTheFile) {
+    const fs::path dir = TestDir("empty");
+    const std::string pcd = WriteText(dir / "empty.pcd", AsciiPcd({}));
+    const std::string ply = WriteText(dir / "empty.ply", AsciiPly({}));
+    ExpectInputError([&] { ReadSurfacePointsPcd(pcd); }, pcd, "");
+    ExpectInputError([&] { ReadSurfacePointsPly(ply); }, ply, "");
+}
+
+TEST(SurfaceReaders, NanPointIsAnInputErrorWithCountAndFirstIndex) {
+    const fs::path dir = TestDir("nan");
+    const std::vector<std::string> rows = {"0 0 0", "nan 1 0", "1 1 0", "2 nan 0"};
+    const std::string pcd = WriteText(dir / "nan.pcd", AsciiPcd(rows));
+    const std::string ply = WriteText(dir / "nan.ply", AsciiPly(rows));
+    ExpectInputError([&] { ReadSurfacePointsPcd(pcd); }, pcd, "2 of 4 points");
+    ExpectInputError([&] { ReadSurfacePointsPcd(pcd); }, pcd, "first at index 1");
+    ExpectInputError([&] { ReadSurfacePointsPly(ply); }, ply, "2 of 4 points");
+}
+
+TEST(SurfaceReaders, UnreadableFilesAreInputErrors) {
+    const fs::path dir = TestDir("garbage");
+    const std::string garbage = "this is not a map\n\x01\x02\x03 at all\n";
+    const std::string pcd = WriteText(dir / "g.pcd", garbage);
+    const std::string ply = WriteText(dir / "g.ply", garbage);
+    const std::string headless =
+        WriteText(dir / "h.pcd", "VERSION 0.7\nPOINTS 2\nDATA ascii\n1 2\n");
+    const std::string bt = WriteText(dir / "g.bt", garbage);
+    const std::string ot = WriteText(dir / "g.ot", garbage);
+    const std::string missing = (dir / "missing.pcd").string();
+    ExpectInputError([&] { ReadSurfacePointsPcd(pcd); }, pcd, "");
+    ExpectInputError([&] { ReadSurfacePointsPcd(headless); }, headless, "");
+    ExpectInputError([&] { ReadSurfacePointsPly(ply); }, ply, "");
+    ExpectInputError([&] { ReadFloorVoxelsOctomap(bt); }, bt, "OctoMap");
+    ExpectInputError([&] { ReadFloorVoxelsOctomap(ot); }, ot, "OctoMap");
+    ExpectInputError([&] { ReadSurfacePointsPcd(missing); }, missing, "does not exist");
+    ExpectInputError([&] { ReadSurfacePoints((dir / "x.las").string()); }, "x.las", ".las");
+}
+
+// Floor rule: an occupied voxel with a non-occupied voxel above is floor; its top face is
+// returned. A 1 m x 1 m floor at z = 0 (100 voxels of 0.1 m) with a second occupied voxel on top
+// in one 0.3 m x 0.3 m corner (9 columns): 91 floor voxels at z = 0, 9 at z = 0.1.
+TEST(SurfaceReaders, OctomapFloorVoxelsAreOccupiedWithFreeOrUnknownAbove) {
+    const fs::path dir = TestDir("octomap");
+    Points pts;
+    AddRect(
+        0.0, 0.0, 1.0, 1.0, [](double) { return 0.0; }, pts);
+    AddRect(
+        0.0, 0.0, 0.3, 0.3, [](double) { return 0.1; }, pts);
+    const std::string bt = (dir / "floor.bt").string();
+    WriteOctomapFromPoints(bt, pts, 0.1);
+    const Points floor = ReadFloorVoxelsOctomap(bt);
+    ASSERT_EQ(floor.size(), 100u);
+    int low = 0, high = 0;
+    for (const auto& p : floor) {
+        const bool corner = p.x() < 0.3 && p.y() < 0.3;
+        EXPECT_NEAR(p.z(), corner ? 0.1 : 0.0, 1e-6) << p.transpose();
+        (corner ? high : low)++;
+        EXPECT_NEAR(std::fmod(p.x() + 1.0, 0.1), 0.05, 1e-6);  // voxel centres, 0.05 + 0.1 i
+    }
+    EXPECT_EQ(low, 91);
+    EXPECT_EQ(high, 9);
+}
+
+// --- BuildSurfaceField ---------------------------------------------------------------------
+
+double Corridor(const TraversableField& f, const Eigen::Vector3d& p) {
+    const auto s = f.Query(p);
+    EXPECT_TRUE(s.has_value()) << p.transpose();
+    return s ? s->corridor.value : 1e9;
+}
+
+// The default config with room above the surfaces for the queries 2 m up.
+SurfaceFieldConfig TallConfig() {
+    SurfaceFieldConfig c;
+    c.vertical_margin_m = 3.0;
+    return c;
+}
+
+// The wall clearance: centre is 0 in open space, 0.8 m + corridor within 0.8 m of the edge.
+TEST(SurfaceField, CentreKeepsClearOfWalls) {
+    Points pts;
+    AddRect(
+        0.0, 0.0, 10.0, 10.0, [](double) { return 0.0; }, pts);
+    SurfaceFieldConfig clear = TallConfig();
+    const TraversableField f = BuildSurfaceField(pts, clear);
+    // On the surface the B-spline rounds the vertical V of the distance: (0.25 + 0.25) / 6 m.
+    EXPECT_NEAR(f.Query({5.0, 5.0, 0.0})->centre.value, 0.083, 0.01);  // open floor
+    // 0.25 m in from the south edge: corridor = -(0.25 + 0.05), centre = 0.8 - 0.3 = 0.5.
+    EXPECT_NEAR(f.Query({5.05, 0.25, 0.0})->centre.value, 0.5, 0.03);
+    // 1 m outside the floor: corridor 0.95, centre 1.75.
+    EXPECT_GT(f.Query({5.05, -1.0, 0.0})->centre.value, 1.5);
+    clear.wall_clearance_m = 0.0;  // surface only: the distance to the nearest surface voxel
+    const TraversableField g = BuildSurfaceField(pts, clear);
+    EXPECT_NEAR(g.Query({5.05, 0.25, 0.0})->centre.value, 0.083, 0.01);
+    EXPECT_NEAR(g.Query({5.0, 5.0, 2.0})->centre.value, 2.0, 0.02);
+}
+
+// A 10 m x 10 m floor at z = 0, points every 0.1 m (x, y = 0.05 ... 9.95), default grid
+// (0.2 m cells from -1.95, 0.25 m layers, vertical tolerance 0.5 m).
+TEST(SurfaceField, FlatFloorMatchesHandComputedDistances) {
+    Points pts;
+    AddRect(
+        0.0, 0.0, 10.0, 10.0, [](double) { return 0.0; }, pts);
+    SurfaceFieldStats stats;
+    const TraversableField f = BuildSurfaceField(pts, TallConfig(), &stats);
+    EXPECT_EQ(stats.points, pts.size());
+    EXPECT_EQ(stats.surface_voxels * 5, stats.traversable_voxels);  // 5 layers: -0.5 ... 0.5
+    // Inside, near the south edge: the zero level lies half-way between the last inside cell
+    // centre (y = 0.05) and the first outside one (y = -0.15): corridor = -(y + 0.05). Exact for
+    // the B-spline (linear in y, constant over the 5 layers around z = 0).
+    for (double y : {0.65, 1.05, 1.45}) EXPECT_NEAR(Corridor(f, {5.05, y, 0.0}), -(y + 0.05), 0.01);
+    EXPECT_LT(Corridor(f, {5.0, 5.0, 0.0}), -4.0);  // middle of the floor: about -5 (truncated)
+    // 2 m above the floor: 1.5 m above the traversable layer's top, minus half a cell.
+    EXPECT_NEAR(Corridor(f, {5.0, 5.0, 2.0}), 1.4, 0.02);
+    // centre = max(distance to the surface, wall_clearance_m + corridor) = max(2.0, 0.8 + 1.4).
+    EXPECT_NEAR(f.Query({5.0, 5.0, 2.0})->centre.value, 2.2, 0.02);
+    // Gradient against central differences at random interior points (fixed seed).
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u_xy(-1.0, 11.0), u_z(-1.0, 2.5);
+    const double h = 1e-4;
+    for (int n = 0; n < 200; ++n) {
+        const Eigen::Vector3d p(u_xy(rng), u_xy(rng), u_z(rng));
+        const auto s = f.Query(p);
+        ASSERT_TRUE(s.has_value());
+        for (int a = 0; a < 3; ++a) {
+            const Eigen::Vector3d e = Eigen::Vector3d::Unit(a) * h;
+            const double g_corr =
+                (f.Query(p + e)->corridor.value - f.Query(p - e)->corridor.value) / (2 * h);
+            const double g_centre =
+                (f.Query(p + e)->centre.value - f.Query(p - e)->centre.value) / (2 * h);
+            EXPECT_NEAR(s->corridor.gradient[a], g_corr, 1e-4 + 1e-4 * std::abs(g_corr));
+            EXPECT_NEAR(s->centre.gradient[a], g_centre, 1e-4 + 1e-4 * std::abs(g_centre));
+        }
+    }
+}
+
+// A ramp (stairs): z = 0.5 x over x in [0, 8], 2 m wide. Traversable along the slope (more than
+// 0.3 m inside, away from the ends, where the edge is near), not 1.5 m above it.
+TEST(SurfaceField, RampIsTraversableAlongTheSlope) {
+    Points pts;
+    AddRect(
+        0.0, 0.0, 8.0, 2.0, [](double x) { return 0.5 * x; }, pts);
+    const TraversableField f = BuildSurfaceField(pts, TallConfig());
+    for (double x = 0.6; x <= 7.4; x += 0.1) {
+        EXPECT_LT(Corridor(f, {x, 1.0, 0.5 * x}), -0.3) << "x = " << x;
+        EXPECT_GT(Corridor(f, {x, 1.0, 0.5 * x + 1.5}), 0.5) << "x = " << x;
+    }
+}
+
+// Two stacked floors (z = 0 and 4) joined only by a ramp: the path over the ramp stays inside,
+// the vertical path between the floors does not.
+TEST(SurfaceField, TwoFloorsJoinedOnlyByARamp) {
+    Points pts;
+    AddRect(
+        0.0, 0.0, 10.0, 10.0, [](double) { return 0.0; }, pts);  // floor A
+    AddRect(
+        10.0, 0.0, 18.0, 2.0, [](double x) { return 0.5 * (x - 10.0); }, pts);  // ramp
+    AddRect(
+        0.0, 3.0, 28.0, 10.0, [](double) { return 4.0; }, pts);  // floor B
+    AddRect(
+        18.0, 0.0, 28.0, 3.0, [](double) { return 4.0; }, pts);  // its landing
+    const TraversableField f = BuildSurfaceField(pts, TallConfig());
+    const std::vector<Eigen::Vector3d> path = {{5, 1, 0},  {10, 1, 0}, {18, 1, 4},
+                                               {22, 1, 4}, {22, 6, 4}, {5, 6, 4}};
+    for (std::size_t k = 1; k < path.size(); ++k) {
+        for (double t = 0.0; t <= 1.0; t += 0.01) {
+            const Eigen::Vector3d p = path[k - 1] + t * (path[k] - path[k - 1]);
+            EXPECT_LT(Corridor(f, p), -0.3) << p.transpose();
+        }
+    }
+    // Between A and B: 1 m above A's traversable layer (top at 0.5 m), minus half a cell. (At
+    // z = 2, mid-way, the distance has a kink that the B-spline rounds: about 1.32 for 1.4.)
+    EXPECT_NEAR(Corridor(f, {5.0, 6.0, 1.5}), 0.9, 0.01);
+    EXPECT_GT(Corridor(f, {5.0, 6.0, 2.0}), 1.2);
+    EXPECT_GT(Corridor(f, {14.0, 1.0, 4.5}), 1.0);  // 2.5 m above the ramp's middle
+}
+
+TEST(SurfaceField, BadInputAndMemoryCap) {
+    EXPECT_THROW(BuildSurfaceField({}, SurfaceFieldConfig{}), std::invalid_argument);
+    Points nan_pts = {{0, 0, 0}, {std::nan(""), 0, 0}};
+    EXPECT_THROW(BuildSurfaceField(nan_pts, SurfaceFieldConfig{}), std::invalid_argument);
+    SurfaceFieldConfig bad;
+    bad.vertical_tolerance_m = 0.1;  // < resolution_z_m
+    EXPECT_NE(bad.Validate().find("vertical_tolerance_m"), std::string::npos);
+    SurfaceFieldConfig small;
+    small.max_memory_mb = 1.0;
+    Points pts;
+    AddRect(
+        0.0, 0.0, 60.0, 30.0, [](double) { return 0.0; }, pts, 0.5);
+    try {
+        BuildSurfaceField(pts, small);
+        FAIL() << "no memory-cap error";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("would fit"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("max_memory_mb"), std::string::npos) << e.what();
+    }
+}
+
+// --- the synthetic building ----------------------------------------------------------------
+
+std::string ReadBytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+void RunGenerator(const fs::path& out, const std::string& args = "") {
+    const std::string cmd = kGenerator + " " + out.string() + " " + args + " > /dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+std::vector<Eigen::Vector3d> ReadTumPositions(const fs::path& path) {
+    std::ifstream in(path);
+    std::vector<Eigen::Vector3d> out;
+    double t, x, y, z, qx, qy, qz, qw;
+    while (in >> t >> x >> y >> z >> qx >> qy >> qz >> qw) out.emplace_back(x, y, z);
+    return out;
+}
+
+const char* const kScenarioFiles[] = {"building.pcd",          "building.ply",     "building.bt",
+                                      "ground_truth.tum",      "estimate.tum",     "scenario.yaml",
+                                      "scenario_octomap.yaml", "scenario_ply.yaml"};
+
+TEST(SynthBuilding, SameSeedSameBytes) {
+    const fs::path a = TestDir("gen_a"), b = TestDir("gen_b"), c = TestDir("gen_c");
+    RunGenerator(a);
+    RunGenerator(b);
+    RunGenerator(c, "--seed 8");
+    for (const char* name : kScenarioFiles) {
+        ASSERT_TRUE(fs::exists(a / name)) << name;
+        EXPECT_EQ(ReadBytes(a / name), ReadBytes(b / name)) << name;
+        EXPECT_FALSE(fs::exists(a / (std::string(name) + ".tmp"))) << name;
+    }
+    EXPECT_EQ(ReadBytes(a / "building.pcd"), ReadBytes(c / "building.pcd"));  // map: no noise
+    EXPECT_EQ(ReadBytes(a / "ground_truth.tum"), ReadBytes(c / "ground_truth.tum"));
+    EXPECT_NE(ReadBytes(a / "estimate.tum"), ReadBytes(c / "estimate.tum"));
+    EXPECT_NE(
+        std::system(
+            (kGenerator + " " + (a / "x").string() + " --scale-error 3 2> /dev/null").c_str()),
+        0);
+}
+
+// The three map files give the same field: every ground-truth pose (floors, stairs, the lift
+// ride) lies inside the traversable set, and the corridor values at the poses agree. PCD and PLY
+// hold the same float points, so their fields are identical; the OctoMap quantises heights to its
+// 0.1 m voxels (stairs, lift levels), so its corridor values may differ by up to 0.15 m.
+TEST(SynthBuilding, PcdPlyAndOctomapGiveTheSameField) {
+    const fs::path dir = TestDir("formats");
+    RunGenerator(dir);
+    const auto gt = ReadTumPositions(dir / "ground_truth.tum");
+    ASSERT_GT(gt.size(), 500u);
+    // Timings are printed for the record (speed is measured, never asserted, in unit tests).
+    const auto t0 = std::chrono::steady_clock::now();
+    const Points pcd_points = ReadSurfacePoints((dir / "building.pcd").string());
+    const auto t1 = std::chrono::steady_clock::now();
+    SurfaceFieldStats stats;
+    const TraversableField pcd = BuildSurfaceField(pcd_points, {}, &stats);
+    const auto t2 = std::chrono::steady_clock::now();
+    const double read_s = std::chrono::duration<double>(t1 - t0).count();
+    const double build_s = std::chrono::duration<double>(t2 - t1).count();
+    std::printf(
+        "building.pcd: %zu points read in %.3f s; field of %zu voxels (%zu traversable) "
+        "built in %.3f s (%.1f Mvoxel/s)\n",
+        pcd_points.size(), read_s, stats.voxels, stats.traversable_voxels, build_s,
+        1e-6 * double(stats.voxels) / build_s);
+    const TraversableField ply =
+        BuildSurfaceField(ReadSurfacePoints((dir / "building.ply").string()), {});
+    const TraversableField bt =
+        BuildSurfaceField(ReadSurfacePoints((dir / "building.bt").string()), {});
+    double max_ply = 0.0, max_bt = 0.0, worst_inside = -1e9;
+    for (const auto& p : gt) {
+        const double c = Corridor(pcd, p);
+        worst_inside = std::max(worst_inside, c);
+        max_ply = std::max(max_ply, std::abs(Corridor(ply, p) - c));
+        max_bt = std::max(max_bt, std::abs(Corridor(bt, p) - c));
+    }
+    EXPECT_LT(worst_inside, -0.1);  // every pose inside, >= 0.1 m from the edge
+    EXPECT_EQ(max_ply, 0.0);
+    EXPECT_LT(max_bt, 0.15);
+    RecordProperty("max_corridor_difference_octomap_m", std::to_string(max_bt));
+    std::printf(
+        "max |corridor difference| at the %zu GT poses: PLY %.4f m, OctoMap %.4f m; "
+        "least-inside pose corridor %.3f m\n",
+        gt.size(), max_ply, max_bt, worst_inside);
+}
+
+}  // namespace
+}  // namespace driftcorr
