@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang-14, ASan + UBSan) and fuzzes each parser for a while.
+#
+#   tests/fuzz/run_fuzzers.sh [seconds_per_target=30] [build_dir=<repo>/build-fuzz]
+#
+# Each target runs on a copy of its seed corpus (tests/fuzz/corpus/<target>, never grown by a run)
+# with its dictionary (tests/fuzz/dict/) when there is one. Prints executions per second and the
+# final corpus size per target. Exits non-zero when a target found a crash (a sanitizer report,
+# an uncaught exception other than InputError, a timeout, an out-of-memory); the reproducer is
+# kept and its path printed: rerun it with `<build_dir>/tests/fuzz/fuzz_<target> <file>`.
+set -euo pipefail
+
+SECONDS_PER_TARGET="${1:-30}"
+REPO="$(cd "$(dirname "$0")/../.." && pwd)"
+BUILD_DIR="${2:-$REPO/build-fuzz}"
+FUZZ_DIR="$REPO/tests/fuzz"
+TARGETS=(tum kitti scenario_yaml osm params_yaml)
+declare -A DICTS=([tum]=numbers [kitti]=numbers [scenario_yaml]=scenario_yaml [osm]=osm
+                  [params_yaml]=params_yaml)
+
+cmake -S "$REPO" -B "$BUILD_DIR" -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+    -DBUILD_FUZZERS=ON \
+    -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer -g -O1" \
+    >/dev/null
+cmake --build "$BUILD_DIR" -j2 --target driftcorr_fuzzers
+
+# UBSan reports are recoverable by default; halting turns them into crashes libFuzzer records.
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1}"
+
+WORK="$(mktemp -d "${TMPDIR:-/tmp}/driftcorr_fuzz_run.XXXXXX")"
+export TMPDIR="$WORK"  # the harnesses' temp files go here too
+failed=0
+printf '\n%-14s %10s %16s %8s  %s\n' target exec/s corpus_units/size new result
+for target in "${TARGETS[@]}"; do
+    corpus="$WORK/corpus_$target"
+    artifacts="$WORK/artifacts_$target/"
+    log="$WORK/$target.log"
+    mkdir -p "$corpus" "$artifacts"
+    cp "$FUZZ_DIR/corpus/$target/"* "$corpus/"
+    args=(-max_total_time="$SECONDS_PER_TARGET" -max_len=4096 -timeout=5 -rss_limit_mb=2048
+          -print_final_stats=1 -artifact_prefix="$artifacts")
+    if [[ -n "${DICTS[$target]:-}" ]]; then args+=(-dict="$FUZZ_DIR/dict/${DICTS[$target]}.dict"); fi
+    status=0
+    "$BUILD_DIR/tests/fuzz/fuzz_$target" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?
+    execs="$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -n 1)"
+    added="$(sed -n 's/^stat::new_units_added: *//p' "$log" | tail -n 1)"
+    # libFuzzer's last status line: "#N DONE cov: C ft: F corp: UNITS/BYTES exec/s: E rss: R".
+    corp="$(grep -E '^#[0-9]+[[:space:]]+DONE ' "$log" | tail -n 1 | sed -n 's/.* corp: \([^ ]*\) .*/\1/p' || true)"
+    crash="$(find "$artifacts" -type f | head -n 1)"
+    if [[ $status -ne 0 || -n "$crash" ]]; then
+        failed=1
+        printf '%-14s %10s %16s %8s  %s\n' "$target" "${execs:-?}" "${corp:-?}" "${added:-?}" \
+            "FAILED (exit $status)"
+        echo "  reproducer: ${crash:-<none written>}"
+        echo "  log:        $log"
+        grep -m 3 -E 'ERROR: |runtime error|terminate called|SUMMARY' "$log" | sed 's/^/  /' || true
+    else
+        printf '%-14s %10s %16s %8s  %s\n' "$target" "${execs:-?}" "${corp:-?}" "${added:-?}" ok
+    fi
+done
+
+if [[ $failed -ne 0 ]]; then
+    echo "fuzzing found crashes; logs and reproducers kept in $WORK"
+    exit 1
+fi
+rm -rf "$WORK"
+echo "no crashes"
