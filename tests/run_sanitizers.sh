@@ -14,7 +14,7 @@ JOBS="${JOBS:-2}"
 
 start=$(date +%s)
 cmake -S "$REPO" -B "$BUILD_DIR" -DCMAKE_C_COMPILER=gcc -DCMAKE_CXX_COMPILER=g++ \
-    -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_BENCHMARKS=OFF \
     -DCMAKE_CXX_FLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
 cmake --build "$BUILD_DIR" -j"$JOBS"
 built=$(date +%s)
