@@ -34,6 +34,10 @@ const std::vector<Target>& Targets() {
         {"scenario_yaml", driftcorr::fuzz::RunScenarioYaml},
         {"osm", driftcorr::fuzz::RunOsm},
         {"params_yaml", driftcorr::fuzz::RunParamsYaml},
+        {"geojson", driftcorr::fuzz::RunGeoJson},
+        {"pcd", driftcorr::fuzz::RunPcd},
+        {"ply", driftcorr::fuzz::RunPly},
+        {"octomap", driftcorr::fuzz::RunOctomap},
     };
     return targets;
 }
@@ -113,6 +117,14 @@ TEST(FuzzCorpusSeeds, ValidSeedsParse) {
         driftcorr::pipeline::LoadPipelineConfig((corpus / "params_yaml/empty.yaml").string()));
     EXPECT_NO_THROW(driftcorr::pipeline::LoadPipelineConfig(
         (corpus / "params_yaml/indoor_paper.yaml").string()));
+    const driftcorr::GeoJsonLayer layer =
+        driftcorr::ReadGeoJson((corpus / "geojson/walkways.geojson").string());
+    EXPECT_EQ(layer.polygons.size(), 2u);  // the corridor and the wall; the null geometry skipped
+    EXPECT_EQ(layer.lines.size(), 1u);
+    EXPECT_EQ(driftcorr::ReadSurfacePoints((corpus / "pcd/floor.pcd").string()).size(), 4u);
+    EXPECT_EQ(driftcorr::ReadSurfacePoints((corpus / "ply/floor.ply").string()).size(), 4u);
+    // 24 voxels in one layer plus one stacked below: 24 floor voxels.
+    EXPECT_EQ(driftcorr::ReadSurfacePoints((corpus / "octomap/floor.bt").string()).size(), 24u);
     fs::remove_all(tmp);
 }
 

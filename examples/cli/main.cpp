@@ -167,6 +167,7 @@ int RunCorrect(const Args& a) {
     cfg.solver = a.solver == "paper" ? pipeline::Solver::kPaper : pipeline::Solver::kDriftcorr;
     pipeline::CorrectionRun run = pipeline::RunCorrection(a.scenario, cfg, MakeProgress(a.quiet));
     for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
+    for (const std::string& w : run.result.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     if (!Usable(run.result.status)) {
         PrintSummary(run, "", cfg.solver);
         std::fprintf(stderr, "driftcorr: the solver did not produce a correction: %s (%s); nothing written\n",

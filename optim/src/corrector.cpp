@@ -1,8 +1,12 @@
 #include "driftcorr/optim/corrector.h"
 
 #include <cassert>
+#include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "driftcorr/optim/incremental_corrector.h"
+#include "driftcorr/optim/window_problem.h"
 
 namespace driftcorr {
 
@@ -16,6 +20,65 @@ std::string CorrectorConfig::Validate() const {
     return "";
 }
 
+namespace {
+
+std::string Percent(double share) { return std::to_string(int(std::lround(100.0 * share))) + " %"; }
+
+std::string Fixed(double value, int decimals) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
+    return buf;
+}
+
+// Share of poses within reach of the map: inside the field and closer than 3 giveup distances to
+// a traversable place (where the map term still pulls).
+double MapCoverage(const PlanarTrajectory& t, const TraversableField& field, double reach_m) {
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+        const auto q = field.Query(Eigen::Vector3d(t.p_en[i].x(), t.p_en[i].y(), t.up_m[i]));
+        if (q && q->centre.value <= reach_m) ++covered;
+    }
+    return t.size() ? double(covered) / double(t.size()) : 0.0;
+}
+
+}  // namespace
+
+void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
+                        const CorrectorConfig& cfg, CorrectionResult& r) {
+    double path_m = 0.0;
+    std::size_t jumps = 0;
+    for (std::size_t i = 1; i < estimate.size(); ++i) {
+        const double step = (estimate.p_en[i] - estimate.p_en[i - 1]).norm();
+        path_m += step;
+        if (step > cfg.model.max_speed_mps * (estimate.t_s[i] - estimate.t_s[i - 1])) ++jumps;
+    }
+    if (path_m <= cfg.stationary_m * estimate.size()) {
+        r.warnings.push_back("the estimate does not move (" + Fixed(path_m, 2) +
+                             " m in all): nothing to correct");
+    }
+    if (jumps > 0) {
+        r.warnings.push_back(std::to_string(jumps) + " step(s) faster than model.max_speed_mps (" +
+                             Fixed(cfg.model.max_speed_mps, 1) +
+                             " m/s) treated as discontinuities of the estimate (not scaled)");
+    }
+    if (field) {
+        const PlanarTrajectory& t = Usable(r.status) ? r.corrected : estimate;
+        const double coverage = MapCoverage(t, *field, 3.0 * cfg.model.map_giveup_m);
+        if (coverage == 0.0) {
+            r.warnings.push_back("the map covers none of the drive (no pose within reach of a "
+                                 "traversable place): the output is the odometry alone");
+        } else if (coverage < 0.5) {
+            r.warnings.push_back("the map covers only " + Percent(coverage) +
+                                 " of the drive: the rest is the odometry alone");
+        }
+    }
+    if (r.scale_min <= kScaleMin * 1.01 || r.scale_max >= kScaleMax * 0.99) {
+        r.warnings.push_back("the step-length scale reached its bound (" +
+                             Fixed(r.scale_min, 2) + ".." + Fixed(r.scale_max, 2) +
+                             "): map and odometry disagree; check the anchor and the map");
+    }
+}
+
 // The incremental pass and the refinement live in IncrementalCorrector (shared with the online
 // corrector); the batch case hands it the whole estimate at once.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
@@ -24,7 +87,9 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
     const bool planar = !field || field->planar();
     IncrementalCorrector inc(InitialState(estimate, cfg, planar), field, cfg);
     inc.SolveRemaining(progress);
-    return inc.Finish(estimate.t_s, progress);
+    CorrectionResult result = inc.Finish(estimate.t_s, progress);
+    DiagnoseCorrection(estimate, field, cfg, result);
+    return result;
 }
 
 }  // namespace driftcorr

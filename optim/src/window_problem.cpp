@@ -9,7 +9,6 @@ namespace driftcorr {
 namespace {
 
 constexpr double kInfBound = 1e19;
-constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
 
 }  // namespace
 

@@ -22,7 +22,9 @@
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/scenario.h"
 #include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/geojson_reader.h"
 #include "driftcorr/mapping/osm_reader.h"
+#include "driftcorr/mapping/surface_io.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace driftcorr::fuzz {
@@ -153,6 +155,44 @@ inline void RunOsm(std::string_view input, const std::string& tmp_dir) {
         }
     } catch (const InputError&) {
     }
+}
+
+/// GeoJSON floor plans / walkways: a layer that loads has a known CRS and finite coordinates.
+inline void RunGeoJson(std::string_view input, const std::string& tmp_dir) {
+    const TempFile file(tmp_dir, "layer.geojson", input);
+    try {
+        const GeoJsonLayer layer = ReadGeoJson(file.path());
+        Require(!layer.crs.empty(), "layer without a normalised CRS");
+        for (const GeoJsonLine& l : layer.lines) {
+            for (const auto& p : l.points) Require(p.allFinite(), "line point not finite");
+        }
+        for (const GeoJsonPolygon& poly : layer.polygons) {
+            Require(poly.outer.size() >= 3, "polygon with fewer than 3 points");
+            for (const auto& p : poly.outer) Require(p.allFinite(), "polygon point not finite");
+        }
+    } catch (const InputError&) {
+    }
+}
+
+/// Point clouds (PCD, PLY) and OctoMap files of walkable surfaces: what loads is non-empty and
+/// finite. The file name's extension selects the reader, as in a scenario.
+inline void RunSurface(std::string_view input, const std::string& tmp_dir, const char* name) {
+    const TempFile file(tmp_dir, name, input);
+    try {
+        const std::vector<Eigen::Vector3d> points = ReadSurfacePoints(file.path());
+        Require(!points.empty(), "surface reader returned no point");
+        for (const auto& p : points) Require(p.allFinite(), "surface point not finite");
+    } catch (const InputError&) {
+    }
+}
+inline void RunPcd(std::string_view input, const std::string& tmp_dir) {
+    RunSurface(input, tmp_dir, "surface.pcd");
+}
+inline void RunPly(std::string_view input, const std::string& tmp_dir) {
+    RunSurface(input, tmp_dir, "surface.ply");
+}
+inline void RunOctomap(std::string_view input, const std::string& tmp_dir) {
+    RunSurface(input, tmp_dir, "surface.bt");
 }
 
 /// params.yaml. A config that loads must pass its own Validate().

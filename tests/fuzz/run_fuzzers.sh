@@ -14,7 +14,7 @@ SECONDS_PER_TARGET="${1:-30}"
 REPO="$(cd "$(dirname "$0")/../.." && pwd)"
 BUILD_DIR="${2:-$REPO/build-fuzz}"
 FUZZ_DIR="$REPO/tests/fuzz"
-TARGETS=(tum kitti scenario_yaml osm params_yaml)
+TARGETS=(tum kitti scenario_yaml osm params_yaml geojson pcd ply octomap)
 declare -A DICTS=([tum]=numbers [kitti]=numbers [scenario_yaml]=scenario_yaml [osm]=osm
                   [params_yaml]=params_yaml)
 

@@ -95,6 +95,8 @@ MethodResult RunMethod(Method method, const pipeline::PreparedScenario& ps,
     r.poses_per_s = ps.estimate.size() / std::max(1e-9, r.wall_s);
     r.ok = Usable(cr.status);
     r.message = ToString(cr.status) + ": " + cr.message;
+    for (const std::string& warning : cr.warnings) r.message += "; warning: " + warning;
+    r.warnings = cr.warnings;
     if (r.ok) r.trajectory = std::move(cr.corrected);
     return r;
 }

@@ -262,7 +262,7 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
     out << "\n|";
     for (std::size_t i = 0; i < header.size(); ++i) out << (i < 2 ? "---|" : "---:|");
     out << "\n";
-    std::vector<std::string> failures;
+    std::vector<std::string> failures, warnings;
     for (const ScenarioEvaluation& ev : evals) {
         std::vector<std::string> row = {ev.label, ev.mode.empty() ? "?" : ev.mode,
                                         ev.ok() ? std::to_string(ev.poses) : "-",
@@ -275,6 +275,10 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
                 for (const std::string& c : MdMethodCells(ev, m)) row.push_back(c);
                 const MethodResult* r = ev.Find(m);
                 if (r && !r->ok) failures.push_back("- **" + ev.label + "**, " + ToString(m) + ": " + r->message);
+                if (!r) continue;
+                for (const std::string& w : r->warnings) {
+                    warnings.push_back("- **" + ev.label + "**, " + ToString(m) + ": " + w);
+                }
             }
         }
         row.resize(header.size(), "");
@@ -286,6 +290,11 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
     if (!failures.empty()) {
         out << "## Failures\n\n";
         for (const std::string& f : failures) out << MdCell(f) << "\n";
+        out << "\n";
+    }
+    if (!warnings.empty()) {
+        out << "## Warnings\n\n";
+        for (const std::string& w : warnings) out << MdCell(w) << "\n";
         out << "\n";
     }
     if (const double ratio = SpeedRatioPaperOverDriftcorr(evals); ratio > 0.0) {

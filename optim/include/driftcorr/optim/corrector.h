@@ -58,7 +58,15 @@ struct CorrectionResult {
     SolveReport refine_report;
     double incremental_s = 0.0;        ///< wall time of the incremental pass [s]
     double refine_s = 0.0;             ///< wall time of the refinement [s]
+    /// Degenerate input or outcome worth a user's attention, one sentence each (the map covers
+    /// none or little of the drive, the estimate does not move, the scale hit its bound, steps
+    /// treated as discontinuities). The correction may still be usable.
+    std::vector<std::string> warnings;
 };
+
+/// Fills result.warnings from the estimate, the field and the outcome (see CorrectionResult).
+void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
+                        const CorrectorConfig& config, CorrectionResult& result);
 
 /// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry
 /// only). Pose 0 is the known initial position and heading and stays fixed.

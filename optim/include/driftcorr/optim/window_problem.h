@@ -34,6 +34,10 @@ struct TrajectoryState {
     bool fix_height = true;             ///< planar mode: heights stay as initialised
 };
 
+/// Bounds of the step-length scale variables: a scale at a bound means the map and the odometry
+/// disagree (a wrong anchor, a map of another place, an estimate that is not odometry).
+constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
+
 /// Assigns scale segments from the estimated path length (one per `segment_m`).
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
 

@@ -38,6 +38,8 @@ struct MethodResult {
     std::optional<double> mean_map_distance_m;
     double wall_s = 0.0;                ///< solver wall time [s] (0 for the estimate)
     double poses_per_s = 0.0;           ///< poses / wall_s (0 for the estimate)
+    /// Degenerate input or outcome reported by the corrector (CorrectionResult::warnings).
+    std::vector<std::string> warnings;
 };
 
 /// One scenario: either it failed as a whole (`error`, bad input), or it holds one MethodResult
