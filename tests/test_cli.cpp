@@ -698,7 +698,13 @@ TEST_P(CliValidInput, SucceedsWithOnePosePerEstimatePose) {
     const RunResult r = RunProgram(kCli, args, c.out_dir.parent_path());
     SCOPED_TRACE("command: " + r.command + "\nstderr:\n" + r.err);
     ASSERT_EQ(r.exit_code, kExitOk);
-    EXPECT_TRUE(MessageLines(r.err).empty()) << "only progress lines expected on stderr";
+    // Progress lines and warnings (degenerate but valid input) only; no error message.
+    for (const std::string& line : MessageLines(r.err)) {
+        EXPECT_EQ(line.rfind("driftcorr: warning: ", 0), 0u) << "unexpected stderr line: " << line;
+    }
+    if (tc.name == std::string("LeavesMapExtent")) {  // the 3 km step is reported, not scaled
+        EXPECT_NE(r.err.find("treated as discontinuities"), std::string::npos);
+    }
     EXPECT_NE(r.out.find("wrote"), std::string::npos) << r.out;
 
     const driftcorr::Trajectory estimate =
