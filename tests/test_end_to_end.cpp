@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,8 @@ struct SyntheticCase {
     const char* name;
     const char* generator_args;
 };
+
+void PrintTo(const SyntheticCase& c, std::ostream* os) { *os << c.name; }
 
 class SyntheticRoad : public ::testing::TestWithParam<SyntheticCase> {};
 
@@ -89,6 +92,8 @@ struct KittiCase {
     double final_ratio;          ///< acceptance: corrected final <= ratio * estimate final (0: none)
     bool no_worse_than_estimate; ///< acceptance: ATE no worse than the estimate's
 };
+
+void PrintTo(const KittiCase& c, std::ostream* os) { *os << c.folder; }
 
 class KittiAcceptance : public ::testing::TestWithParam<KittiCase> {};
 
