@@ -10,6 +10,9 @@
 //   3. that no output file (nor a temporary of it) was created, or, for the cases marked
 //      `sentinel`, that a pre-existing output file is left byte-identical.
 // Valid but unusual inputs must succeed with one output pose per estimate pose.
+// The other formats are reached from the same copy: the KITTI cases convert its estimate to
+// estimate.kitti + times.txt, the indoor3d cases replace it with a small corridor walk written by
+// the test (GeoJSON floor plan + walkways, or an ASCII PCD floor); each has a valid case too.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -198,6 +201,159 @@ std::vector<std::string> FolderEntries(const fs::path& dir) {
     return names;
 }
 
+// ---- other estimate and map formats -----------------------------------------------------------
+
+std::string Fmt(const char* format, double a, double b = 0.0, double c = 0.0) {
+    char buf[128];
+    std::snprintf(buf, sizeof(buf), format, a, b, c);
+    return buf;
+}
+
+/// Writes estimate.kitti (12 numbers a line: row-major 3x4 [R|t], R from the TUM quaternion) and
+/// times.txt (the TUM timestamps) from the scenario's estimate.tum, and points scenario.yaml's
+/// estimate at them with both `rate_hz: 10` and `times: times.txt` (the times file wins).
+/// estimate.tum is kept: the valid cases compare the output's timestamps with it.
+void TumToKitti(const fs::path& s) {
+    std::istringstream in(ReadFile(s / "estimate.tum"));
+    std::string kitti, times;
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream fields(line);
+        double t, x, y, z, qx, qy, qz, qw;
+        if (!(fields >> t >> x >> y >> z >> qx >> qy >> qz >> qw))
+            throw std::runtime_error("test setup: bad TUM line " + line);
+        const double n = std::sqrt(qx * qx + qy * qy + qz * qz + qw * qw);
+        qx /= n, qy /= n, qz /= n, qw /= n;
+        const double r[3][3] = {
+            {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)},
+            {2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)},
+            {2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)}};
+        const double p[3] = {x, y, z};
+        std::string row;
+        for (int i = 0; i < 3; ++i) {
+            row += Fmt("%.9g %.9g %.9g", r[i][0], r[i][1], r[i][2]) + Fmt(" %.6f", p[i]);
+            row += i < 2 ? " " : "\n";
+        }
+        kitti += row;
+        times += Fmt("%.6f\n", t);
+    }
+    WriteFile(s / "estimate.kitti", kitti);
+    WriteFile(s / "times.txt", times);
+    Replace(s / "scenario.yaml", "  path: estimate.tum\n  format: tum\n",
+            "  path: estimate.kitti\n  format: kitti\n  rate_hz: 10\n  times: times.txt\n");
+}
+
+/// Applies `edit` to the numbers of line `line_no` (1-based) of a KITTI (or times) file.
+void EditKittiLine(const fs::path& file, std::size_t line_no,
+                   const std::function<void(Fields&)>& edit) {
+    EditTumLine(file, line_no, edit);  // the same: whitespace-separated fields, no comments
+}
+
+// A small indoor scenario (mode indoor3d, frame enu, anchor in UTM 32N): a person walks 30 steps
+// east along a 20 m x 3 m corridor whose floor is at height 0. Map coordinates are local
+// East-North metres from the anchor (x east, y north), written as UTM for the GeoJSON layers.
+constexpr double kIndoorEasting = 566578.7, kIndoorNorthing = 5932830.4;
+
+std::string Utm(double x, double y) {
+    return Fmt("[%.3f, %.3f]", kIndoorEasting + x, kIndoorNorthing + y);
+}
+
+std::string Ring(const std::vector<std::pair<double, double>>& xy) {
+    std::string s = "[[";
+    for (std::size_t i = 0; i <= xy.size(); ++i) {  // closed: the first point repeated
+        const auto& p = xy[i % xy.size()];
+        s += (i ? ", " : "") + Utm(p.first, p.second);
+    }
+    return s + "]]";
+}
+
+std::string Box(double x0, double y0, double x1, double y1) {
+    return Ring({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}});
+}
+
+std::string PolygonFeature(const std::string& type, const std::string& ring) {
+    return R"({"type": "Feature", "properties": {"Type": ")" + type +
+           R"("}, "geometry": {"type": "Polygon", "coordinates": )" + ring + "}}";
+}
+
+const std::string kCrs32632 =
+    R"("crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}},)";
+
+std::string FeatureCollection(const std::vector<std::string>& features) {
+    std::string s = "{\n\"type\": \"FeatureCollection\",\n" + kCrs32632 + "\n\"features\": [\n";
+    for (std::size_t i = 0; i < features.size(); ++i) s += (i ? ",\n" : "") + features[i];
+    return s + "\n]\n}\n";
+}
+
+/// Ground truth: 30 poses 0.6 m apart along y = 0, every 0.5 s, facing east. The estimate drifts:
+/// 4 % too long steps and a heading error growing to about 3 degrees, still inside the corridor.
+void WriteIndoorWalk(const fs::path& s) {
+    std::string est, gt;
+    double ex = 1.0, ey = 0.0;
+    for (int i = 0; i < 30; ++i) {
+        const double t = 100.0 + 0.5 * i;
+        gt += Fmt("%.3f", t) + Fmt(" %.4f %.4f %.4f", 1.0 + 0.6 * i, 0.0, 0.0) + " 0 0 0 1\n";
+        const double yaw = 0.002 * i;
+        est += Fmt("%.3f", t) + Fmt(" %.4f %.4f %.4f", ex, ey, 0.0) +
+               Fmt(" 0 0 %.9f %.9f\n", std::sin(yaw / 2), std::cos(yaw / 2));
+        ex += 0.624 * std::cos(yaw);
+        ey += 0.624 * std::sin(yaw);
+    }
+    WriteFile(s / "estimate.tum", est);
+    WriteFile(s / "ground_truth.tum", gt);
+}
+
+std::string IndoorScenarioYaml(const std::string& map_layers) {
+    return "name: synthetic-corridor\nmode: indoor3d\n"
+           "estimate:\n  path: estimate.tum\n  format: tum\n"
+           "ground_truth:\n  path: ground_truth.tum\n  format: tum\n"
+           "frame: enu\n"
+           "anchor:\n  crs: EPSG:32632\n" +
+           Fmt("  easting_m: %.3f\n  northing_m: %.3f\n", kIndoorEasting, kIndoorNorthing) +
+           "  yaw_deg: 0.0\n  z_m: 0.0\n"
+           "map:\n" + map_layers;
+}
+
+/// Replaces the folder `s` with the indoor scenario mapped by two GeoJSON layers: plan.geojson
+/// (a Corridor, a Room north of it and the Walls between) and walkways.geojson (a LineString
+/// along the corridor), both with role and floor_z_m 0.
+void WriteIndoorGeoJsonScenario(const fs::path& s) {
+    fs::remove_all(s);
+    fs::create_directories(s);
+    WriteIndoorWalk(s);
+    WriteFile(s / "plan.geojson",
+              FeatureCollection({PolygonFeature("Corridor", Box(0, -1.5, 20, 1.5)),
+                                 PolygonFeature("Room", Box(5, 1.5, 10, 6)),
+                                 PolygonFeature("Wall", Box(0, 1.5, 5, 1.7)),
+                                 PolygonFeature("Wall", Box(10, 1.5, 20, 1.7))}));
+    WriteFile(s / "walkways.geojson",
+              FeatureCollection({R"({"type": "Feature", "properties": {"name": "corridor"}, )"
+                                 R"("geometry": {"type": "LineString", "coordinates": [)" +
+                                 Utm(0.5, 0) + ", " + Utm(19.5, 0) + "]}}"}));
+    WriteFile(s / "scenario.yaml",
+              IndoorScenarioYaml(
+                  "  - {path: walkways.geojson, format: geojson, role: walkways, floor_z_m: 0.0}\n"
+                  "  - {path: plan.geojson, format: geojson, role: floorplan, floor_z_m: 0.0}\n"));
+}
+
+/// Replaces the folder `s` with the indoor scenario mapped by floor.pcd: an ASCII PCD of the
+/// corridor floor, 20 m x 3 m sampled every 0.1 m at z = 0 (local East-North-Up).
+void WriteIndoorPcdScenario(const fs::path& s) {
+    fs::remove_all(s);
+    fs::create_directories(s);
+    WriteIndoorWalk(s);
+    std::string points;
+    std::size_t n = 0;
+    for (int i = 0; i <= 200; ++i) {
+        for (int j = 0; j <= 30; ++j, ++n) points += Fmt("%.2f %.2f 0\n", 0.1 * i, -1.5 + 0.1 * j);
+    }
+    WriteFile(s / "floor.pcd", "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
+                               "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                               "WIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n"
+                               "POINTS " + std::to_string(n) + "\nDATA ascii\n" + points);
+    WriteFile(s / "scenario.yaml", IndoorScenarioYaml("  - {path: floor.pcd, format: pcd}\n"));
+}
+
 // ---- cases ------------------------------------------------------------------------------------
 
 /// Where one case works: a fresh copy of the valid scenario, and an empty output folder.
@@ -235,6 +391,35 @@ Mutation WithParams(std::string yaml) {
 
 Mutation EditEstimateLine(std::size_t line_no, std::function<void(Fields&)> edit) {
     return Edit([=](const fs::path& s) { EditTumLine(s / "estimate.tum", line_no, edit); });
+}
+
+/// Converts the estimate to KITTI (estimate.kitti + times.txt), then applies `edit`.
+Mutation Kitti(std::function<void(const fs::path& scenario)> edit = nullptr) {
+    return Edit([edit](const fs::path& s) {
+        TumToKitti(s);
+        if (edit) edit(s);
+    });
+}
+
+/// Replaces the copy with the small indoor GeoJSON scenario, then applies `edit`.
+Mutation IndoorGeoJson(std::function<void(const fs::path& scenario)> edit = nullptr) {
+    return Edit([edit](const fs::path& s) {
+        WriteIndoorGeoJsonScenario(s);
+        if (edit) edit(s);
+    });
+}
+
+/// Replaces the copy with the small indoor point-cloud scenario, then applies `edit`.
+Mutation IndoorPcd(std::function<void(const fs::path& scenario)> edit = nullptr) {
+    return Edit([edit](const fs::path& s) {
+        WriteIndoorPcdScenario(s);
+        if (edit) edit(s);
+    });
+}
+
+/// Scales the rotation part (R) of the fields of one KITTI line by `factor`.
+void ScaleKittiRotation(Fields& f, double factor) {
+    for (int i : {0, 1, 2, 4, 5, 6, 8, 9, 10}) f[i] = Fmt("%.9g", std::stod(f[i]) * factor);
 }
 
 struct BadInputCase {
@@ -419,6 +604,134 @@ std::vector<BadInputCase> BadInputCases() {
          kExitBadInput,
          {R"(map\.osm: cannot open)"}},
 
+        // ---- estimate.kitti (+ times.txt; the estimate of the road scenario as KITTI) ----
+        {"KittiElevenNumbers",
+         Kitti([](const fs::path& s) {
+             EditKittiLine(s / "estimate.kitti", 5, [](Fields& f) { f.pop_back(); });
+         }),
+         kExitBadInput,
+         {R"(estimate\.kitti:5: expected 12 numbers, found 11 fields)"},
+         kSentinelKept},
+        {"KittiRotationScaledByTwo",
+         Kitti([](const fs::path& s) {
+             EditKittiLine(s / "estimate.kitti", 5, [](Fields& f) { ScaleKittiRotation(f, 2.0); });
+         }),
+         kExitBadInput,
+         {R"(estimate\.kitti:5: rotation part is not a rotation matrix \(det 8\b)"}},
+        {"KittiNaN",
+         Kitti([](const fs::path& s) {
+             EditKittiLine(s / "estimate.kitti", 5, [](Fields& f) { f[7] = "nan"; });
+         }),
+         kExitBadInput,
+         {R"(estimate\.kitti:5: field 8 'nan' is not finite)"}},
+        {"KittiTimesLineCount",
+         Kitti([](const fs::path& s) { KeepLines(s / "times.txt", 600); }),
+         kExitBadInput,
+         {R"(times\.txt: has 600 timestamps but .*estimate\.kitti has 601 poses)"},
+         kSentinelKept},
+        {"KittiTimesBackwards",
+         Kitti([](const fs::path& s) {
+             EditKittiLine(s / "times.txt", 5, [](Fields& f) { f[0] = "1000.1"; });
+         }),
+         kExitBadInput,
+         {R"(times\.txt:5: timestamp 1000\.1 does not increase)"}},
+        {"KittiTimesMissing",
+         Kitti([](const fs::path& s) { fs::remove(s / "times.txt"); }),
+         kExitBadInput,
+         {R"(times\.txt: cannot open file)"}},
+        {"KittiRateZero",
+         Kitti([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "  rate_hz: 10\n  times: times.txt\n", "  rate_hz: 0\n");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: estimate\.rate_hz: must be positive)"}},
+
+        // ---- indoor3d GeoJSON layers (plan.geojson, walkways.geojson) ----
+        {"GeoJsonNoCrs",
+         IndoorGeoJson([](const fs::path& s) { Replace(s / "plan.geojson", kCrs32632, ""); }),
+         kExitBadInput,
+         {R"(plan\.geojson: crs: no `crs` member)"},
+         kSentinelKept},
+        {"GeoJsonUnknownCrs",
+         IndoorGeoJson([](const fs::path& s) {
+             Replace(s / "walkways.geojson", "EPSG::32632", "EPSG::99999");
+         }),
+         kExitBadInput,
+         {R"(walkways\.geojson: crs: .*99999)"}},
+        {"GeoJsonSyntaxError",
+         IndoorGeoJson([](const fs::path& s) {
+             Replace(s / "plan.geojson", "\"features\": [\n", "\"features\": [\n,");
+         }),
+         kExitBadInput,
+         {R"(plan\.geojson:5: )"}},
+        {"GeoJsonPlanOnlyWalls",
+         IndoorGeoJson([](const fs::path& s) {
+             RegexReplace(s / "plan.geojson", R"re("Type": "(Corridor|Room)")re", R"("Type": "Wall")");
+         }),
+         kExitBadInput,
+         {R"(plan\.geojson: the floor plan has no walkable polygon)"}},
+        {"GeoJsonLayerWithoutFloorZ",
+         IndoorGeoJson([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "role: floorplan, floor_z_m: 0.0}", "role: floorplan}");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d*:? ?map\[1\]: .*needs role .* and floor_z_m)"}},
+        {"GeoJsonLayerWithoutRole",
+         IndoorGeoJson([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "role: walkways, ", "");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d*:? ?map\[0\]: .*needs role .* and floor_z_m)"}},
+
+        // ---- indoor3d point-cloud / OctoMap layers (floor.pcd) ----
+        {"PcdNoPoints",
+         IndoorPcd([](const fs::path& s) {
+             WriteFile(s / "floor.pcd", "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                                        "COUNT 1 1 1\nWIDTH 0\nHEIGHT 1\n"
+                                        "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA ascii\n");
+         }),
+         kExitBadInput,
+         {R"(floor\.pcd: PCD file has no points)"},
+         kSentinelKept},
+        {"PcdNaNPoint",
+         IndoorPcd([](const fs::path& s) {
+             Replace(s / "floor.pcd", "\n0.10 -1.40 0\n", "\n0.10 nan 0\n");
+         }),
+         kExitBadInput,
+         {R"(floor\.pcd: PCD file has 1 of 6231 points with a NaN or infinite coordinate)"}},
+        {"PcdGarbage",
+         IndoorPcd([](const fs::path& s) {
+             WriteFile(s / "floor.pcd", "this is not a point cloud\n\x01\x02\x03 garbage\n");
+         }),
+         kExitBadInput,
+         {R"(floor\.pcd: PCD file has no 'x' field)"}},
+        {"PlyEmpty",
+         IndoorPcd([](const fs::path& s) {
+             WriteFile(s / "floor.ply", "");
+             Replace(s / "scenario.yaml", "{path: floor.pcd, format: pcd}",
+                     "{path: floor.ply, format: ply}");
+         }),
+         kExitBadInput,
+         {R"(floor\.ply: cannot be read or parsed as a PLY point cloud)"}},
+        {"OctomapGarbage",
+         IndoorPcd([](const fs::path& s) {
+             WriteFile(s / "floor.bt", "# Octomap OcTree binary file\ngarbage\n");
+             Replace(s / "scenario.yaml", "{path: floor.pcd, format: pcd}",
+                     "{path: floor.bt, format: octomap}");
+         }),
+         kExitBadInput,
+         {R"(floor\.bt: cannot be read or parsed as a binary OctoMap \(\.bt\) file)"}},
+        {"SurfaceFieldOverMemoryCap",
+         [](const CaseDirs& c) {
+             WriteIndoorPcdScenario(c.scenario);
+             WriteFile(c.params, "surface_field: {max_memory_mb: 0.01}\n");
+             return Correct(c, {"--config", c.params.string()});
+         },
+         kExitBadInput,
+         {R"(scenario\.yaml: map: )", "max_memory_mb = 0\\.01",
+          R"(a horizontal resolution of [0-9.]+ m or coarser would fit)"},
+         kSentinelKept},
+
         // ---- params.yaml via --config ----
         {"ParamsUnknownKey",
          WithParams("model: {step_sigmaa_m: 1}\n"),
@@ -584,6 +897,16 @@ std::vector<ValidCase> ValidCases() {
                  TransformTum(s / f, [](std::vector<Fields>& p) { ShiftTail(p, 50, 3000.0); });
              }
          })},
+        {"KittiWithTimes", Kitti()},
+        // rate_hz only: timestamps i / 10, so the reference estimate.tum is shifted to start at 0.
+        {"KittiRateHz", Kitti([](const fs::path& s) {
+             Replace(s / "scenario.yaml", "  rate_hz: 10\n  times: times.txt\n", "  rate_hz: 10\n");
+             TransformTum(s / "estimate.tum", [](std::vector<Fields>& p) {
+                 for (std::size_t i = 0; i < p.size(); ++i) p[i][0] = Fmt("%.6f", 0.1 * i);
+             });
+         })},
+        {"IndoorGeoJson", IndoorGeoJson()},
+        {"IndoorPcd", IndoorPcd()},
         {"ScenarioYamlPath",
          [](const CaseDirs& c) {
              return std::vector<std::string>{"correct", (c.scenario / "scenario.yaml").string(),

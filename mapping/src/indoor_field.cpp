@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <iomanip>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -169,7 +170,7 @@ GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
         std::ostringstream msg;
         msg << "indoor distance field of " << s.nx << " x " << s.ny << " x " << s.nz
             << " voxels at " << c.resolution_m << " m (vertical " << c.resolution_z_m
-            << " m) needs about " << int(mb) << " MB, more than max_memory_mb = " << c.max_memory_mb
+            << " m) needs about " << std::setprecision(2) << mb << std::setprecision(6) << " MB, more than max_memory_mb = " << c.max_memory_mb
             << "; a horizontal resolution of " << std::ceil(fit * 100.0) / 100.0
             << " m or coarser would fit (or coarsen resolution_z_m, shrink margin_m)";
         throw std::invalid_argument(msg.str());

@@ -1,6 +1,7 @@
 #include "driftcorr/mapping/road_network.h"
 
 #include <algorithm>
+#include <iomanip>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -82,7 +83,7 @@ GridSpec MakeSpec(const Eigen::AlignedBox2d& box, const RoadFieldConfig& c) {
         const double fit = c.resolution_m * std::sqrt(mb / c.max_memory_mb) * 1.01;
         std::ostringstream msg;
         msg << "distance field of " << s.nx << " x " << s.ny << " samples at "
-            << c.resolution_m << " m needs about " << int(mb) << " MB, more than max_memory_mb = "
+            << c.resolution_m << " m needs about " << std::setprecision(2) << mb << std::setprecision(6) << " MB, more than max_memory_mb = "
             << c.max_memory_mb << "; a resolution of " << std::ceil(fit * 100.0) / 100.0
             << " m or coarser would fit (or shrink margin_m)";
         throw std::invalid_argument(msg.str());

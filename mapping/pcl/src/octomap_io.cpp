@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <memory>
+#include <streambuf>
 #include <stdexcept>
 #include <string>
 
@@ -14,6 +16,26 @@
 namespace driftcorr {
 namespace {
 
+// OctoMap reports progress and parse errors on std::cout / std::cerr; the caller reports errors
+// itself (InputError naming the file), so the library's own lines are silenced while it runs.
+class QuietStreams {
+public:
+    QuietStreams() : out_(std::cout.rdbuf(&null_)), err_(std::cerr.rdbuf(&null_)) {}
+    ~QuietStreams() {
+        std::cout.rdbuf(out_);
+        std::cerr.rdbuf(err_);
+    }
+    QuietStreams(const QuietStreams&) = delete;
+    QuietStreams& operator=(const QuietStreams&) = delete;
+
+private:
+    struct NullBuffer : std::streambuf {
+        int overflow(int c) override { return c; }
+    } null_;
+    std::streambuf* out_;
+    std::streambuf* err_;
+};
+
 std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
@@ -21,6 +43,7 @@ std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
     }
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext == ".ot" || ext == ".OT") {
+        const QuietStreams quiet;
         std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
         auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
         if (!tree) {
@@ -32,7 +55,11 @@ std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
         return std::unique_ptr<octomap::OcTree>(tree);
     }
     auto tree = std::make_unique<octomap::OcTree>(0.1);
-    if (!tree->readBinary(path)) {
+    const bool ok = [&] {
+        const QuietStreams quiet;
+        return tree->readBinary(path);
+    }();
+    if (!ok) {
         throw InputError(path, 0, "", "cannot be read or parsed as a binary OctoMap (.bt) file");
     }
     return tree;
@@ -84,7 +111,11 @@ void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Ve
     }
     tree.updateInnerOccupancy();
     const std::string tmp = path + ".tmp";
-    if (!tree.writeBinary(tmp)) throw std::runtime_error(tmp + ": cannot write OctoMap");
+    const bool written = [&] {
+        const QuietStreams quiet;
+        return tree.writeBinary(tmp);
+    }();
+    if (!written) throw std::runtime_error(tmp + ": cannot write OctoMap");
     std::error_code ec;
     std::filesystem::rename(tmp, path, ec);
     if (ec) throw std::runtime_error(path + ": cannot rename from " + tmp + ": " + ec.message());

@@ -1,5 +1,6 @@
 // PCD and PLY surface clouds through PCL (PRIVATE to driftcorr_mapping_pcl).
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/console/print.h>
 #include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
@@ -19,6 +20,23 @@
 namespace driftcorr {
 namespace {
 
+// PCL's readers print their own diagnostics ("[pcl::PCDReader::readHeader] No points to read")
+// to stderr; the InputError thrown below, naming the file, is the one message a caller shows, so
+// they are silenced while a reader runs (PCL's verbosity is process-wide; readers run on one
+// thread at a time here).
+class QuietPcl {
+public:
+    QuietPcl() : level_(pcl::console::getVerbosityLevel()) {
+        pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+    }
+    ~QuietPcl() { pcl::console::setVerbosityLevel(level_); }
+    QuietPcl(const QuietPcl&) = delete;
+    QuietPcl& operator=(const QuietPcl&) = delete;
+
+private:
+    pcl::console::VERBOSITY_LEVEL level_;
+};
+
 bool HasField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
     return std::any_of(cloud.fields.begin(), cloud.fields.end(),
                        [&](const pcl::PCLPointField& f) { return f.name == name; });
@@ -30,6 +48,21 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
     for (const char* axis : {"x", "y", "z"}) {
         if (!HasField(blob, axis)) {
             throw InputError(path, 0, "", kind + " file has no '" + axis + "' field");
+        }
+    }
+    // PCL converts without checking that the data matches the header: an empty cloud makes it
+    // index an empty vector (UBSan: reference binding to null), a short buffer or a field past the
+    // point's end makes it read out of bounds. Check all three before converting.
+    const std::size_t count = std::size_t(blob.width) * std::size_t(blob.height);
+    if (count == 0) throw InputError(path, 0, "", kind + " file has no points");
+    if (blob.point_step == 0 || blob.data.size() < count * std::size_t(blob.point_step)) {
+        throw InputError(path, 0, "", kind + " file holds less point data than its header says");
+    }
+    for (const pcl::PCLPointField& f : blob.fields) {
+        const std::size_t end = std::size_t(f.offset) +
+                                std::size_t(pcl::getFieldSize(f.datatype)) * std::max<std::size_t>(1, f.count);
+        if (end > blob.point_step) {
+            throw InputError(path, 0, "", kind + " file field '" + f.name + "' lies outside its point");
         }
     }
     pcl::PointCloud<pcl::PointXYZ> cloud;
@@ -92,6 +125,7 @@ std::string LowerExtension(const std::string& path) {
 }  // namespace
 
 std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
+    const QuietPcl quiet;
     RequireReadable(path, "PCD");
     pcl::PCLPointCloud2 blob;
     pcl::PCDReader reader;
@@ -119,6 +153,7 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
 }
 
 std::vector<Eigen::Vector3d> ReadSurfacePointsPly(const std::string& path) {
+    const QuietPcl quiet;
     RequireReadable(path, "PLY");
     pcl::PCLPointCloud2 blob;
     pcl::PLYReader reader;
