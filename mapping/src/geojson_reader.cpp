@@ -160,14 +160,10 @@ std::string GeoJsonReport::Summary() const {
     return out.str();
 }
 
-GeoJsonLayer ParseGeoJson(const std::string& text, const std::string& path) {
-    Json root;
-    try {
-        root = Json::parse(text);
-    } catch (const Json::parse_error& e) {
-        throw InputError(path, LineOfByte(text, e.byte), "",
-                         "invalid JSON at byte " + std::to_string(e.byte) + ": " + e.what());
-    }
+namespace {
+
+GeoJsonLayer ParseGeoJsonUnchecked(const std::string& text, const std::string& path) {
+    Json root = Json::parse(text);
     if (!root.is_object() || !root.contains("type") || root["type"] != "FeatureCollection") {
         throw InputError(path, 0, "type", "not a GeoJSON FeatureCollection");
     }
@@ -191,6 +187,20 @@ GeoJsonLayer ParseGeoJson(const std::string& text, const std::string& path) {
     }
     return layer;
 }
+
+}  // namespace
+
+GeoJsonLayer ParseGeoJson(const std::string& text, const std::string& path) {
+    try {
+        return ParseGeoJsonUnchecked(text, path);
+    } catch (const Json::parse_error& e) {
+        throw InputError(path, LineOfByte(text, e.byte), "",
+                         "invalid JSON at byte " + std::to_string(e.byte) + ": " + e.what());
+    } catch (const Json::exception& e) {  // e.g. out_of_range: a number too large for a double
+        throw InputError(path, 0, "", std::string("invalid GeoJSON: ") + e.what());
+    }
+}
+
 
 GeoJsonLayer ReadGeoJson(const std::string& path) {
     std::ifstream in(path, std::ios::binary);

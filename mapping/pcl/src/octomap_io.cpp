@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <iostream>
 #include <memory>
 #include <streambuf>
@@ -36,6 +38,40 @@ private:
     std::streambuf* err_;
 };
 
+// OctoMap's binary reader (OcTree::readBinaryNode) follows the child bits of the data
+// recursively with no depth bound, so malformed data runs it off the stack (found by fuzzing).
+// This walks the same encoding first: per node two bytes, two bits per child (01 occupied leaf,
+// 10 free leaf, 11 inner node, 00 none), depth first; the tree must stay within OctoMap's 16
+// levels and within the data, and hold at least one node.
+bool ValidBinaryNode(const std::string& data, std::size_t& pos, int depth) {
+    if (depth > 16 || pos + 2 > data.size()) return false;
+    const unsigned char bytes[2] = {static_cast<unsigned char>(data[pos]),
+                                    static_cast<unsigned char>(data[pos + 1])};
+    pos += 2;
+    for (const unsigned char b : bytes) {
+        for (int i = 0; i < 4; ++i) {
+            const bool low = (b >> (2 * i)) & 1, high = (b >> (2 * i + 1)) & 1;
+            if (low && high && !ValidBinaryNode(data, pos, depth + 1)) return false;
+        }
+    }
+    return true;
+}
+
+// The .bt header ends with a line "data"; the tree encoding follows. Files whose header OctoMap
+// itself rejects are left to it (it reports and returns false without harm).
+void CheckBinaryTreeData(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t header_end = text.find("\ndata\n");
+    if (header_end == std::string::npos) return;
+    std::size_t pos = header_end + 6;
+    if (!ValidBinaryNode(text, pos, 0)) {
+        throw InputError(path, 0, "",
+                         "binary OctoMap (.bt) data is malformed (the tree runs past the file's "
+                         "end or deeper than 16 levels)");
+    }
+}
+
 std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
@@ -54,6 +90,7 @@ std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
         any.release();
         return std::unique_ptr<octomap::OcTree>(tree);
     }
+    CheckBinaryTreeData(path);
     auto tree = std::make_unique<octomap::OcTree>(0.1);
     const bool ok = [&] {
         const QuietStreams quiet;

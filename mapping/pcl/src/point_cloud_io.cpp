@@ -11,6 +11,9 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <new>
+#include <sstream>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -36,6 +39,51 @@ public:
 private:
     pcl::console::VERBOSITY_LEVEL level_;
 };
+
+// PCL's readers throw standard exceptions on some malformed headers (std::out_of_range from a
+// number conversion, found by fuzzing) and allocate whatever a header declares: both become
+// InputErrors naming the file.
+template <typename F>
+int CallPcl(const std::string& path, const std::string& kind, F&& read) {
+    try {
+        return read();
+    } catch (const std::bad_alloc&) {
+        throw InputError(path, 0, "", kind + " file declares more data than can be held in memory");
+    } catch (const std::exception& e) {
+        throw InputError(path, 0, "", "cannot be parsed as a " + kind + " point cloud: " + e.what());
+    }
+}
+
+// A point takes at least one byte in any encoding: a header that declares more points than the
+// file has bytes is malformed (and would make PCL allocate for them first).
+void RequireDeclaredPointsFit(const std::string& path, const std::string& kind, std::size_t count) {
+    std::error_code ec;
+    const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+    if (!ec && count > bytes) {
+        throw InputError(path, 0, "", kind + " header declares " + std::to_string(count) +
+                                          " points but the file has only " +
+                                          std::to_string(bytes) + " bytes");
+    }
+}
+
+// The vertex count of a PLY header ("element vertex N"), 0 when absent; a negative or
+// unparseable count is an InputError.
+std::size_t PlyVertexCount(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    for (int n = 0; n < 200 && std::getline(in, line); ++n) {
+        if (line.rfind("end_header", 0) == 0) break;
+        std::istringstream words(line);
+        std::string element, name;
+        long long count = -1;
+        if (!(words >> element >> name) || element != "element" || name != "vertex") continue;
+        if (!(words >> count) || count < 0) {
+            throw InputError(path, n + 1, "", "PLY header: bad vertex count in '" + line + "'");
+        }
+        return static_cast<std::size_t>(count);
+    }
+    return 0;
+}
 
 bool HasField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
     return std::any_of(cloud.fields.begin(), cloud.fields.end(),
@@ -135,7 +183,9 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
     Eigen::Quaternionf orientation;
     int version = 0, data_type = 0;
     unsigned int data_idx = 0;
-    if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_idx) < 0) {
+    if (CallPcl(path, "PCD", [&] {
+            return reader.readHeader(path, blob, origin, orientation, version, data_type, data_idx);
+        }) < 0) {
         throw InputError(path, 0, "", "cannot be read or parsed as a PCD point cloud (header)");
     }
     for (const char* axis : {"x", "y", "z"}) {
@@ -146,7 +196,8 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
     if (std::size_t(blob.width) * blob.height == 0) {
         throw InputError(path, 0, "", "PCD file has no points");
     }
-    if (reader.read(path, blob) < 0) {
+    RequireDeclaredPointsFit(path, "PCD", std::size_t(blob.width) * blob.height);
+    if (CallPcl(path, "PCD", [&] { return reader.read(path, blob); }) < 0) {
         throw InputError(path, 0, "", "cannot be read or parsed as a PCD point cloud");
     }
     return ToSurfacePoints(blob, path, "PCD");
@@ -155,9 +206,10 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
 std::vector<Eigen::Vector3d> ReadSurfacePointsPly(const std::string& path) {
     const QuietPcl quiet;
     RequireReadable(path, "PLY");
+    RequireDeclaredPointsFit(path, "PLY", PlyVertexCount(path));
     pcl::PCLPointCloud2 blob;
     pcl::PLYReader reader;
-    if (reader.read(path, blob) < 0) {
+    if (CallPcl(path, "PLY", [&] { return reader.read(path, blob); }) < 0) {
         throw InputError(path, 0, "", "cannot be read or parsed as a PLY point cloud");
     }
     return ToSurfacePoints(blob, path, "PLY");
