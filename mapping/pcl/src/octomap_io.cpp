@@ -8,6 +8,8 @@
 #include <iterator>
 #include <iostream>
 #include <memory>
+#include <sstream>
+#include <limits>
 #include <streambuf>
 #include <stdexcept>
 #include <string>
@@ -57,14 +59,37 @@ bool ValidBinaryNode(const std::string& data, std::size_t& pos, int depth) {
     return true;
 }
 
-// The .bt header ends with a line "data"; the tree encoding follows. Files whose header OctoMap
-// itself rejects are left to it (it reports and returns false without harm).
+// Where the tree data of a .bt file starts, found as OctoMap's AbstractOcTree::readHeader finds
+// it (after the first line: whitespace-separated tokens; "#" starts a comment to the end of the
+// line; id, res and size take one value; any other token skips to the end of the line; "data"
+// ends the header after the rest of its line). std::string::npos when there is no data token.
+std::size_t BinaryDataStart(const std::string& text) {
+    std::size_t pos = text.find('\n');
+    if (pos == std::string::npos) return std::string::npos;
+    std::istringstream in(text.substr(pos + 1));
+    auto skip_line = [&] {
+        in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    };
+    for (std::string token; in >> token;) {
+        if (token == "data") {
+            skip_line();
+            return in ? pos + 1 + static_cast<std::size_t>(in.tellg()) : text.size();
+        }
+        if (token == "id" || token == "res" || token == "size") {
+            std::string value;
+            in >> value;
+        } else {
+            skip_line();
+        }
+    }
+    return std::string::npos;
+}
+
 void CheckBinaryTreeData(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const std::size_t header_end = text.find("\ndata\n");
-    if (header_end == std::string::npos) return;
-    std::size_t pos = header_end + 6;
+    std::ifstream file(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    std::size_t pos = BinaryDataStart(text);
+    if (pos == std::string::npos) return;  // no data: OctoMap reads nothing (and reports it)
     if (!ValidBinaryNode(text, pos, 0)) {
         throw InputError(path, 0, "",
                          "binary OctoMap (.bt) data is malformed (the tree runs past the file's "

@@ -66,6 +66,21 @@ void RequireDeclaredPointsFit(const std::string& path, const std::string& kind, 
     }
 }
 
+// PCL allocates width * height * point_step bytes as the header says. Binary data holds exactly
+// that; ASCII may be smaller than binary by at most about 8x (a field of up to 8 bytes written
+// in as little as one digit and a separator). More than that is a malformed header.
+void RequireDeclaredDataFits(const std::string& path, std::size_t count, std::size_t point_step) {
+    std::error_code ec;
+    const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+    if (ec) return;
+    if (point_step == 0 || count > (8 * bytes + 1024) / point_step) {
+        throw InputError(path, 0, "",
+                         "PCD header declares " + std::to_string(count) + " points of " +
+                             std::to_string(point_step) + " bytes, more than the file (" +
+                             std::to_string(bytes) + " bytes) can hold");
+    }
+}
+
 // The vertex count of a PLY header ("element vertex N"), 0 when absent; a negative or
 // unparseable count is an InputError.
 std::size_t PlyVertexCount(const std::string& path) {
@@ -197,6 +212,7 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
         throw InputError(path, 0, "", "PCD file has no points");
     }
     RequireDeclaredPointsFit(path, "PCD", std::size_t(blob.width) * blob.height);
+    RequireDeclaredDataFits(path, std::size_t(blob.width) * blob.height, blob.point_step);
     if (CallPcl(path, "PCD", [&] { return reader.read(path, blob); }) < 0) {
         throw InputError(path, 0, "", "cannot be read or parsed as a PCD point cloud");
     }
