@@ -16,6 +16,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "driftcorr/core/errors.h"
 #include "driftcorr/mapping/surface_io.h"
@@ -79,6 +80,45 @@ void RequireDeclaredDataFits(const std::string& path, std::size_t count, std::si
                              std::to_string(point_step) + " bytes, more than the file (" +
                              std::to_string(bytes) + " bytes) can hold");
     }
+}
+
+// PCL's PCDReader::readHeader already allocates width * height * point_step bytes as the header
+// declares (found by fuzzing: 8 GB for "SIZE 4 5555555555"), so the header is bounded here first:
+// SIZE values 1, 2, 4 or 8, COUNT values 1..4096, and the declared data must fit the file (see
+// RequireDeclaredDataFits). Malformed numbers are left to PCL's own parser, which rejects them.
+void PrecheckPcdHeader(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<long long> sizes, counts;
+    long long width = 1, height = 1, points = -1;
+    std::string line;
+    for (int n = 0; n < 64 && std::getline(in, line); ++n) {
+        std::istringstream words(line);
+        std::string key;
+        if (!(words >> key)) continue;
+        std::vector<long long> values;
+        for (long long v; words >> v;) values.push_back(v);
+        if (key == "SIZE") sizes = values;
+        else if (key == "COUNT") counts = values;
+        else if (key == "WIDTH" && !values.empty()) width = values[0];
+        else if (key == "HEIGHT" && !values.empty()) height = values[0];
+        else if (key == "POINTS" && !values.empty()) points = values[0];
+        else if (key == "DATA") break;
+    }
+    long long step = 0;
+    for (std::size_t k = 0; k < sizes.size(); ++k) {
+        const long long count = k < counts.size() ? counts[k] : 1;
+        const long long s = sizes[k];
+        if ((s != 1 && s != 2 && s != 4 && s != 8) || count < 1 || count > 4096) {
+            throw InputError(path, 0, "", "PCD header: field " + std::to_string(k) + " has SIZE " +
+                                              std::to_string(s) + ", COUNT " + std::to_string(count));
+        }
+        step += s * count;
+    }
+    const long long declared = points >= 0 ? points : width * height;
+    if (width < 0 || height < 0 || declared < 0) {
+        throw InputError(path, 0, "", "PCD header: negative WIDTH, HEIGHT or POINTS");
+    }
+    if (step > 0) RequireDeclaredDataFits(path, std::size_t(declared), std::size_t(step));
 }
 
 // The vertex count of a PLY header ("element vertex N"), 0 when absent; a negative or
@@ -198,6 +238,7 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
     Eigen::Quaternionf orientation;
     int version = 0, data_type = 0;
     unsigned int data_idx = 0;
+    PrecheckPcdHeader(path);
     if (CallPcl(path, "PCD", [&] {
             return reader.readHeader(path, blob, origin, orientation, version, data_type, data_idx);
         }) < 0) {
