@@ -704,7 +704,7 @@ std::vector<BadInputCase> BadInputCases() {
              WriteFile(s / "floor.pcd", "this is not a point cloud\n\x01\x02\x03 garbage\n");
          }),
          kExitBadInput,
-         {R"(floor\.pcd: PCD file has no 'x' field)"}},
+         {R"(floor\.pcd:1: PCD header: unknown line 'this is not a point cloud')"}},
         {"PlyEmpty",
          IndoorPcd([](const fs::path& s) {
              WriteFile(s / "floor.ply", "");

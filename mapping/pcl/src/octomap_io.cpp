@@ -70,14 +70,23 @@ std::size_t BinaryDataStart(const std::string& text) {
     auto skip_line = [&] {
         in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
     };
-    for (std::string token; in >> token;) {
+    for (std::string token; in.good() && in >> token;) {
         if (token == "data") {
             skip_line();
             return in ? pos + 1 + static_cast<std::size_t>(in.tellg()) : text.size();
         }
-        if (token == "id" || token == "res" || token == "size") {
-            std::string value;
-            in >> value;
+        // The values are read with the types OctoMap uses: "res 0.1data" is 0.1, then "data".
+        if (token == "id") {
+            std::string id;
+            in >> id;
+        } else if (token == "res") {
+            double res = 0.0;
+            in >> res;
+        } else if (token == "size") {
+            unsigned size = 0;
+            in >> size;
+        } else if (token.rfind('#', 0) == 0) {
+            skip_line();
         } else {
             skip_line();
         }

@@ -16,6 +16,8 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <set>
+#include <map>
 #include <vector>
 
 #include "driftcorr/core/errors.h"
@@ -82,43 +84,84 @@ void RequireDeclaredDataFits(const std::string& path, std::size_t count, std::si
     }
 }
 
-// PCL's PCDReader::readHeader already allocates width * height * point_step bytes as the header
-// declares (found by fuzzing: 8 GB for "SIZE 4 5555555555"), so the header is bounded here first:
-// SIZE values 1, 2, 4 or 8, COUNT values 1..4096, and the declared data must fit the file (see
-// RequireDeclaredDataFits). Malformed numbers are left to PCL's own parser, which rejects them.
+// PCL's PCDReader::readHeader misbehaves on malformed headers: it allocates what the header
+// declares (8 GB for "SIZE 4 5555555555") and corrupts the heap on some garbled lines (found by
+// fuzzing, ASan allocator check in readHeader). So PCL only sees headers validated here first:
+// the keys of the PCD v0.7 header, each at most once, in a sane form (FIELDS, SIZE, TYPE and
+// COUNT of one length; SIZE 1, 2, 4 or 8; TYPE F, I or U; COUNT 1..4096; WIDTH, HEIGHT, POINTS
+// whole numbers with POINTS = WIDTH * HEIGHT; DATA ascii, binary or binary_compressed), and the
+// declared data must fit the file (RequireDeclaredDataFits).
+std::vector<std::string> Words(std::istringstream& in) {
+    std::vector<std::string> out;
+    for (std::string w; in >> w;) out.push_back(w);
+    return out;
+}
+
+bool WholeNumber(const std::string& s, long long max, long long& value) {
+    if (s.empty() || s.size() > 18 || s.find_first_not_of("0123456789") != std::string::npos) {
+        return false;
+    }
+    value = std::stoll(s);
+    return value <= max;
+}
+
 void PrecheckPcdHeader(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    std::vector<long long> sizes, counts;
-    long long width = 1, height = 1, points = -1;
+    auto bad = [&](long line, const std::string& what) {
+        throw InputError(path, line, "", "PCD header: " + what);
+    };
+    std::map<std::string, std::vector<std::string>> keys;
     std::string line;
-    for (int n = 0; n < 64 && std::getline(in, line); ++n) {
+    long n = 0;
+    while (std::getline(in, line) && n < 64) {
+        ++n;
+        if (line.empty() || line[0] == '#') continue;
         std::istringstream words(line);
         std::string key;
-        if (!(words >> key)) continue;
-        std::vector<long long> values;
-        for (long long v; words >> v;) values.push_back(v);
-        if (key == "SIZE") sizes = values;
-        else if (key == "COUNT") counts = values;
-        else if (key == "WIDTH" && !values.empty()) width = values[0];
-        else if (key == "HEIGHT" && !values.empty()) height = values[0];
-        else if (key == "POINTS" && !values.empty()) points = values[0];
-        else if (key == "DATA") break;
+        words >> key;
+        static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",      "TYPE", "COUNT",
+                                                    "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+        if (!kKeys.count(key)) bad(n, "unknown line '" + line.substr(0, 40) + "'");
+        if (keys.count(key)) bad(n, key + " given twice");
+        keys[key] = Words(words);
+        if (key == "DATA") break;
     }
-    long long step = 0;
-    for (std::size_t k = 0; k < sizes.size(); ++k) {
-        const long long count = k < counts.size() ? counts[k] : 1;
-        const long long s = sizes[k];
-        if ((s != 1 && s != 2 && s != 4 && s != 8) || count < 1 || count > 4096) {
-            throw InputError(path, 0, "", "PCD header: field " + std::to_string(k) + " has SIZE " +
-                                              std::to_string(s) + ", COUNT " + std::to_string(count));
+    for (const char* k : {"FIELDS", "SIZE", "TYPE", "WIDTH", "POINTS", "DATA"}) {
+        if (!keys.count(k)) bad(0, std::string("no ") + k + " line");
+    }
+    const std::size_t nf = keys["FIELDS"].size();
+    if (nf == 0 || nf > 64 || keys["SIZE"].size() != nf || keys["TYPE"].size() != nf ||
+        (keys.count("COUNT") && keys["COUNT"].size() != nf)) {
+        bad(0, "FIELDS, SIZE, TYPE and COUNT must list one entry per field");
+    }
+    long long step = 0, v = 0;
+    for (std::size_t k = 0; k < nf; ++k) {
+        const std::string& s = keys["SIZE"][k];
+        if (s != "1" && s != "2" && s != "4" && s != "8") bad(0, "SIZE must be 1, 2, 4 or 8");
+        const std::string& type = keys["TYPE"][k];
+        if (type != "F" && type != "I" && type != "U") bad(0, "TYPE must be F, I or U");
+        long long count = 1;
+        if (keys.count("COUNT") && (!WholeNumber(keys["COUNT"][k], 4096, count) || count < 1)) {
+            bad(0, "COUNT must be 1..4096");
         }
-        step += s * count;
+        step += std::stoll(s) * count;
     }
-    const long long declared = points >= 0 ? points : width * height;
-    if (width < 0 || height < 0 || declared < 0) {
-        throw InputError(path, 0, "", "PCD header: negative WIDTH, HEIGHT or POINTS");
+    long long width = 0, height = 1, points = 0;
+    if (keys["WIDTH"].size() != 1 || !WholeNumber(keys["WIDTH"][0], 1LL << 40, width)) bad(0, "bad WIDTH");
+    if (keys.count("HEIGHT") &&
+        (keys["HEIGHT"].size() != 1 || !WholeNumber(keys["HEIGHT"][0], 1LL << 40, height))) {
+        bad(0, "bad HEIGHT");
     }
-    if (step > 0) RequireDeclaredDataFits(path, std::size_t(declared), std::size_t(step));
+    if (keys["POINTS"].size() != 1 || !WholeNumber(keys["POINTS"][0], 1LL << 40, points) ||
+        points != width * height) {
+        bad(0, "POINTS must be a whole number equal to WIDTH * HEIGHT");
+    }
+    const auto& data = keys["DATA"];
+    if (data.size() != 1 || (data[0] != "ascii" && data[0] != "binary" && data[0] != "binary_compressed")) {
+        bad(0, "DATA must be ascii, binary or binary_compressed");
+    }
+    RequireDeclaredDataFits(path, std::size_t(points), std::size_t(step));
+    (void)v;
 }
 
 // The vertex count of a PLY header ("element vertex N"), 0 when absent; a negative or
