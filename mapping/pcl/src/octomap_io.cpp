@@ -3,6 +3,8 @@
 #include <octomap/OcTree.h>
 
 #include <cmath>
+#include <cstring>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -64,6 +66,14 @@ bool ValidBinaryNode(const std::string& data, std::size_t& pos, int depth) {
 // line; id, res and size take one value; any other token skips to the end of the line; "data"
 // ends the header after the rest of its line). std::string::npos when there is no data token.
 std::size_t BinaryDataStart(const std::string& text) {
+    static const std::string kHeader = "# Octomap OcTree binary file";
+    if (text.compare(0, kHeader.size(), kHeader) != 0) {
+        // OctoMap then tries its legacy layout: int32 tree type 3, double resolution, uint32
+        // size, and the tree data right after (byte 16).
+        std::int32_t type = 0;
+        if (text.size() >= 16) std::memcpy(&type, text.data(), sizeof(type));
+        return type == 3 ? 16 : std::string::npos;
+    }
     std::size_t pos = text.find('\n');
     if (pos == std::string::npos) return std::string::npos;
     std::istringstream in(text.substr(pos + 1));
@@ -143,6 +153,9 @@ bool OccupiedAt(const octomap::OcTree& tree, double x, double y, double z) {
 
 }  // namespace
 
+// 4 M floor voxels: 100 m x 100 m of floor at 0.05 m, or 4 floors of it at 0.1 m.
+constexpr std::size_t kMaxFloorVoxels = 4'000'000;
+
 std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
     const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
     const double res = tree->getResolution();
@@ -152,13 +165,27 @@ std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
         // A pruned leaf of size n * res: its top layer of n x n finest voxels.
         const double size = it.getSize();
         const int n = std::max(1, int(std::lround(size / res)));
+        // A pruned leaf near the root stands for up to 2^15 x 2^15 finest voxels: refuse maps
+        // whose floor would not fit in memory rather than expanding them (found by fuzzing).
+        if (double(floor.size()) + double(n) * double(n) > double(kMaxFloorVoxels)) {
+            throw InputError(path, 0, "",
+                             "OctoMap floor would have more than " +
+                                 std::to_string(kMaxFloorVoxels) +
+                                 " voxels at its resolution (a pruned occupied leaf of " +
+                                 std::to_string(size) + " m); coarsen or crop the map");
+        }
         const octomap::point3d c = it.getCoordinate();
         const double z_top_centre = c.z() + 0.5 * size - 0.5 * res;
+        // The same-size cell above: when it is one leaf (or nothing) and not occupied, the whole
+        // top face is floor and needs no search per finest voxel.
+        const octomap::OcTreeNode* above =
+            tree->search(c.x(), c.y(), c.z() + size, static_cast<unsigned>(it.getDepth()));
+        const bool open_above = !above || (!tree->nodeHasChildren(above) && !tree->isNodeOccupied(above));
         for (int a = 0; a < n; ++a) {
             for (int b = 0; b < n; ++b) {
                 const double x = c.x() - 0.5 * size + res * (a + 0.5);
                 const double y = c.y() - 0.5 * size + res * (b + 0.5);
-                if (OccupiedAt(*tree, x, y, z_top_centre + res)) continue;
+                if (!open_above && OccupiedAt(*tree, x, y, z_top_centre + res)) continue;
                 floor.emplace_back(x, y, z_top_centre + 0.5 * res);
             }
         }
