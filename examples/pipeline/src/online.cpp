@@ -3,43 +3,13 @@
 #include <stdexcept>
 
 #include "driftcorr/core/errors.h"
-#include "driftcorr/mapping/osm_reader.h"
 
 namespace driftcorr::pipeline {
-namespace {
-
-// Road map of all osm layers. Throws InputError when no layer yields a usable road.
-// (The same rules as RunCorrection's loader in pipeline.cpp.)
-RoadNetwork LoadStreamRoads(const io::Scenario& sc, const WorldFrame& world,
-                            const RoadClassConfig& roads) {
-    RoadNetwork net;
-    for (const io::MapLayerSpec& layer : sc.map) {
-        if (layer.format != io::MapFormat::kOsm) {
-            throw InputError(sc.yaml_path, 0, "map",
-                             "road2d mode reads OpenStreetMap layers only; '" + layer.path +
-                                 "' is " + io::ToString(layer.format));
-        }
-        const OsmRoads osm = ReadOsmRoads(layer.path);
-        RoadNetwork part = BuildRoadNetwork(
-            osm, [&](const GeoPoint& g) { return world.ToEn(g); }, roads);
-        if (part.roads.empty()) {
-            throw InputError(layer.path, 0, "", "no usable roads in the '" + roads.profile +
-                                                    "' profile");
-        }
-        for (auto& r : part.roads) net.roads.push_back(std::move(r));
-    }
-    return net;
-}
-
-}  // namespace
 
 StreamSetup LoadStreamSetup(const std::string& scenario_path, const PipelineConfig& config) {
     StreamSetup setup;
     setup.scenario = io::LoadScenario(scenario_path);
     const io::Scenario& sc = setup.scenario;
-    if (sc.mode != io::ScenarioMode::kRoad2d) {
-        throw InputError(sc.yaml_path, 0, "mode", "indoor3d scenarios are not supported yet");
-    }
     std::unique_ptr<WorldFrame> world;
     try {
         world = std::make_unique<WorldFrame>(sc.anchor);
@@ -47,12 +17,10 @@ StreamSetup LoadStreamSetup(const std::string& scenario_path, const PipelineConf
         throw InputError(sc.yaml_path, 0, e.key(), e.what());
     }
     setup.anchor = world->planar_anchor();
-    setup.network = LoadStreamRoads(sc, *world, config.roads);
-    try {
-        setup.field = RasteriseRoads(setup.network, setup.network.Bounds(), config.field);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(sc.yaml_path, 0, "map", e.what());
-    }
+    // The route is not known in advance: the field covers the whole map (for roads, the region
+    // is unbounded and RasteriseRoads clips it to the network's extent).
+    const Eigen::AlignedBox2d everywhere(Eigen::Vector2d(-1e7, -1e7), Eigen::Vector2d(1e7, 1e7));
+    setup.field = LoadMapField(sc, *world, config, everywhere, sc.anchor.z_m, setup.network);
     return setup;
 }
 

@@ -218,24 +218,30 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     ps.timings.load_s = Since(t0);
 
     t0 = std::chrono::steady_clock::now();
-    if (sc.mode == io::ScenarioMode::kIndoor3d) {
-        std::vector<double> up = ps.estimate.up_m;
-        std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
-        if (IsSurfaceLayer(sc.map.front())) {
-            ps.field = LoadSurfaceField(sc, config.surface_field);
-        } else {
-            ps.field = LoadIndoorField(sc, config.indoor_field, up[up.size() / 2], ps.network);
-        }
-    } else {
-        ps.network = LoadRoads(sc, world, config.roads);
-        try {
-            ps.field = RasteriseRoads(ps.network, BoundsOf(ps.estimate), config.field);
-        } catch (const std::invalid_argument& e) {
-            throw InputError(sc.yaml_path, 0, "map", e.what());
-        }
-    }
+    std::vector<double> up = ps.estimate.up_m;
+    std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
+    ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network);
     ps.timings.map_s = Since(t0);
     return ps;
+}
+
+TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
+                              const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
+                              double up_m, RoadNetwork& network) {
+    if (sc.mode == io::ScenarioMode::kIndoor3d) {
+        if (IsSurfaceLayer(sc.map.front())) return LoadSurfaceField(sc, config.surface_field);
+        return LoadIndoorField(sc, config.indoor_field, up_m, network);
+    }
+    network = LoadRoads(sc, world, config.roads);
+    try {
+        return RasteriseRoads(network, region_en, config.field);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(sc.yaml_path, 0, "map", e.what());
+    }
+}
+
+const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config) {
+    return sc.mode == io::ScenarioMode::kIndoor3d ? config.indoor_corrector : config.corrector;
 }
 
 CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& config,
@@ -243,10 +249,7 @@ CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& confi
     if (config.solver == Solver::kPaper) {
         return CorrectWithPaperMethod(ps.estimate, &ps.field, config.paper, progress);
     }
-    const CorrectorConfig& cfg = ps.scenario.mode == io::ScenarioMode::kIndoor3d
-                                     ? config.indoor_corrector
-                                     : config.corrector;
-    return CorrectTrajectory(ps.estimate, &ps.field, cfg, progress);
+    return CorrectTrajectory(ps.estimate, &ps.field, CorrectorFor(ps.scenario, config), progress);
 }
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,

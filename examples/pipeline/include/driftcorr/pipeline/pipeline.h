@@ -99,6 +99,16 @@ struct PreparedScenario {
 /// (files, anchor, an unsupported mode, map with no usable roads, field too large).
 PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config);
 
+/// The scenario's map as a field: OSM roads rasterised over `region_en` (road2d), or the indoor
+/// GeoJSON / point-cloud / OctoMap layers (indoor3d; `up_m` picks the floor whose walkways go into
+/// `network` for pictures). Throws InputError naming the file or setting.
+TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
+                              const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
+                              double up_m, RoadNetwork& network);
+
+/// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector).
+const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config);
+
 /// Runs config.solver on a prepared scenario. Solver outcomes are in the result, never thrown.
 CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig& config,
                          const ProgressCallback& progress = {});
