@@ -2,9 +2,9 @@
 
 #include <cassert>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
+#include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/window_problem.h"
 
@@ -24,11 +24,7 @@ namespace {
 
 std::string Percent(double share) { return std::to_string(int(std::lround(100.0 * share))) + " %"; }
 
-std::string Fixed(double value, int decimals) {
-    char buf[64];
-    std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
-    return buf;
-}
+std::string Fixed(double value, int decimals) { return FormatFixed(value, decimals); }
 
 // Share of poses within reach of the map: inside the field and closer than 3 giveup distances to
 // a traversable place (where the map term still pulls).

@@ -1,8 +1,9 @@
 #include "driftcorr/optim/online_corrector.h"
 
+#include "driftcorr/core/format.h"
+
 #include <cassert>
 #include <cmath>
-#include <cstdio>
 #include <exception>
 
 #include "driftcorr/core/angles.h"
@@ -62,10 +63,9 @@ std::optional<PushResult> OnlineCorrector::Validate(const PlanarPose& pose) cons
     if (finished_) return Reject(PushStatus::kRejectedFinished, "Push after Finish()");
     if (!Finite(pose)) return Reject(PushStatus::kRejectedNonFinite, "pose has a NaN or inf value");
     if (!t_s_.empty() && !(pose.t_s > last_t_s_)) {
-        char msg[160];
-        std::snprintf(msg, sizeof(msg), "timestamp %.6f is not after the previous one (%.6f)",
-                      pose.t_s, last_t_s_);
-        return Reject(PushStatus::kRejectedTime, msg);
+        return Reject(PushStatus::kRejectedTime,
+                      "timestamp " + FormatFixed(pose.t_s, 6) + " is not after the previous one (" +
+                          FormatFixed(last_t_s_, 6) + ")");
     }
     if (has_yaw_ && *has_yaw_ != pose.yaw_rad.has_value()) {
         return Reject(PushStatus::kRejectedHeading,
@@ -149,9 +149,8 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     }
     r.corrected = ToPlanarPose(pose.t_s, out);
     if (r.gap) {
-        char msg[120];
-        std::snprintf(msg, sizeof(msg), "gap of %.3f s since the previous pose", entry.step.dt_s);
-        r.message = r.message.empty() ? msg : std::string(msg) + "; " + r.message;
+        const std::string msg = "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
+        r.message = r.message.empty() ? msg : msg + "; " + r.message;
     }
     return r;
 }
