@@ -55,11 +55,21 @@ bool Bool(const Context& c, const YAML::Node& n, const std::string& key) {
     }
 }
 
+// Registers keys that each set one double field (finite, else InputError naming file, line, key).
+struct NumberKeys {
+    std::map<std::string, Setter>& setters;
+    const Context& context;
+    void operator()(const char* name, double* field) const {
+        const Context& c = context;
+        setters[name] = [&c, field](const YAML::Node& n, const std::string& k) {
+            *field = Number(c, n, k);
+        };
+    }
+};
+
 std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
     std::map<std::string, Setter> s;
-    auto num = [&](const char* name, double* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
-    };
+    const NumberKeys num{s, c};
     num("step_sigma_m", &m.step_sigma_m);
     num("step_sigma_rel", &m.step_sigma_rel);
     num("step_robust_k", &m.step_robust_k);
@@ -93,9 +103,7 @@ std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
 
 std::map<std::string, Setter> CorrectorSetters(const Context& c, CorrectorConfig& cc) {
     std::map<std::string, Setter> s;
-    auto num = [&](const char* name, double* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
-    };
+    const NumberKeys num{s, c};
     auto count = [&](const char* name, auto* field) {
         s[name] = [&c, field](const YAML::Node& n, const std::string& k) {
             using Count = std::remove_pointer_t<decltype(field)>;
@@ -126,9 +134,7 @@ std::map<std::string, Setter> CorrectorSetters(const Context& c, CorrectorConfig
 
 std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f) {
     std::map<std::string, Setter> s;
-    auto num = [&](const char* name, double* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
-    };
+    const NumberKeys num{s, c};
     num("resolution_m", &f.resolution_m);
     num("margin_m", &f.margin_m);
     num("truncation_m", &f.truncation_m);
@@ -139,9 +145,7 @@ std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f)
 
 std::map<std::string, Setter> IndoorFieldSetters(const Context& c, IndoorFieldConfig& f) {
     std::map<std::string, Setter> s;
-    auto num = [&](const char* name, double* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
-    };
+    const NumberKeys num{s, c};
     num("resolution_m", &f.resolution_m);
     num("resolution_z_m", &f.resolution_z_m);
     num("device_height_m", &f.device_height_m);
@@ -157,9 +161,7 @@ std::map<std::string, Setter> IndoorFieldSetters(const Context& c, IndoorFieldCo
 
 std::map<std::string, Setter> SurfaceFieldSetters(const Context& c, SurfaceFieldConfig& f) {
     std::map<std::string, Setter> s;
-    auto num = [&](const char* name, double* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
-    };
+    const NumberKeys num{s, c};
     num("resolution_m", &f.resolution_m);
     num("resolution_z_m", &f.resolution_z_m);
     num("device_height_m", &f.device_height_m);
@@ -174,9 +176,7 @@ std::map<std::string, Setter> SurfaceFieldSetters(const Context& c, SurfaceField
 
 std::map<std::string, Setter> PaperSetters(const Context& c, PaperSolverConfig& p) {
     std::map<std::string, Setter> s;
-    auto num = [&](const char* name, double* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) { *field = Number(c, n, k); };
-    };
+    const NumberKeys num{s, c};
     num("learning_rate", &p.learning_rate);
     num("turn_weight", &p.turn_weight);
     num("step_weight", &p.step_weight);
