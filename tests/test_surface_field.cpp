@@ -7,9 +7,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -128,6 +131,58 @@ TEST(SurfaceReaders, UnreadableFilesAreInputErrors) {
     ExpectInputError([&] { ReadFloorVoxelsOctomap(ot); }, ot, "OctoMap");
     ExpectInputError([&] { ReadSurfacePointsPcd(missing); }, missing, "does not exist");
     ExpectInputError([&] { ReadSurfacePoints((dir / "x.las").string()); }, "x.las", ".las");
+}
+
+// PCL splits header lines on blanks, tabs and CR only and corrupts its heap on some garbled
+// headers (found by fuzzing), so headers with other bytes, odd field names or a malformed
+// VIEWPOINT are refused before PCL reads them.
+TEST(SurfaceReaders, PcdHeaderIsCheckedBeforePclSeesIt) {
+    const fs::path dir = TestDir("pcd_header");
+    auto pcd = [&](const std::string& name, const std::string& fields, const std::string& viewpoint) {
+        return WriteText(dir / name, "VERSION 0.7\nFIELDS " + fields +
+                                         "\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+                                         "VIEWPOINT " + viewpoint + "\nPOINTS 1\nDATA ascii\n1 2 3\n");
+    };
+    EXPECT_EQ(ReadSurfacePointsPcd(pcd("ok.pcd", "x y z", "0 0 0 1 0 0 0")).size(), 1u);
+    const std::string vtab = pcd("vtab.pcd", "x\vy z w", "0 0 0 1 0 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(vtab); }, vtab, "control or non-ASCII byte");
+    const std::string nul = pcd("nul.pcd", std::string("x y\0\x01 z", 9), "0 0 0 1 0 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(nul); }, nul, "control or non-ASCII byte");
+    const std::string trailing = pcd("trailing.pcd", "x y z ", "0 0 0 1 0 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(trailing); }, trailing, "single-blank separated");
+    const std::string tab = pcd("tab.pcd", "x\ty z", "0 0 0 1 0 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(tab); }, tab, "single-blank separated");
+    const std::string name = pcd("name.pcd", "x y z-", "0 0 0 1 0 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(name); }, name, "field name 'z-'");
+    const std::string vp = pcd("vp.pcd", "x y z", "0 0 0 1 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(vp); }, vp, "VIEWPOINT must be 7 finite numbers");
+    const std::string vp_inf = pcd("vp_inf.pcd", "x y z", "0 0 inf 1 0 0 0");
+    ExpectInputError([&] { ReadSurfacePointsPcd(vp_inf); }, vp_inf, "VIEWPOINT");
+}
+
+// A .bt file in OctoMap's legacy layout (int32 type 3, double resolution, uint32 size, tree):
+// a resolution that is not a sane length is refused (an infinite one made OctoMap convert
+// infinite coordinates to keys, found by fuzzing).
+TEST(SurfaceReaders, OctomapResolutionOutsideSaneRangeIsAnInputError) {
+    const fs::path dir = TestDir("octomap_res");
+    auto legacy = [&](const std::string& name, double res) {
+        std::string bytes(16, '\0');
+        const std::int32_t type = 3;
+        const std::uint32_t size = 17;  // nodes: 16 inner ones down to one finest leaf
+        std::memcpy(&bytes[0], &type, 4);
+        std::memcpy(&bytes[4], &res, 8);
+        std::memcpy(&bytes[12], &size, 4);
+        // Depth first, two bits per child: 11 inner node (levels 0-14), 10 occupied leaf.
+        for (int level = 0; level < 15; ++level) bytes += std::string("\x03\x00", 2);
+        bytes += std::string("\x02\x00", 2);
+        return WriteText(dir / name, bytes);
+    };
+    const std::string ok = legacy("ok.bt", 0.1);
+    EXPECT_EQ(ReadFloorVoxelsOctomap(ok).size(), 1u);
+    for (double res : {1e-300, 1e6, std::numeric_limits<double>::infinity()}) {
+        const std::string bt = legacy("bad.bt", res);
+        ExpectInputError([&] { ReadFloorVoxelsOctomap(bt); }, bt, "resolution");
+    }
 }
 
 // Floor rule: an occupied voxel with a non-occupied voxel above is floor; its top face is

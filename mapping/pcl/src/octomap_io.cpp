@@ -155,10 +155,20 @@ bool OccupiedAt(const octomap::OcTree& tree, double x, double y, double z) {
 
 // 4 M floor voxels: 100 m x 100 m of floor at 0.05 m, or 4 floors of it at 0.1 m.
 constexpr std::size_t kMaxFloorVoxels = 4'000'000;
+constexpr double kMinResolutionM = 0.001;  ///< [m] finer than any floor map needs
+constexpr double kMaxResolutionM = 100.0;  ///< [m]
 
 std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
     const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
     const double res = tree->getResolution();
+    // A garbled header can carry any double as the resolution; OctoMap then converts infinite
+    // coordinates to keys (UBSan: inf to int, found by fuzzing).
+    if (!(res >= kMinResolutionM && res <= kMaxResolutionM)) {
+        throw InputError(path, 0, "",
+                         "OctoMap resolution " + std::to_string(res) + " m is outside [" +
+                             std::to_string(kMinResolutionM) + ", " +
+                             std::to_string(kMaxResolutionM) + "] m");
+    }
     std::vector<Eigen::Vector3d> floor;
     for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
         if (!tree->isNodeOccupied(*it)) continue;

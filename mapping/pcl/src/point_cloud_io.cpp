@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <new>
 #include <sstream>
@@ -115,7 +116,24 @@ void PrecheckPcdHeader(const std::string& path) {
     long n = 0;
     while (std::getline(in, line) && n < 64) {
         ++n;
+        // Only printable ASCII, blanks and tabs: PCL splits lines on "\t\r " only, so any other
+        // byte (a NUL, a vertical tab) would make it see other fields than the checks below.
+        for (const char c : line) {
+            if (!(c == '\t' || c == '\r' || (c >= 0x20 && c <= 0x7e))) {  // tabs: below
+                bad(n, "line " + std::to_string(n) + " has a control or non-ASCII byte");
+            }
+        }
         if (line.empty() || line[0] == '#') continue;
+        // PCL counts the empty words around extra blanks, tabs and CRs as entries: "FIELDS x y z "
+        // is four fields to it and three here, and it then indexes past its per-field arrays
+        // (valgrind: invalid read in PCDReader::readHeader, found by fuzzing). Header lines must
+        // be in the form PCL writes them: words separated by single blanks.
+        if (line.find_first_of("\t\r") != std::string::npos || line.front() == ' ' ||
+            line.back() == ' ' || line.find("  ") != std::string::npos) {
+            bad(n, "line " + std::to_string(n) +
+                       " is not single-blank separated (no tabs, CR, leading, trailing or double "
+                       "blanks in a PCD header)");
+        }
         std::istringstream words(line);
         std::string key;
         words >> key;
@@ -133,6 +151,22 @@ void PrecheckPcdHeader(const std::string& path) {
     if (nf == 0 || nf > 64 || keys["SIZE"].size() != nf || keys["TYPE"].size() != nf ||
         (keys.count("COUNT") && keys["COUNT"].size() != nf)) {
         bad(0, "FIELDS, SIZE, TYPE and COUNT must list one entry per field");
+    }
+    for (const std::string& name : keys["FIELDS"]) {
+        if (name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") !=
+            std::string::npos) {
+            bad(0, "field name '" + name + "' is not made of letters, digits and '_'");
+        }
+    }
+    if (keys.count("VIEWPOINT")) {
+        const auto& vp = keys["VIEWPOINT"];
+        bool ok = vp.size() == 7;
+        for (std::size_t k = 0; ok && k < vp.size(); ++k) {
+            char* end = nullptr;
+            const double value = std::strtod(vp[k].c_str(), &end);
+            ok = end != vp[k].c_str() && *end == '\0' && std::isfinite(value);
+        }
+        if (!ok) bad(0, "VIEWPOINT must be 7 finite numbers (tx ty tz qw qx qy qz)");
     }
     long long step = 0, v = 0;
     for (std::size_t k = 0; k < nf; ++k) {
