@@ -160,6 +160,45 @@ TEST(SurfaceReaders, PcdHeaderIsCheckedBeforePclSeesIt) {
     ExpectInputError([&] { ReadSurfacePointsPcd(vp_inf); }, vp_inf, "VIEWPOINT");
 }
 
+// The ASCII body is checked before PCL reads it (its reader wrote past its buffer on a garbled
+// body, found by fuzzing): POINTS lines of the declared number of values, single-blank separated.
+TEST(SurfaceReaders, PcdAsciiBodyIsCheckedBeforePclSeesIt) {
+    const fs::path dir = TestDir("pcd_body");
+    auto pcd = [&](const std::string& name, const std::string& body) {
+        return WriteText(dir / name, "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                                     "COUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n" + body);
+    };
+    EXPECT_EQ(ReadSurfacePointsPcd(pcd("ok.pcd", "1 2 3\n\n4 5 6\n")).size(), 2u);
+    const std::string few = pcd("few.pcd", "1 2 3\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(few); }, few, "1 point lines, the header declares 2");
+    const std::string many = pcd("many.pcd", "1 2 3\n4 5 6\n7 8 9\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(many); }, many, "more point lines than POINTS");
+    const std::string short_line = pcd("short.pcd", "1 2 3\n4 5\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(short_line); }, short_line, "2 values");
+    const std::string word = pcd("word.pcd", "1 2 3\n4 five 6\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(word); }, word, "'five' is not a number");
+    const std::string blanks = pcd("blanks.pcd", "1 2 3\n4  5 6\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(blanks); }, blanks, "is not a number");
+}
+
+// binary_compressed data starts with its compressed and uncompressed sizes; PCL resizes its
+// buffer to the latter and writes every point into it, so it must match the header.
+TEST(SurfaceReaders, PcdCompressedSizesMustMatchTheHeader) {
+    const fs::path dir = TestDir("pcd_lzf");
+    auto pcd = [&](const std::string& name, std::uint32_t compressed, std::uint32_t uncompressed) {
+        std::string bytes = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                            "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary_compressed\n";
+        bytes.append(reinterpret_cast<const char*>(&compressed), 4);
+        bytes.append(reinterpret_cast<const char*>(&uncompressed), 4);
+        bytes += std::string(32, '\0');
+        return WriteText(dir / name, bytes);
+    };
+    const std::string small = pcd("small.pcd", 16, 4);  // 2 points of 12 bytes: 24 expected
+    ExpectInputError([&] { ReadSurfacePointsPcd(small); }, small, "binary_compressed sizes");
+    const std::string past_end = pcd("past_end.pcd", 4096, 24);
+    ExpectInputError([&] { ReadSurfacePointsPcd(past_end); }, past_end, "binary_compressed sizes");
+}
+
 // A .bt file in OctoMap's legacy layout (int32 type 3, double resolution, uint32 size, tree):
 // a resolution that is not a sane length is refused (an infinite one made OctoMap convert
 // infinite coordinates to keys, found by fuzzing).
