@@ -177,7 +177,7 @@ int RunStream(const StreamArgs& a) {
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
     const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(a.scenario, cfg);
-    OnlineConfig online;
+    OnlineConfig online = cfg.online;
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = a.sync;
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);

@@ -201,17 +201,54 @@ void IncrementalCorrector::SolveChunk(std::size_t end) {
     const auto t0 = std::chrono::steady_clock::now();
     SeedNewScales(state_, done_ + 1, end);
     ComposeOdometry(state_, done_ + 1, end);
-    std::size_t first = end;
-    while (first > 1 && dist_[end] - dist_[first - 1] <= cfg_.window_m &&
-           end - first + 1 < cfg_.max_window_poses) {
-        --first;
-    }
+    const std::size_t first = WindowFirst(end);
     window_first_ = first;
     SolveReport rep = SolveIncrementalWindow(state_, field_, cfg_, first, end, stats_);
     ++stats_.windows;
     if (!Usable(rep.status)) ++stats_.window_failures;
     done_ = end;
     stats_.incremental_s += SecondsSince(t0);
+}
+
+std::size_t IncrementalCorrector::WindowFirst(std::size_t end) const {
+    std::size_t first = end;
+    while (first > 1 && dist_[end] - dist_[first - 1] <= cfg_.window_m &&
+           end - first + 1 < cfg_.max_window_poses) {
+        --first;
+    }
+    return first;
+}
+
+IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end) {
+    assert(done_ < end && end < size() && "preview must add poses");
+    const std::vector<PoseState> saved_poses = state_.poses;
+    const std::vector<double> saved_scales = state_.scales;
+    SeedNewScales(state_, done_ + 1, end);
+    Preview p;
+    p.first = WindowFirst(end);
+    // Warm start from the previous preview while it still covers poses after done(): its poses
+    // (from the window's first on) and scales, and odometry only after its end.
+    std::size_t from = done_ + 1;
+    if (!last_preview_.poses.empty() && last_preview_end_ > done_ && last_preview_end_ <= end) {
+        for (std::size_t i = std::max(p.first, last_preview_.first); i <= last_preview_end_; ++i) {
+            state_.poses[i] = last_preview_.poses[i - last_preview_.first];
+        }
+        for (std::size_t g = 0; g < last_preview_.scales.size(); ++g) {
+            state_.scales[g] = last_preview_.scales[g];
+        }
+        SeedNewScales(state_, last_preview_end_ + 1, end);
+        from = last_preview_end_ + 1;
+    }
+    if (from <= end) ComposeOdometry(state_, from, end);
+    CorrectionResult preview_stats;  // not counted in the chunk statistics
+    const SolveReport rep = SolveIncrementalWindow(state_, field_, cfg_, p.first, end, preview_stats);
+    if (Usable(rep.status)) p.poses.assign(state_.poses.begin() + p.first, state_.poses.begin() + end + 1);
+    p.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
+    state_.poses = saved_poses;
+    state_.scales = saved_scales;
+    last_preview_ = p;
+    last_preview_end_ = end;
+    return p;
 }
 
 void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {

@@ -30,6 +30,9 @@ PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
 std::string OnlineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;
     if (!(gap_warn_s > 0.0)) return "online.gap_warn_s: must be > 0";
+    if (!(update_fraction >= 0.0 && update_fraction <= 1.0)) {
+        return "online.update_fraction: must be in [0, 1]";
+    }
     return "";
 }
 
@@ -43,7 +46,7 @@ OnlineCorrector::~OnlineCorrector() {
     {
         std::lock_guard<std::mutex> lock(mutex_);
         stop_ = true;
-        chunk_ends_.clear();  // queued solves are not needed any more
+        jobs_.clear();  // queued solves are not needed any more
     }
     wake_.notify_all();
     if (worker_.joinable()) worker_.join();
@@ -170,43 +173,55 @@ bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
     return true;
 }
 
-// Completes a chunk at `index` by the batch rule and hands it to the solver. Without headings,
-// no chunk completes before the first moving step (the poses' heading is not known yet).
+// Completes a chunk at `index` by the batch rule and hands it to the solver; otherwise, every
+// update_fraction * chunk_m of path, asks for a preview ending at `index`. Without headings, nothing is solved
+// before the first moving step (the poses' heading is not known yet).
 void OnlineCorrector::UpdateChunks(std::size_t index) {
     if (index == 0 || (has_yaw_ && !*has_yaw_ && !heading_known_)) return;
-    if (path_m_ - chunk_start_path_m_ < cfg_.corrector.chunk_m &&
-        index - chunk_start_ < cfg_.corrector.max_chunk_poses) {
-        return;
+    if (path_m_ - chunk_start_path_m_ >= cfg_.corrector.chunk_m ||
+        index - chunk_start_ >= cfg_.corrector.max_chunk_poses) {
+        chunk_start_ = index;
+        chunk_start_path_m_ = path_m_;
+        update_path_m_ = path_m_;
+        Schedule({index, false});
+    } else if (cfg_.update_fraction > 0.0 &&
+               path_m_ - update_path_m_ >= cfg_.update_fraction * cfg_.corrector.chunk_m) {
+        update_path_m_ = path_m_;
+        Schedule({index, true});
     }
-    chunk_start_ = index;
-    chunk_start_path_m_ = path_m_;
+}
+
+void OnlineCorrector::Schedule(Job job) {
     if (cfg_.synchronous) {
-        SolveQueuedChunk(index);
+        RunJob(job);
         return;
     }
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        chunk_ends_.push_back(index);
+        jobs_.push_back(job);
     }
     wake_.notify_one();
 }
 
 void OnlineCorrector::WorkerLoop() {
     for (;;) {
-        std::size_t end = 0;
+        Job job;
         {
             std::unique_lock<std::mutex> lock(mutex_);
-            wake_.wait(lock, [this] { return stop_ || !chunk_ends_.empty(); });
-            if (chunk_ends_.empty()) return;  // stop_ and nothing queued
-            end = chunk_ends_.front();
-            chunk_ends_.pop_front();
+            wake_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+            if (jobs_.empty()) return;  // stop_ and nothing queued
+            job = jobs_.front();
+            jobs_.pop_front();
+            // A preview is worth its solve only while nothing newer waits; at the end
+            // (stop_), only the chunks matter.
+            if (job.preview && (stop_ || !jobs_.empty())) continue;
         }
         try {
-            SolveQueuedChunk(end);
+            RunJob(job);
         } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(mutex_);
             worker_error_ = std::string("window solve failed: ") + e.what();
-            chunk_ends_.clear();
+            jobs_.clear();
             return;
         }
     }
@@ -220,9 +235,8 @@ void OnlineCorrector::EnsureSolver(std::vector<Entry>& entries) {
     entries.erase(entries.begin());
 }
 
-// Hands the queued poses up to `end` to the solver, solves the chunk and merges the solution.
-// Runs on the worker (or inside Push when synchronous); holds the mutex only to take and merge.
-void OnlineCorrector::SolveQueuedChunk(std::size_t end) {
+// Hands the queued poses up to `end` to the solver (holding the mutex only to take them).
+void OnlineCorrector::AppendQueued(std::size_t end) {
     std::vector<Entry> entries;
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -234,9 +248,30 @@ void OnlineCorrector::SolveQueuedChunk(std::size_t end) {
     }
     EnsureSolver(entries);
     for (const Entry& e : entries) solver_->Append(e.initial, e.step);
-    solver_->SolveChunk(end);
+}
+
+// Runs one solve and merges its solution. On the worker (or inside Push when synchronous); holds
+// the mutex only to take the poses and to merge, never while solving.
+void OnlineCorrector::RunJob(const Job& job) {
+    AppendQueued(job.end);
+    if (job.preview) {
+        const IncrementalCorrector::Preview p = solver_->SolvePreview(job.end);
+        std::lock_guard<std::mutex> lock(mutex_);
+        MergePreview(job.end, p);
+        return;
+    }
+    solver_->SolveChunk(job.end);
     std::lock_guard<std::mutex> lock(mutex_);
     Merge();
+}
+
+// Re-composes the causal estimates after `end` onto the (newly solved) pose `end`.
+// Caller holds mutex_.
+void OnlineCorrector::Recompose(std::size_t end) {
+    for (std::size_t i = end + 1; i < current_.size(); ++i) {
+        current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
+                                  current_[i].p.z());
+    }
 }
 
 // Replaces the causal estimates of the solved window and re-composes the poses pushed since.
@@ -246,10 +281,15 @@ void OnlineCorrector::Merge() {
     const std::size_t end = solver_->done();
     for (std::size_t i = solver_->last_window_first(); i <= end; ++i) current_[i] = s.poses[i];
     front_scales_.assign(s.scales.begin(), s.scales.begin() + s.scale_segment[end] + 1);
-    for (std::size_t i = end + 1; i < current_.size(); ++i) {
-        current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
-                                  current_[i].p.z());
-    }
+    Recompose(end);
+}
+
+// The same for a preview (nothing to merge when its solve failed). Caller holds mutex_.
+void OnlineCorrector::MergePreview(std::size_t end, const IncrementalCorrector::Preview& p) {
+    if (p.poses.empty()) return;
+    for (std::size_t i = p.first; i <= end; ++i) current_[i] = p.poses[i - p.first];
+    front_scales_ = p.scales;
+    Recompose(end);
 }
 
 CorrectionResult OnlineCorrector::Finish() {

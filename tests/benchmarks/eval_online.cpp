@@ -25,6 +25,7 @@ OnlineRun RunOnline(const pipeline::CorrectionRun& run, const TraversableField& 
     OnlineConfig cfg;
     cfg.synchronous = synchronous;
     if (const char* c = std::getenv("CHUNK_M")) cfg.corrector.chunk_m = std::atof(c);
+    if (const char* u = std::getenv("UPDATE_FRACTION")) cfg.update_fraction = std::atof(u);
     OnlineCorrector online(&field, cfg);
     OnlineRun out;
     for (std::size_t i = 0; i < run.estimate.size(); ++i) {
@@ -45,7 +46,9 @@ void Evaluate(const std::string& dir) {
     const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(dir, cfg);
     const PlanarTrajectory& gt = *run.ground_truth;
     std::printf("%-30s batch %7.2f |", run.scenario.name.c_str(), run.after ? run.after->ate_m : -1.0);
+    const char* modes = std::getenv("ONLINE_MODES");  // "sync", "fast" or both (default)
     for (bool sync : {true, false}) {
+        if (modes && std::string(modes) != (sync ? "sync" : "fast")) continue;
         const OnlineRun o = RunOnline(run, setup.field, sync);
         const double causal = ComputeMetrics(o.causal, gt).ate_m;
         const double smooth =

@@ -45,7 +45,7 @@ std::optional<double> MeanMapDistance(const PlanarTrajectory& t, const Traversab
 MethodResult RunOnline(const pipeline::PreparedScenario& ps, const pipeline::PipelineConfig& base) {
     MethodResult r;
     r.method = Method::kOnline;
-    OnlineConfig oc;
+    OnlineConfig oc = base.online;
     oc.corrector = ps.scenario.mode == io::ScenarioMode::kIndoor3d ? base.indoor_corrector
                                                                     : base.corrector;
     oc.synchronous = true;

@@ -132,6 +132,17 @@ std::map<std::string, Setter> CorrectorSetters(const Context& c, CorrectorConfig
     return s;
 }
 
+std::map<std::string, Setter> OnlineSetters(const Context& c, OnlineConfig& o) {
+    std::map<std::string, Setter> s;
+    const NumberKeys num{s, c};
+    num("update_fraction", &o.update_fraction);
+    num("gap_warn_s", &o.gap_warn_s);
+    s["project_output"] = [&c, &o](const YAML::Node& n, const std::string& k) {
+        o.project_output = Bool(c, n, k);
+    };
+    return s;
+}
+
 std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f) {
     std::map<std::string, Setter> s;
     const NumberKeys num{s, c};
@@ -294,10 +305,12 @@ PipelineConfig ParseConfig(const Context& c, const YAML::Node& root) {
             ApplySection(c, kv.first, body, section, RoadSetters(c, cfg.roads));
         } else if (section == "field") {
             ApplySection(c, kv.first, body, section, FieldSetters(c, cfg.field));
+        } else if (section == "online") {
+            ApplySection(c, kv.first, body, section, OnlineSetters(c, cfg.online));
         } else {
             throw InputError(c.file, Line(kv.first), section,
                              "unknown section (model, corrector, paper, roads, field, indoor_model, "
-                             "indoor_corrector, indoor_field, surface_field)");
+                             "indoor_corrector, indoor_field, surface_field, online)");
         }
     }
     if (std::string m = cfg.Validate(); !m.empty()) {
@@ -316,6 +329,7 @@ std::string PipelineConfig::Validate() const {
     if (std::string m = indoor_corrector.Validate(); !m.empty()) return "indoor_" + m;
     if (std::string m = indoor_field.Validate(); !m.empty()) return "indoor_field." + m;
     if (std::string m = surface_field.Validate(); !m.empty()) return "surface_field." + m;
+    if (std::string m = online.Validate(); !m.empty()) return m;  // "online.<key>: ..."
     return "";
 }
 

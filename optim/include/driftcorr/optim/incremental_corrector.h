@@ -54,6 +54,15 @@ public:
     /// Initialises poses (done(), end] by odometry and solves the trailing window ending at `end`.
     /// Precondition: done() < end < size().
     void SolveChunk(std::size_t end);
+    /// A look-ahead solve for a causal output: the trailing window ending at `end` solved as
+    /// SolveChunk(end) would, on a copy; the state, done() and the chunk sequence are unchanged.
+    struct Preview {
+        std::size_t first = 0;            ///< the window's first pose
+        std::vector<PoseState> poses;     ///< poses [first, end]; empty if the solve failed
+        std::vector<double> scales;       ///< scale segments [0, segment of end]
+    };
+    /// Precondition: done() < end < size().
+    Preview SolvePreview(std::size_t end);
     /// Solves chunks until every appended pose is corrected.
     void SolveRemaining(const ProgressCallback& progress = {});
     /// Final whole-trajectory solve with the hard corridor (if config.refine) and the outcome.
@@ -71,6 +80,10 @@ private:
     std::vector<double> dist_;
     std::size_t done_ = 0;
     std::size_t window_first_ = 1;
+    Preview last_preview_;              ///< warm start of the next preview
+    std::size_t last_preview_end_ = 0;
+    /// First pose of the trailing window that ends at `end`.
+    std::size_t WindowFirst(std::size_t end) const;
     CorrectionResult stats_;
 };
 

@@ -12,6 +12,11 @@
 //    solution plus the dead-reckoned new poses. Its solution replaces the causal estimates of the
 //    window's poses, and the poses pushed meanwhile are re-composed onto it, so later outputs
 //    continue from the corrected state. Already returned outputs are not changed (causal).
+//  - Between chunk ends, every update_fraction * chunk_m of path, the trailing window ending at the newest pose is
+//    solved once more for the causal output only (IncrementalCorrector::SolvePreview: on a copy,
+//    the chunk sequence is unchanged); its poses replace the causal estimates as a chunk solve's
+//    would, so the output follows the map between chunks instead of dead-reckoning up to chunk_m.
+//    In the threaded mode a preview that is no longer the newest queued job is skipped.
 //  - Poses leaving the window are summarised, not forgotten, in what the window keeps fixed: the
 //    boundary pose (treated as exact: no marginalisation prior/covariance is carried) and the
 //    step-length scale of earlier segments, tied to the window's scale by the scale random walk.
@@ -58,6 +63,9 @@ struct OnlineConfig {
     /// smoothed poses), along the corridor distance gradient, in at most 3 Newton steps. Only the
     /// output is moved; the solver state is not.
     bool project_output = true;
+    /// Path between look-ahead solves for the causal output, as a share of corrector.chunk_m
+    /// (0.125: every 10 m with the road chunks of 80 m); 0: only the chunk solves.
+    double update_fraction = 0.125;
 
     /// Empty if valid, else a message naming the bad field.
     std::string Validate() const;
@@ -120,11 +128,19 @@ private:
     double FrontScale(int segment) const;
     /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
     bool ProjectOutput(PoseState& pose) const;
+    struct Job {  ///< a solve for the worker: a chunk end, or a preview ending at `end`
+        std::size_t end = 0;
+        bool preview = false;
+    };
     void UpdateChunks(std::size_t index);
+    void Schedule(Job job);
     void WorkerLoop();
-    void SolveQueuedChunk(std::size_t end);
+    void RunJob(const Job& job);
+    void AppendQueued(std::size_t end);
     void EnsureSolver(std::vector<Entry>& entries);
+    void Recompose(std::size_t end);
     void Merge();
+    void MergePreview(std::size_t end, const IncrementalCorrector::Preview& p);
 
     const TraversableField* field_;
     OnlineConfig cfg_;
@@ -134,7 +150,8 @@ private:
     // Push-thread-only state (never touched by the worker).
     std::optional<bool> has_yaw_;
     bool heading_known_ = false;  ///< without yaw: a moving step has been seen
-    double last_t_s_ = 0.0, last_yaw_u_ = 0.0, path_m_ = 0.0, chunk_start_path_m_ = 0.0;
+    double last_t_s_ = 0.0, last_yaw_u_ = 0.0, path_m_ = 0.0, chunk_start_path_m_ = 0.0,
+           update_path_m_ = 0.0;
     Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
     std::size_t chunk_start_ = 0;
     std::vector<double> t_s_;
@@ -144,7 +161,7 @@ private:
     std::condition_variable wake_;
     std::deque<Entry> pending_;           ///< accepted poses not yet handed to the solver
     std::size_t pending_first_ = 0;       ///< stream index of pending_.front()
-    std::deque<std::size_t> chunk_ends_;  ///< completed chunks not yet solved
+    std::deque<Job> jobs_;                ///< solves not yet run, in order
     std::vector<PoseState> current_;      ///< latest estimate of every accepted pose
     std::vector<StepObservation> steps_;  ///< observation of every accepted pose
     std::vector<int> segment_;            ///< scale segment of every accepted pose

@@ -13,6 +13,7 @@
 #include "driftcorr/mapping/surface_field.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/corrector.h"
+#include "driftcorr/optim/online_corrector.h"
 #include "driftcorr/optim/paper_solver.h"
 
 namespace driftcorr::pipeline {
@@ -39,12 +40,15 @@ struct PipelineConfig {
     PaperSolverConfig paper;     ///< used by Solver::kPaper (params.yaml section `paper`)
     RoadClassConfig roads;
     RoadFieldConfig field;
+    /// driftcorr stream and the online method of eval (section `online`); its `corrector` is
+    /// not read from the file: the mode's corrector above is used.
+    OnlineConfig online;
 
     std::string Validate() const;
 };
 
 /// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`, `indoor_model`,
-/// `indoor_corrector`, `indoor_field`). Unknown keys are errors
+/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`). Unknown keys are errors
 /// (a misspelt parameter must not be ignored). Throws InputError naming file, line and key.
 PipelineConfig LoadPipelineConfig(const std::string& path);
 
