@@ -1,0 +1,116 @@
+// What a map cannot correct: the along-track error on a drive's final straight.
+//
+// A road (or corridor) map constrains a trajectory across the road everywhere, but along it only
+// where the road turns. After the drive's last turn, no map term (and no later measurement) says
+// how far the platform went: a corrector can only carry on with the estimate's steps times the
+// step-length scale it learned before the straight. When the odometry's scale changes on that
+// straight, the error it leaves is beyond any map-only corrector, however good.
+//
+// For each scenario with ground truth this prints, from the ground truth and the estimate only
+// (no correction is run):
+//  - the final straight: the longest tail of the drive whose ground-truth direction (over 5 m
+//    chords) stays within 10 deg of the final direction; its first pose and length;
+//  - the scale before it: ground-truth path / estimate path over the 500 m of path before it
+//    (the best scale a corrector could have learned), and the scale on the straight itself;
+//  - the bound: a corrector that is exact at the start of the straight and then moves along the
+//    road by the estimate's steps times the scale before it. Its along-track error at the end is
+//    the lower bound on the final error; RMS over the whole drive (zero error before the
+//    straight) is the lower bound on the ATE that the straight alone contributes.
+//
+// Run: build/tests/final_straight [scenario dir ...]  (default: the 7 KITTI scenarios)
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/angles.h"
+#include "driftcorr/pipeline/pipeline.h"
+
+namespace {
+
+using namespace driftcorr;
+
+constexpr double kChordM = 5.0;         // direction of travel measured over this much path
+double kStraightDeg = 10.0;  // a straight keeps within this of the final direction (env STRAIGHT_DEG)
+constexpr double kScaleWindowM = 500.0; // path before the straight for its scale
+
+std::vector<double> PathLength(const PlanarTrajectory& t) {
+    std::vector<double> s(t.size(), 0.0);
+    for (std::size_t i = 1; i < t.size(); ++i) s[i] = s[i - 1] + (t.p_en[i] - t.p_en[i - 1]).norm();
+    return s;
+}
+
+// Direction of travel at pose i: the chord to the first pose kChordM further on (or from the
+// first pose kChordM back, near the end). NaN while the platform stands.
+double Direction(const PlanarTrajectory& t, const std::vector<double>& s, std::size_t i) {
+    std::size_t j = i;
+    while (j + 1 < t.size() && s[j] - s[i] < kChordM) ++j;
+    std::size_t k = i;
+    if (s[j] - s[i] < kChordM) {
+        j = i;
+        while (k > 0 && s[i] - s[k] < kChordM) --k;
+    }
+    const Eigen::Vector2d d = t.p_en[j] - t.p_en[k];
+    return d.norm() < 0.5 * kChordM ? std::nan("") : std::atan2(d.y(), d.x());
+}
+
+void Evaluate(const std::string& dir) {
+    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(dir, {});
+    if (!ps.ground_truth) {
+        std::printf("%-30s no ground truth\n", ps.scenario.name.c_str());
+        return;
+    }
+    const PlanarTrajectory& gt = *ps.ground_truth;
+    const PlanarTrajectory& est = ps.estimate;
+    const std::size_t n = gt.size();
+    const std::vector<double> sg = PathLength(gt), se = PathLength(est);
+    // The final direction, from the last moving chord.
+    double final_dir = std::nan("");
+    for (std::size_t i = n; i-- > 0 && std::isnan(final_dir);) final_dir = Direction(gt, sg, i);
+    std::size_t k = n - 1;
+    while (k > 0) {
+        const double d = Direction(gt, sg, k - 1);
+        if (!std::isnan(d) && std::abs(AngleDiff(d, final_dir)) > DegToRad(kStraightDeg)) break;
+        --k;
+    }
+    std::size_t b = k;
+    while (b > 0 && sg[k] - sg[b] < kScaleWindowM) --b;
+    const double scale_before = (sg[k] - sg[b]) / std::max(se[k] - se[b], 1e-9);
+    const double scale_on = (sg[n - 1] - sg[k]) / std::max(se[n - 1] - se[k], 1e-9);
+    double sum_sq = 0.0, final_err = 0.0;
+    for (std::size_t i = k; i < n; ++i) {
+        const double e = (sg[i] - sg[k]) - scale_before * (se[i] - se[k]);
+        sum_sq += e * e;
+        final_err = std::abs(e);
+    }
+    std::printf("%-30s straight from pose %5zu of %5zu, %6.0f m | scale before %.3f, on it %.3f | "
+                "bound: final >= %6.1f m, ATE >= %5.2f m\n",
+                ps.scenario.name.c_str(), k, n, sg[n - 1] - sg[k], scale_before, scale_on,
+                final_err, std::sqrt(sum_sq / double(n)));
+    std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (const char* d = std::getenv("STRAIGHT_DEG")) kStraightDeg = std::atof(d);
+    std::vector<std::string> dirs(argv + 1, argv + argc);
+    if (dirs.empty()) {
+        for (const char* s : {"kitti00_cvo_stereo_geometric", "kitti05_cvo_stereo_geometric",
+                              "kitti07_cvo_stereo_geometric", "kitti00_gicp_frame2frame",
+                              "kitti05_gicp_frame2frame", "kitti07_gicp_frame2frame",
+                              "kitti00_orb2_longruidong"}) {
+            dirs.push_back(std::string(DRIFTCORR_SHARED_DATASETS) + "/" + s);
+        }
+    }
+    for (const std::string& d : dirs) {
+        if (!std::filesystem::exists(d)) {
+            std::printf("%s: not found, skipped\n", d.c_str());
+            continue;
+        }
+        Evaluate(d);
+    }
+    return 0;
+}
