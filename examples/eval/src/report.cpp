@@ -208,7 +208,7 @@ namespace {
 std::vector<std::string> MdMethodHeaders(Method m) {
     const std::string n = ToString(m);
     std::vector<std::string> h = {n + " ATE [m]", "final [m]", "max [m]", "p90 [m]", "drift [%]",
-                                  "map [m]"};
+                                  "right floor [%]", "map [m]"};
     if (m != Method::kEstimate) {
         h.push_back("time [s]");
         h.push_back("poses/s");
@@ -230,8 +230,9 @@ std::vector<std::string> MdMethodCells(const ScenarioEvaluation& ev, Method m) {
                                r->metrics->p90_m, r->metrics->drift_pct}) {
             c.push_back(Num(v));
         }
+        c.push_back(ev.mode == "indoor3d" ? Num(100.0 * r->metrics->floor_accuracy, 1) : "-");
     } else {
-        c.assign(5, "n/a");
+        c.assign(6, "n/a");
     }
     c.push_back(r->mean_map_distance_m ? Num(*r->mean_map_distance_m) : "-");
     if (m != Method::kEstimate) {
@@ -250,7 +251,8 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
         << "Horizontal errors against the ground truth, pose by pose, in the world East-North plane "
            "through the scenario's anchor, without re-alignment (FORMAT.md, \"Judging\"). ATE = RMS "
            "error, final = error of the last pose, p90 = 90th percentile, drift = KITTI translational "
-           "drift over 100-800 m segments, map = mean distance of the poses to the nearest road "
+           "drift over 100-800 m segments, right floor = share of poses within 1.5 m of the ground "
+           "truth's height (indoor3d), map = mean distance of the poses to the nearest road "
            "centre line, time = solver wall time (map field and loading excluded, shared by all "
            "methods).\n\n";
     std::vector<std::string> header = {"scenario", "mode", "poses", "ground truth"};
@@ -423,7 +425,8 @@ std::string MapSvg(const ScenarioEvaluation& ev) {
     s << "</g>\n";
     // Legend (top left) with the ATE of each method.
     std::vector<std::pair<std::string, std::string>> legend;
-    legend.push_back({"#d4d4d4", "roads (map)"});
+    legend.push_back(
+        {"#d4d4d4", ev.mode == "indoor3d" ? "walkways of the walk's floor (map)" : "roads (map)"});
     if (ev.ground_truth) legend.push_back({"#000", "ground truth (start: circle)"});
     for (const MethodResult& r : ev.methods) {
         std::string text = ToString(r.method);
