@@ -1,6 +1,7 @@
 // The online corrector: causal and smoothed quality against the batch corrector on a synthetic
 // scenario, every kind of bad input, and `driftcorr stream` through a real pipe.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -268,6 +269,23 @@ TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
     EXPECT_NE(err.find("line 44"), std::string::npos) << err;
     EXPECT_EQ(io::ReadTum(dir + "/out.tum").size(), 40u);
     EXPECT_EQ(io::ReadTum(dir + "/smoothed.tum").size(), 40u);
+}
+
+// An unwritable --smoothed-out is refused before the first pose is read (exit 2), not after an
+// hour of streaming.
+TEST_F(OnlineSynthetic, SmoothedOutIsCheckedBeforeStreaming) {
+    const std::string dir = TmpDir("smoothed_out");
+    fs::create_directories(dir);
+    const std::string cmd = "echo '1 0 0 0 0 0 0 1' | " + std::string(DRIFTCORR_BINARY_DIR) +
+                            "/examples/driftcorr stream " + *dir_ + " --smoothed-out " + dir +
+                            "/missing/smoothed.tum > " + dir + "/out.tum 2> " + dir + "/err.txt";
+    const int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2);
+    const std::string err = Slurp(dir + "/err.txt");
+    EXPECT_NE(err.find("--smoothed-out"), std::string::npos) << err;
+    EXPECT_NE(err.find("does not exist"), std::string::npos) << err;
+    EXPECT_EQ(Slurp(dir + "/out.tum"), "");
 }
 
 }  // namespace

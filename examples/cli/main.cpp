@@ -134,29 +134,11 @@ std::vector<driftcorr::GeoPoint> ToGeo(const driftcorr::pipeline::WorldFrame& w,
     return out;
 }
 
-// An output path must be creatable before any work is done: an existing folder, a missing or
-// read-only parent folder are bad input (exit 2), not an internal error after the correction.
-void CheckOutputPath(const std::string& path, const std::string& option) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) {
-        throw driftcorr::InputError(path, 0, option, "is a folder, expected an output file path");
-    }
-    const fs::path parent = fs::path(path).parent_path();
-    const std::string dir = parent.empty() ? "." : parent.string();
-    if (!fs::is_directory(dir, ec)) {
-        throw driftcorr::InputError(path, 0, option, "folder '" + dir + "' does not exist");
-    }
-    if (::access(dir.c_str(), W_OK) != 0) {
-        throw driftcorr::InputError(path, 0, option, "folder '" + dir + "' is not writable");
-    }
-}
-
 int RunCorrect(const Args& a) {
     using namespace driftcorr;
-    CheckOutputPath(a.output, "-o");
+    driftcorr::cli::CheckOutputPath(a.output, "-o");
     if (!a.geojson.empty()) {
-        CheckOutputPath(a.geojson, "--geojson");
+        driftcorr::cli::CheckOutputPath(a.geojson, "--geojson");
         std::error_code ec;
         if (a.geojson == a.output || std::filesystem::equivalent(a.geojson, a.output, ec)) {
             throw InputError(a.geojson, 0, "--geojson", "is the same file as -o");

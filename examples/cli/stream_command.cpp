@@ -174,6 +174,7 @@ void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
 }
 
 int RunStream(const StreamArgs& a) {
+    if (!a.smoothed_out.empty()) CheckOutputPath(a.smoothed_out, "--smoothed-out");
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
     const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(a.scenario, cfg);
