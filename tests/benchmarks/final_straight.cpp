@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "driftcorr/core/angles.h"
+#include "scenario_list.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace {
@@ -96,21 +97,5 @@ void Evaluate(const std::string& dir) {
 
 int main(int argc, char** argv) {
     if (const char* d = std::getenv("STRAIGHT_DEG")) kStraightDeg = std::atof(d);
-    std::vector<std::string> dirs(argv + 1, argv + argc);
-    if (dirs.empty()) {
-        for (const char* s : {"kitti00_cvo_stereo_geometric", "kitti05_cvo_stereo_geometric",
-                              "kitti07_cvo_stereo_geometric", "kitti00_gicp_frame2frame",
-                              "kitti05_gicp_frame2frame", "kitti07_gicp_frame2frame",
-                              "kitti00_orb2_longruidong"}) {
-            dirs.push_back(std::string(DRIFTCORR_SHARED_DATASETS) + "/" + s);
-        }
-    }
-    for (const std::string& d : dirs) {
-        if (!std::filesystem::exists(d)) {
-            std::printf("%s: not found, skipped\n", d.c_str());
-            continue;
-        }
-        Evaluate(d);
-    }
-    return 0;
+    return driftcorr::bench::ForEachScenario(argc, argv, Evaluate);
 }
