@@ -54,8 +54,9 @@ public:
     /// Initialises poses (done(), end] by odometry and solves the trailing window ending at `end`.
     /// Precondition: done() < end < size().
     void SolveChunk(std::size_t end);
-    /// A look-ahead solve for a causal output: the trailing window ending at `end` solved as
-    /// SolveChunk(end) would, on a copy; the state, done() and the chunk sequence are unchanged.
+    /// A look-ahead solve for a causal output: the trailing window ending at `end` solved once
+    /// (no restarts) on a copy, warm-started from the previous preview; the state, done() and the
+    /// chunk sequence are unchanged. `poses` is empty when Ipopt did not converge.
     struct Preview {
         std::size_t first = 0;            ///< the window's first pose
         std::vector<PoseState> poses;     ///< poses [first, end]; empty if the solve failed
