@@ -146,7 +146,7 @@ TEST(SurfaceReaders, PcdHeaderIsCheckedBeforePclSeesIt) {
     EXPECT_EQ(ReadSurfacePointsPcd(pcd("ok.pcd", "x y z", "0 0 0 1 0 0 0")).size(), 1u);
     const std::string vtab = pcd("vtab.pcd", "x\vy z w", "0 0 0 1 0 0 0");
     ExpectInputError([&] { ReadSurfacePointsPcd(vtab); }, vtab, "control or non-ASCII byte");
-    const std::string nul = pcd("nul.pcd", std::string("x y\0\x01 z", 9), "0 0 0 1 0 0 0");
+    const std::string nul = pcd("nul.pcd", std::string("x y") + '\0' + "\x01 z", "0 0 0 1 0 0 0");
     ExpectInputError([&] { ReadSurfacePointsPcd(nul); }, nul, "control or non-ASCII byte");
     const std::string trailing = pcd("trailing.pcd", "x y z ", "0 0 0 1 0 0 0");
     ExpectInputError([&] { ReadSurfacePointsPcd(trailing); }, trailing, "single-blank separated");
