@@ -174,8 +174,8 @@ bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
 }
 
 // Completes a chunk at `index` by the batch rule and hands it to the solver; otherwise, every
-// update_fraction * chunk_m of path, asks for a preview ending at `index`. Without headings, nothing is solved
-// before the first moving step (the poses' heading is not known yet).
+// update_fraction * chunk_m of path, asks for a preview ending at `index`. Without headings,
+// nothing is solved before the first moving step (the poses' heading is not known yet).
 void OnlineCorrector::UpdateChunks(std::size_t index) {
     if (index == 0 || (has_yaw_ && !*has_yaw_ && !heading_known_)) return;
     if (path_m_ - chunk_start_path_m_ >= cfg_.corrector.chunk_m ||

@@ -34,7 +34,8 @@ namespace {
 using namespace driftcorr;
 
 constexpr double kChordM = 5.0;         // direction of travel measured over this much path
-double kStraightDeg = 10.0;  // a straight keeps within this of the final direction (env STRAIGHT_DEG)
+// A straight keeps within this of the final direction [deg] (environment STRAIGHT_DEG).
+double kStraightDeg = 10.0;
 constexpr double kScaleWindowM = 500.0; // path before the straight for its scale
 
 std::vector<double> PathLength(const PlanarTrajectory& t) {

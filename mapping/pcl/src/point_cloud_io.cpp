@@ -131,7 +131,8 @@ void PrecheckPcdAsciiBody(const std::string& path, std::istream& in, long header
             char* stop = nullptr;
             std::strtod(word.c_str(), &stop);
             if (word.empty() || stop != word.c_str() + word.size()) {
-                bad("'" + word.substr(0, 20) + "' is not a number (values are separated by single blanks)");
+                bad("'" + word.substr(0, 20) +
+                    "' is not a number (values are separated by single blanks)");
             }
             ++count;
             if (end == line.size()) break;
@@ -217,8 +218,9 @@ void PrecheckPcdHeader(const std::string& path) {
         bad(0, "FIELDS, SIZE, TYPE and COUNT must list one entry per field");
     }
     for (const std::string& name : keys["FIELDS"]) {
-        if (name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") !=
-            std::string::npos) {
+        static const char* kNameChars =
+            "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_";
+        if (name.find_first_not_of(kNameChars) != std::string::npos) {
             bad(0, "field name '" + name + "' is not made of letters, digits and '_'");
         }
     }

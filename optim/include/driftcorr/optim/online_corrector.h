@@ -12,11 +12,12 @@
 //    solution plus the dead-reckoned new poses. Its solution replaces the causal estimates of the
 //    window's poses, and the poses pushed meanwhile are re-composed onto it, so later outputs
 //    continue from the corrected state. Already returned outputs are not changed (causal).
-//  - Between chunk ends, every update_fraction * chunk_m of path, the trailing window ending at the newest pose is
-//    solved once more for the causal output only (IncrementalCorrector::SolvePreview: on a copy,
-//    the chunk sequence is unchanged); its poses replace the causal estimates as a chunk solve's
-//    would, so the output follows the map between chunks instead of dead-reckoning up to chunk_m.
-//    In the threaded mode a preview that is no longer the newest queued job is skipped.
+//  - Between chunk ends, every update_fraction * chunk_m of path, the trailing window ending at
+//    the newest pose is solved once more for the causal output only (a preview:
+//    IncrementalCorrector::SolvePreview, on a copy, one solve without restarts; the chunk sequence
+//    is unchanged). Its poses replace the causal estimates as a chunk solve's would, so the output
+//    follows the map between chunks instead of dead-reckoning up to chunk_m. In the threaded mode
+//    a preview that is no longer the newest queued job is skipped.
 //  - Poses leaving the window are summarised, not forgotten, in what the window keeps fixed: the
 //    boundary pose (treated as exact: no marginalisation prior/covariance is carried) and the
 //    step-length scale of earlier segments, tied to the window's scale by the scale random walk.
