@@ -1,7 +1,11 @@
 #include "voxel_corridor.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
 
 namespace driftcorr::internal {
 namespace {
@@ -64,6 +68,32 @@ std::vector<float> CorridorField(const GridSpec& s, const Mask& inside, float tr
     }
     for (float& v : corridor) v = std::clamp(v, -trunc, trunc);
     return corridor;
+}
+
+GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what) {
+    GridSpec s;
+    s.resolution_m = c.resolution_m;
+    s.resolution_z_m = c.resolution_z_m;
+    const int kz = std::max(2, int(std::ceil(c.vertical_margin_m / c.resolution_z_m)));
+    s.origin_m = Eigen::Vector3d(box.min().x() - c.margin_m, box.min().y() - c.margin_m,
+                                 box.min().z() - kz * c.resolution_z_m);
+    s.nx = std::max(4, int(std::ceil((box.sizes().x() + 2.0 * c.margin_m) / c.resolution_m)) + 1);
+    s.ny = std::max(4, int(std::ceil((box.sizes().y() + 2.0 * c.margin_m) / c.resolution_m)) + 1);
+    s.nz = int(std::ceil(box.sizes().z() / c.resolution_z_m - 1e-9)) + 2 * kz + 1;
+    // Peak bytes per voxel: centre and corridor (4 + 4), the EDT's buffer (4), two masks.
+    const double mb = double(s.size()) * 14.0 / (1024.0 * 1024.0);
+    if (mb > c.max_memory_mb) {
+        const double fit = c.resolution_m * std::sqrt(mb / c.max_memory_mb) * 1.01;
+        std::ostringstream msg;
+        msg << what << " distance field of " << s.nx << " x " << s.ny << " x " << s.nz
+            << " voxels at " << c.resolution_m << " m (vertical " << c.resolution_z_m
+            << " m) needs about " << std::setprecision(2) << mb << std::setprecision(6)
+            << " MB, more than max_memory_mb = " << c.max_memory_mb
+            << "; a horizontal resolution of " << std::ceil(fit * 100.0) / 100.0
+            << " m or coarser would fit (or coarsen resolution_z_m, shrink margin_m)";
+        throw std::invalid_argument(msg.str());
+    }
+    return s;
 }
 
 }  // namespace driftcorr::internal

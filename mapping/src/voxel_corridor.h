@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "driftcorr/mapping/grid.h"
 
 namespace driftcorr::internal {
@@ -12,6 +14,17 @@ namespace driftcorr::internal {
 /// +/- trunc: outside, the 3D distance to the set minus half a cell; inside, minus the
 /// horizontal distance to the nearest outside voxel of the same slice, plus half a cell (how far
 /// from the walls). The zero level lies between the last inside and the first outside voxel.
+/// The size settings both voxel fields share (IndoorFieldConfig, SurfaceFieldConfig).
+struct VoxelGridSize {
+    double resolution_m, resolution_z_m, margin_m, vertical_margin_m, max_memory_mb;
+};
+
+/// The grid over `box` grown by margin_m horizontally and by at least two layers (and
+/// vertical_margin_m) vertically, at least 4 x 4 cells. Throws std::invalid_argument when it
+/// would need more than max_memory_mb, saying which horizontal resolution would fit; `what`
+/// names the field in that message ("indoor", "surface").
+GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what);
+
 std::vector<float> CorridorField(const GridSpec& s, const std::vector<std::uint8_t>& inside,
                                  float trunc);
 
