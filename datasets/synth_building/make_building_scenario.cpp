@@ -2,22 +2,20 @@
 // (building.pcd/.ply/.bt, ground_truth.tum, estimate.tum, scenario.yaml, scenario_ply.yaml,
 // scenario_octomap.yaml) into a folder. See datasets/README.md, "Synthetic building".
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include "building.h"
 #include "driftcorr/core/angles.h"
 #include "driftcorr/mapping/surface_io.h"
+#include "synth_common.h"
 #include "walk.h"
 
 namespace driftcorr::synth {
@@ -35,20 +33,6 @@ struct Options {
     PdrDriftConfig drift;
 };
 
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 2)))
-#endif
-std::string
-Format(const char* fmt, ...) {
-    char buffer[512];
-    va_list args;
-    va_start(args, fmt);
-    const int n = std::vsnprintf(buffer, sizeof(buffer), fmt, args);
-    va_end(args);
-    if (n < 0 || n >= int(sizeof(buffer))) throw std::logic_error("Format overflow");
-    return std::string(buffer, std::size_t(n));
-}
-
 void PrintUsage(std::FILE* stream) {
     const PdrDriftConfig d;
     std::fprintf(stream,
@@ -65,64 +49,16 @@ void PrintUsage(std::FILE* stream) {
                  d.heading_bias_deg_per_sqrt_s, d.height_drift_m_per_sqrt_s);
 }
 
-std::optional<double> ParseDouble(const char* text) {
-    char* end = nullptr;
-    errno = 0;
-    const double value = std::strtod(text, &end);
-    if (end == text || *end != '\0' || errno != 0 || !std::isfinite(value)) return std::nullopt;
-    return value;
-}
-
-std::string ApplyFlag(const std::string& flag, const char* value, Options& opt) {
-    if (flag == "--seed") {
-        char* end = nullptr;
-        errno = 0;
-        const unsigned long long seed = std::strtoull(value, &end, 10);
-        if (*value < '0' || *value > '9' || *end != '\0' || errno != 0) {
-            return "--seed: not an unsigned integer: " + std::string(value);
-        }
-        opt.drift.seed = seed;
-        return "";
-    }
-    double* target = nullptr;
-    if (flag == "--scale-error") target = &opt.drift.scale_error;
-    if (flag == "--heading-bias-deg-per-sqrt-s") target = &opt.drift.heading_bias_deg_per_sqrt_s;
-    if (flag == "--height-drift-m-per-sqrt-s") target = &opt.drift.height_drift_m_per_sqrt_s;
-    if (target == nullptr) return "unknown option: " + flag;
-    const auto number = ParseDouble(value);
-    if (!number) return flag + ": not a finite number: " + value;
-    *target = *number;
-    return "";
-}
-
 std::string ParseArgs(int argc, char** argv, Options& opt) {
-    for (int i = 1; i < argc; ++i) {
-        const std::string arg = argv[i];
-        if (arg.empty() || arg[0] != '-') {
-            if (!opt.out_dir.empty()) return "more than one output folder: " + arg;
-            opt.out_dir = arg;
-            continue;
-        }
-        if (i + 1 >= argc) return arg + ": missing value";
-        const std::string error = ApplyFlag(arg, argv[++i], opt);
-        if (!error.empty()) return error;
-    }
-    if (opt.out_dir.empty()) return "missing <out_dir>";
-    return opt.drift.Validate();
-}
-
-void WriteAtomically(const std::string& path, const std::string& content) {
-    const std::string tmp_path = path + ".tmp";
-    {
-        std::ofstream out(tmp_path, std::ios::binary | std::ios::trunc);
-        out.write(content.data(), std::streamsize(content.size()));
-        out.close();
-        if (!out) throw std::runtime_error(tmp_path + ": cannot write");
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp_path, path, ec);
-    if (ec)
-        throw std::runtime_error(path + ": cannot rename from " + tmp_path + ": " + ec.message());
+    const std::string error = ParseGeneratorArgs(argc, argv, opt.out_dir, [&](const std::string& flag,
+                                                                              const char* value) {
+        return ApplySeedOrNumberFlag(
+            flag, value, opt.drift.seed,
+            {{"--scale-error", &opt.drift.scale_error},
+             {"--heading-bias-deg-per-sqrt-s", &opt.drift.heading_bias_deg_per_sqrt_s},
+             {"--height-drift-m-per-sqrt-s", &opt.drift.height_drift_m_per_sqrt_s}});
+    });
+    return error.empty() ? opt.drift.Validate() : error;
 }
 
 void WriteTumFile(const std::string& path, const std::vector<WalkPose>& poses) {

@@ -117,23 +117,6 @@ std::vector<WalkPose> SimulateWalk(const BuildingLayout& b, const WalkConfig& co
     return poses;
 }
 
-double NormalSampler::Uniform01() {
-    constexpr double kTwoPow53 = 9007199254740992.0;
-    return (static_cast<double>(engine_() >> 11) + 1.0) / kTwoPow53;
-}
-
-double NormalSampler::Next() {
-    if (has_spare_) {
-        has_spare_ = false;
-        return spare_;
-    }
-    const double radius = std::sqrt(-2.0 * std::log(Uniform01()));
-    const double angle_rad = 2.0 * kPi * Uniform01();
-    spare_ = radius * std::sin(angle_rad);
-    has_spare_ = true;
-    return radius * std::cos(angle_rad);
-}
-
 std::string PdrDriftConfig::Validate() const {
     if (!(scale_error >= 0.5 && scale_error <= 1.5)) return "scale_error: must be in [0.5, 1.5]";
     if (!(step_noise_rel >= 0.0 && step_noise_rel <= 0.2)) {
@@ -153,15 +136,6 @@ std::string PdrDriftConfig::Validate() const {
     }
     return "";
 }
-
-namespace {
-
-Eigen::Vector2d Rotate(double yaw_rad, const Eigen::Vector2d& v) {
-    const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
-    return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
-}
-
-}  // namespace
 
 std::vector<WalkPose> IntegrateDriftingPdr(const std::vector<WalkPose>& ground_truth,
                                            const PdrDriftConfig& config) {

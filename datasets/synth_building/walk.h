@@ -4,11 +4,11 @@
 // std::normal_distribution differs between standard libraries).
 #include <Eigen/Core>
 #include <cstdint>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "building.h"
+#include "synth_common.h"
 
 namespace driftcorr::synth {
 
@@ -31,19 +31,6 @@ struct WalkConfig {
 /// the lift up to floor 2 (standing in the cabin; z changes with no horizontal motion), a
 /// corridor and a room, then both flights down and back along the corridor of floor 0.
 std::vector<WalkPose> SimulateWalk(const BuildingLayout& b, const WalkConfig& config);
-
-/// Standard normal samples by the Box-Muller transform on std::mt19937_64.
-class NormalSampler {
-public:
-    explicit NormalSampler(std::uint64_t seed) : engine_(seed) {}
-    double Next();
-
-private:
-    double Uniform01();  ///< in (0, 1], never 0 (so log() is finite)
-    std::mt19937_64 engine_;
-    double spare_ = 0.0;
-    bool has_spare_ = false;
-};
 
 struct PdrDriftConfig {
     std::uint64_t seed = 7;  ///< seed of the noise; building and ground truth do not depend on it

@@ -1,14 +1,12 @@
 // driftcorr_make_road_scenario: writes the deterministic synthetic road scenario (map.osm,
 // ground_truth.tum, estimate.tum, scenario.yaml) into a folder. See datasets/README.md.
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +15,7 @@
 #include "odometry_drift.h"
 #include "road_network.h"
 #include "scenario_files.h"
+#include "synth_common.h"
 
 namespace driftcorr::synth {
 namespace {
@@ -49,56 +48,16 @@ void PrintUsage(std::FILE* stream) {
         drift.scale_error, drive.duration_s);
 }
 
-std::optional<double> ParseDouble(const char* text) {
-    char* end = nullptr;
-    errno = 0;
-    const double value = std::strtod(text, &end);
-    if (end == text || *end != '\0' || errno != 0 || !std::isfinite(value)) return std::nullopt;
-    return value;
-}
-
-std::optional<std::uint64_t> ParseSeed(const char* text) {
-    if (*text < '0' || *text > '9') return std::nullopt;  // no sign, no blanks
-    char* end = nullptr;
-    errno = 0;
-    const unsigned long long value = std::strtoull(text, &end, 10);
-    if (*end != '\0' || errno != 0) return std::nullopt;
-    return static_cast<std::uint64_t>(value);
-}
-
-/// Applies one "--flag value" pair; returns an error message, empty on success.
-std::string ApplyFlag(const std::string& flag, const char* value, Options& opt) {
-    if (flag == "--seed") {
-        const auto seed = ParseSeed(value);
-        if (!seed) return "--seed: not an unsigned integer: " + std::string(value);
-        opt.drift.seed = *seed;
-        return "";
-    }
-    double* target = nullptr;
-    if (flag == "--heading-bias-deg-per-sqrt-s") target = &opt.drift.heading_bias_deg_per_sqrt_s;
-    if (flag == "--scale-error") target = &opt.drift.scale_error;
-    if (flag == "--duration-s") target = &opt.drive.duration_s;
-    if (target == nullptr) return "unknown option: " + flag;
-    const auto number = ParseDouble(value);
-    if (!number) return flag + ": not a finite number: " + value;
-    *target = *number;
-    return "";
-}
-
 std::string ParseArgs(int argc, char** argv, Options& opt) {
-    for (int i = 1; i < argc; ++i) {
-        const std::string arg = argv[i];
-        if (arg.empty() || arg[0] != '-') {
-            if (!opt.out_dir.empty()) return "more than one output folder: " + arg;
-            opt.out_dir = arg;
-            continue;
-        }
-        if (i + 1 >= argc) return arg + ": missing value";
-        const std::string error = ApplyFlag(arg, argv[++i], opt);
-        if (!error.empty()) return error;
-    }
-    if (opt.out_dir.empty()) return "missing <out_dir>";
-    std::string error = opt.drift.Validate();
+    std::string error = ParseGeneratorArgs(argc, argv, opt.out_dir, [&](const std::string& flag,
+                                                                        const char* value) {
+        return ApplySeedOrNumberFlag(
+            flag, value, opt.drift.seed,
+            {{"--heading-bias-deg-per-sqrt-s", &opt.drift.heading_bias_deg_per_sqrt_s},
+             {"--scale-error", &opt.drift.scale_error},
+             {"--duration-s", &opt.drive.duration_s}});
+    });
+    if (error.empty()) error = opt.drift.Validate();
     if (error.empty()) error = opt.drive.Validate();
     return error;
 }

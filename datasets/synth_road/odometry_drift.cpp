@@ -8,23 +8,6 @@
 
 namespace driftcorr::synth {
 
-double NormalSampler::Uniform01() {
-    constexpr double kTwoPow53 = 9007199254740992.0;
-    return (static_cast<double>(engine_() >> 11) + 1.0) / kTwoPow53;
-}
-
-double NormalSampler::Next() {
-    if (has_spare_) {
-        has_spare_ = false;
-        return spare_;
-    }
-    const double radius = std::sqrt(-2.0 * std::log(Uniform01()));
-    const double angle_rad = 2.0 * kPi * Uniform01();
-    spare_ = radius * std::sin(angle_rad);
-    has_spare_ = true;
-    return radius * std::cos(angle_rad);
-}
-
 std::string DriftConfig::Validate() const {
     if (!(heading_bias_deg_per_sqrt_s >= 0.0 && heading_bias_deg_per_sqrt_s <= 1.0)) {
         return "heading_bias_deg_per_sqrt_s: must be in [0, 1]";
@@ -38,15 +21,6 @@ std::string DriftConfig::Validate() const {
     }
     return "";
 }
-
-namespace {
-
-Eigen::Vector2d Rotate(double yaw_rad, const Eigen::Vector2d& v) {
-    const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
-    return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
-}
-
-}  // namespace
 
 std::vector<DrivePose> IntegrateDriftingOdometry(const std::vector<DrivePose>& ground_truth,
                                                  const DriftConfig& config) {

@@ -4,27 +4,13 @@
 // small white noise. Deterministic for a seed: std::mt19937_64 and an own Box-Muller sampler (the
 // output of std::normal_distribution differs between standard libraries).
 #include <cstdint>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "drive.h"
+#include "synth_common.h"
 
 namespace driftcorr::synth {
-
-/// Standard normal samples by the Box-Muller transform on std::mt19937_64 (bit-identical for a
-/// seed on every platform with IEEE doubles and a correctly rounded libm).
-class NormalSampler {
-public:
-    explicit NormalSampler(std::uint64_t seed) : engine_(seed) {}
-    double Next();
-
-private:
-    double Uniform01();  ///< in (0, 1], never 0 (so log() is finite)
-    std::mt19937_64 engine_;
-    double spare_ = 0.0;
-    bool has_spare_ = false;
-};
 
 struct DriftConfig {
     /// Seed of the noise; the map and the ground truth do not depend on it.

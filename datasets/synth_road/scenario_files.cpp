@@ -2,43 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <stdexcept>
 
+#include "synth_common.h"
+
 #include "driftcorr/core/angles.h"
 
 namespace driftcorr::synth {
 
-std::string Format(const char* fmt, ...) {
-    char buffer[512];
-    va_list args;
-    va_start(args, fmt);
-    const int n = std::vsnprintf(buffer, sizeof(buffer), fmt, args);
-    va_end(args);
-    if (n < 0 || n >= static_cast<int>(sizeof(buffer))) throw std::logic_error("Format overflow");
-    return std::string(buffer, static_cast<std::size_t>(n));
-}
-
 namespace {
-
-/// Writes `content` to path + ".tmp", then renames it to `path`.
-void WriteAtomically(const std::string& path, const std::string& content) {
-    const std::string tmp_path = path + ".tmp";
-    {
-        std::ofstream out(tmp_path, std::ios::binary | std::ios::trunc);
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        out.close();
-        if (!out) throw std::runtime_error(tmp_path + ": cannot write");
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp_path, path, ec);
-    if (ec)
-        throw std::runtime_error(path + ": cannot rename from " + tmp_path + ": " + ec.message());
-}
 
 std::string XmlEscape(const std::string& text) {
     std::string out;

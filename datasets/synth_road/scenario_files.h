@@ -8,15 +8,9 @@
 #include "driftcorr/mapping/geodesy.h"
 #include "drive.h"
 #include "road_network.h"
+#include "synth_common.h"
 
 namespace driftcorr::synth {
-
-/// printf-style formatting into a std::string of at most 511 characters (the generator keeps the
-/// "C" locale, so numbers always use a decimal point). Throws std::logic_error when too long.
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 2)))
-#endif
-std::string Format(const char* fmt, ...);
 
 /// Writes `net` as OSM XML 0.6, nodes converted from East-North (plane's origin) to WGS84.
 /// Throws std::runtime_error naming the file when it cannot be written.
