@@ -154,34 +154,33 @@ std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f)
     return s;
 }
 
-std::map<std::string, Setter> IndoorFieldSetters(const Context& c, IndoorFieldConfig& f) {
-    std::map<std::string, Setter> s;
-    const NumberKeys num{s, c};
+// The keys both voxel fields have (IndoorFieldConfig, SurfaceFieldConfig).
+template <typename VoxelFieldConfig>
+void VoxelFieldKeys(const NumberKeys& num, VoxelFieldConfig& f) {
     num("resolution_m", &f.resolution_m);
     num("resolution_z_m", &f.resolution_z_m);
     num("device_height_m", &f.device_height_m);
     num("vertical_tolerance_m", &f.vertical_tolerance_m);
-    num("walkway_half_width_m", &f.walkway_half_width_m);
     num("margin_m", &f.margin_m);
     num("vertical_margin_m", &f.vertical_margin_m);
     num("truncation_m", &f.truncation_m);
-    num("exact_band_m", &f.exact_band_m);
     num("max_memory_mb", &f.max_memory_mb);
+}
+
+std::map<std::string, Setter> IndoorFieldSetters(const Context& c, IndoorFieldConfig& f) {
+    std::map<std::string, Setter> s;
+    const NumberKeys num{s, c};
+    VoxelFieldKeys(num, f);
+    num("walkway_half_width_m", &f.walkway_half_width_m);
+    num("exact_band_m", &f.exact_band_m);
     return s;
 }
 
 std::map<std::string, Setter> SurfaceFieldSetters(const Context& c, SurfaceFieldConfig& f) {
     std::map<std::string, Setter> s;
     const NumberKeys num{s, c};
-    num("resolution_m", &f.resolution_m);
-    num("resolution_z_m", &f.resolution_z_m);
-    num("device_height_m", &f.device_height_m);
-    num("vertical_tolerance_m", &f.vertical_tolerance_m);
+    VoxelFieldKeys(num, f);
     num("wall_clearance_m", &f.wall_clearance_m);
-    num("margin_m", &f.margin_m);
-    num("vertical_margin_m", &f.vertical_margin_m);
-    num("truncation_m", &f.truncation_m);
-    num("max_memory_mb", &f.max_memory_mb);
     return s;
 }
 
