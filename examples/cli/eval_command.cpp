@@ -21,7 +21,8 @@
 namespace driftcorr::cli {
 namespace {
 
-constexpr int kExitOk = 0, kExitUsage = 1, kExitFailed = 2, kExitInternal = 4;
+/// Some scenario could not be evaluated (bad input, or a method failed): exit 2.
+constexpr int kExitFailed = kExitBadInput;
 
 const char* kEvalUsage =
     "usage: driftcorr eval <scenario dir | scenario.yaml>... [-o report_dir]\n"
@@ -49,24 +50,20 @@ bool IsNonScenarioFile(const std::string& path) {
 }
 
 bool ParseEvalArgs(int argc, char** argv, EvalArgs& a, std::string& err) {
-    for (int i = 1; i < argc; ++i) {
-        const std::string arg = argv[i];
-        auto value = [&](std::string& out) {
-            if (i + 1 >= argc) { err = arg + " needs a value"; return false; }
-            out = argv[++i];
-            return true;
-        };
-        if (arg == "-o" || arg == "--output") { if (!value(a.report_dir)) return false; }
-        else if (arg == "--config") { if (!value(a.config)) return false; }
-        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
-        else if (arg == "-h" || arg == "--help") { err = ""; return false; }
-        else if (!arg.empty() && arg[0] == '-') { err = "unknown option " + arg; return false; }
-        else if (IsNonScenarioFile(arg)) {
+    const OptionTable table{{{"--quiet", &a.quiet}, {"-q", &a.quiet}},
+                            {{"-o", &a.report_dir}, {"--output", &a.report_dir},
+                             {"--config", &a.config}}};
+    auto positional = [&a](const std::string& arg) -> std::string {
+        if (IsNonScenarioFile(arg)) {
             // A shell glob over a datasets folder also matches its README.md / FORMAT.md.
             std::fprintf(stderr, "driftcorr: skipping %s (not a scenario folder or .yaml file)\n",
                          arg.c_str());
-        } else a.scenarios.push_back(arg);
-    }
+        } else {
+            a.scenarios.push_back(arg);
+        }
+        return "";
+    };
+    if (!ParseOptions(argc, argv, 1, table, positional, err)) return false;
     if (a.scenarios.empty()) err = "missing scenario folder(s)";
     return err.empty();
 }

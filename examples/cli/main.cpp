@@ -19,7 +19,10 @@
 
 namespace {
 
-constexpr int kExitUsage = 1, kExitBadInput = 2, kExitSolver = 3, kExitInternal = 4;
+using driftcorr::cli::kExitBadInput;
+using driftcorr::cli::kExitInternal;
+using driftcorr::cli::kExitSolver;
+using driftcorr::cli::kExitUsage;
 
 const char* kUsage =
     "usage: driftcorr correct <scenario dir | scenario.yaml> -o <corrected.tum>\n"
@@ -47,28 +50,19 @@ bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
         err = argc < 2 ? "missing command" : std::string("unknown command '") + argv[1] + "'";
         return false;
     }
-    for (int i = 2; i < argc; ++i) {
-        const std::string arg = argv[i];
-        auto value = [&](std::string& out) {
-            if (i + 1 >= argc) { err = arg + " needs a value"; return false; }
-            out = argv[++i];
-            return true;
-        };
-        if (arg == "-o" || arg == "--output") { if (!value(a.output)) return false; }
-        else if (arg == "--config") { if (!value(a.config)) return false; }
-        else if (arg == "--geojson") { if (!value(a.geojson)) return false; }
-        else if (arg == "--solver") {
-            if (!value(a.solver)) return false;
-            if (a.solver != "driftcorr" && a.solver != "paper") {
-                err = "--solver must be driftcorr or paper, not '" + a.solver + "'";
-                return false;
-            }
-        }
-        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
-        else if (arg == "-h" || arg == "--help") { err = ""; return false; }
-        else if (!arg.empty() && arg[0] == '-') { err = "unknown option " + arg; return false; }
-        else if (a.scenario.empty()) a.scenario = arg;
-        else { err = "unexpected argument " + arg; return false; }
+    const driftcorr::cli::OptionTable table{
+        {{"--quiet", &a.quiet}, {"-q", &a.quiet}},
+        {{"-o", &a.output}, {"--output", &a.output}, {"--config", &a.config},
+         {"--geojson", &a.geojson}, {"--solver", &a.solver}}};
+    auto positional = [&a](const std::string& arg) -> std::string {
+        if (!a.scenario.empty()) return "unexpected argument " + arg;
+        a.scenario = arg;
+        return "";
+    };
+    if (!driftcorr::cli::ParseOptions(argc, argv, 2, table, positional, err)) return false;
+    if (a.solver != "driftcorr" && a.solver != "paper") {
+        err = "--solver must be driftcorr or paper, not '" + a.solver + "'";
+        return false;
     }
     if (a.scenario.empty()) err = "missing scenario";
     else if (a.output.empty()) err = "missing -o <corrected.tum>";

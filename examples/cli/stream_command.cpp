@@ -18,8 +18,6 @@
 namespace driftcorr::cli {
 namespace {
 
-constexpr int kExitUsage = 1, kExitBadInput = 2, kExitSolver = 3, kExitInternal = 4;
-
 const char* kStreamUsage =
     "usage: driftcorr stream <scenario dir | scenario.yaml> [--config params.yaml]\n"
     "                        [--replay] [--rate-hz R] [--smoothed-out smoothed.tum] [--sync] [-q]\n"
@@ -42,29 +40,23 @@ struct StreamArgs {
 };
 
 bool ParseStreamArgs(int argc, char** argv, StreamArgs& a, std::string& err) {
-    for (int i = 1; i < argc; ++i) {
-        const std::string arg = argv[i];
-        auto value = [&](std::string& out) {
-            if (i + 1 >= argc) { err = arg + " needs a value"; return false; }
-            out = argv[++i];
-            return true;
-        };
-        std::string rate;
-        if (arg == "--config") { if (!value(a.config)) return false; }
-        else if (arg == "--smoothed-out") { if (!value(a.smoothed_out)) return false; }
-        else if (arg == "--rate-hz") {
-            if (!value(rate)) return false;
-            char* end = nullptr;
-            a.rate_hz = std::strtod(rate.c_str(), &end);
-            if (*end != '\0' || !(a.rate_hz >= 0.0)) { err = "--rate-hz needs a number >= 0"; return false; }
+    std::string rate;
+    const OptionTable table{
+        {{"--replay", &a.replay}, {"--sync", &a.sync}, {"--quiet", &a.quiet}, {"-q", &a.quiet}},
+        {{"--config", &a.config}, {"--smoothed-out", &a.smoothed_out}, {"--rate-hz", &rate}}};
+    auto positional = [&a](const std::string& arg) -> std::string {
+        if (!a.scenario.empty()) return "unexpected argument " + arg;
+        a.scenario = arg;
+        return "";
+    };
+    if (!ParseOptions(argc, argv, 1, table, positional, err)) return false;
+    if (!rate.empty()) {
+        char* end = nullptr;
+        a.rate_hz = std::strtod(rate.c_str(), &end);
+        if (*end != '\0' || !(a.rate_hz >= 0.0)) {
+            err = "--rate-hz needs a number >= 0";
+            return false;
         }
-        else if (arg == "--replay") a.replay = true;
-        else if (arg == "--sync") a.sync = true;
-        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
-        else if (arg == "-h" || arg == "--help") { err = ""; return false; }
-        else if (!arg.empty() && arg[0] == '-') { err = "unknown option " + arg; return false; }
-        else if (a.scenario.empty()) a.scenario = arg;
-        else { err = "unexpected argument " + arg; return false; }
     }
     if (a.scenario.empty()) err = "missing scenario";
     return err.empty();
