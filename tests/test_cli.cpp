@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "driftcorr/io/trajectory_io.h"
+#include "test_support.h"
 
 namespace {
 
@@ -931,9 +932,7 @@ class CliTest : public ::testing::Test {
 protected:
     /// Generates the valid scenario once per suite, in a folder of this process.
     static void SetUpTestSuite() {
-        root_ = fs::path(DRIFTCORR_TEST_TMPDIR) / ("test_cli_" + std::to_string(::getpid()));
-        fs::remove_all(root_);
-        fs::create_directories(root_);
+        root_ = driftcorr::test::FreshProcessDir("test_cli");
         base_ = root_ / "valid_scenario";
         const RunResult gen = RunProgram(kGenerator, {base_.string(), "--duration-s", "60"}, root_);
         base_error_.clear();

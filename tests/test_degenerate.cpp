@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "driftcorr/pipeline/pipeline.h"
+#include "test_support.h"
 
 namespace fs = std::filesystem;
 using namespace driftcorr;
@@ -44,12 +45,8 @@ void WriteFields(const fs::path& p, const Lines& lines) {
 class Degenerate : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
-        base_ = fs::path(DRIFTCORR_TEST_TMPDIR) / ("degenerate_" + std::to_string(::getpid()));
-        fs::remove_all(base_);
-        fs::create_directories(base_);
-        const std::string cmd = std::string(DRIFTCORR_BINARY_DIR) +
-                                "/datasets/driftcorr_make_road_scenario " + (base_ / "base").string() +
-                                " --duration-s 60 > /dev/null";
+        base_ = test::FreshProcessDir("degenerate");
+        const std::string cmd = test::RoadGeneratorCommand(base_ / "base", "--duration-s 60");
         ASSERT_EQ(std::system(cmd.c_str()), 0);
     }
     static void TearDownTestSuite() { fs::remove_all(base_); }

@@ -11,6 +11,7 @@
 
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/pipeline/pipeline.h"
+#include "test_support.h"
 
 namespace fs = std::filesystem;
 using namespace driftcorr;
@@ -18,19 +19,16 @@ using namespace driftcorr;
 namespace {
 
 std::string TmpDir(const std::string& name) {
-    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) /
-                         ("e2e_" + std::to_string(::getpid())) / name;
+    static const fs::path root = test::FreshProcessDir("e2e");
+    const fs::path dir = root / name;
     fs::remove_all(dir);
-    fs::create_directories(dir.parent_path());
     return dir.string();
 }
 
 // Runs the committed generator into a fresh folder; returns the folder.
 std::string Generate(const std::string& name, const std::string& args) {
     const std::string dir = TmpDir(name);
-    const std::string cmd = std::string(DRIFTCORR_BINARY_DIR) +
-                            "/datasets/driftcorr_make_road_scenario " + dir + " " + args +
-                            " > /dev/null";
+    const std::string cmd = test::RoadGeneratorCommand(dir, args);
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
     return dir;
 }

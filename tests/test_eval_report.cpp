@@ -13,6 +13,7 @@
 
 #include "driftcorr/eval/evaluation.h"
 #include "driftcorr/eval/report.h"
+#include "test_support.h"
 
 namespace driftcorr::eval {
 namespace {
@@ -34,9 +35,7 @@ void WriteFile(const fs::path& path, const std::string& text) {
 class EvalReport : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
-        root_ = fs::path(DRIFTCORR_TEST_TMPDIR) / ("eval_report_" + std::to_string(::getpid()));
-        fs::remove_all(root_);
-        fs::create_directories(root_);
+        root_ = test::FreshProcessDir("eval_report");
         const std::string cmd = kGenerator + " " + (root_ / "synth").string() +
                                 " --duration-s 60 > " + (root_ / "gen.log").string();
         ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;

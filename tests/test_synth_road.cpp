@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "test_support.h"
 
 namespace {
 
@@ -80,9 +81,7 @@ double HorizontalError_m(const TumRow& a, const TumRow& b) {
 class SynthRoadTest : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
-        root_ = fs::path(DRIFTCORR_TEST_TMPDIR) / ("synth_road_" + std::to_string(::getpid()));
-        fs::remove_all(root_);
-        fs::create_directories(root_);
+        root_ = driftcorr::test::FreshProcessDir("synth_road");
         exit_a_ = RunGenerator("\"" + (root_ / "a").string() + "\"");
         exit_b_ = RunGenerator("\"" + (root_ / "b").string() + "\"");
         exit_c_ = RunGenerator("\"" + (root_ / "c").string() + "\" --seed 7");

@@ -1,0 +1,27 @@
+#pragma once
+// Helpers the test executables share: a fresh scratch folder per test process (ctest runs every
+// test in its own process, hence the process id) and the synthetic road generator.
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace driftcorr::test {
+
+/// DRIFTCORR_TEST_TMPDIR/<prefix>_<pid>, emptied and created.
+inline std::filesystem::path FreshProcessDir(const std::string& prefix) {
+    const std::filesystem::path dir =
+        std::filesystem::path(DRIFTCORR_TEST_TMPDIR) / (prefix + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+/// The command that runs the committed road generator into `dir` with `args`, output to /dev/null.
+inline std::string RoadGeneratorCommand(const std::filesystem::path& dir, const std::string& args) {
+    return std::string(DRIFTCORR_BINARY_DIR) + "/datasets/driftcorr_make_road_scenario \"" +
+           dir.string() + "\" " + args + " > /dev/null";
+}
+
+}  // namespace driftcorr::test
