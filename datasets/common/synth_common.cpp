@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -96,6 +98,28 @@ std::string ParseGeneratorArgs(
     }
     if (out_dir.empty()) return "missing <out_dir>";
     return "";
+}
+
+int GeneratorMain(int argc, char** argv, const char* name, void (*print_usage)(std::FILE*),
+                  const std::function<std::string(int, char**)>& parse,
+                  const std::function<int()>& run) {
+    constexpr int kExitFailure = 1, kExitBadArguments = 2;
+    if (argc == 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
+        print_usage(stdout);
+        return 0;
+    }
+    const std::string error = parse(argc, argv);
+    if (!error.empty()) {
+        std::fprintf(stderr, "%s: %s\n", name, error.c_str());
+        print_usage(stderr);
+        return kExitBadArguments;
+    }
+    try {
+        return run();
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: %s\n", name, e.what());
+        return kExitFailure;
+    }
 }
 
 void WriteAtomically(const std::string& path, const std::string& content) {

@@ -2,6 +2,7 @@
 // What the synthetic scenario generators (synth_road, synth_building) share: the noise source,
 // 2D rotation, command-line parsing and atomic file writing.
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <optional>
 #include <random>
@@ -52,6 +53,13 @@ std::string ApplySeedOrNumberFlag(const std::string& flag, const char* value, st
 std::string ParseGeneratorArgs(
     int argc, char** argv, std::string& out_dir,
     const std::function<std::string(const std::string& flag, const char* value)>& apply_flag);
+
+/// A generator's main(): -h/--help prints the usage to stdout (exit 0); otherwise `parse`
+/// (an error message or "") and `run`; a bad argument prints the error and the usage to stderr
+/// (exit 2), an exception from `run` its message (exit 1). Messages start with `name`.
+int GeneratorMain(int argc, char** argv, const char* name, void (*print_usage)(std::FILE*),
+                  const std::function<std::string(int, char**)>& parse,
+                  const std::function<int()>& run);
 
 /// Writes `content` to path + ".tmp", then renames it to `path` (no partial file on failure).
 /// Throws std::runtime_error naming the path.

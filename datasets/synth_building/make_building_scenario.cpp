@@ -5,8 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -21,8 +19,6 @@
 namespace driftcorr::synth {
 namespace {
 
-constexpr int kExitBadArguments = 2;
-constexpr int kExitFailure = 1;
 constexpr double kSurfaceSpacing_m = 0.1;  // point lattice of the map
 constexpr double kOctomapResolution_m = 0.1;
 constexpr double kAnchorEasting_m = 456500.0;  // EPSG:32632 (UTM 32N), Karlsruhe area
@@ -171,21 +167,8 @@ int Run(const Options& opt) {
 
 int main(int argc, char** argv) {
     using namespace driftcorr::synth;
-    if (argc == 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
-        PrintUsage(stdout);
-        return 0;
-    }
     Options opt;
-    const std::string error = ParseArgs(argc, argv, opt);
-    if (!error.empty()) {
-        std::fprintf(stderr, "driftcorr_make_building_scenario: %s\n", error.c_str());
-        PrintUsage(stderr);
-        return kExitBadArguments;
-    }
-    try {
-        return Run(opt);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "driftcorr_make_building_scenario: %s\n", e.what());
-        return kExitFailure;
-    }
+    return GeneratorMain(
+        argc, argv, "driftcorr_make_building_scenario", PrintUsage,
+        [&opt](int n, char** args) { return ParseArgs(n, args, opt); }, [&opt] { return Run(opt); });
 }

@@ -4,8 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
-#include <exception>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -23,8 +21,6 @@ namespace {
 constexpr double kAnchorLat_deg = 48.98;
 constexpr double kAnchorLon_deg = 8.39;
 constexpr double kAnchorAlt_m = 115.0;
-constexpr int kExitBadArguments = 2;
-constexpr int kExitFailure = 1;
 
 struct Options {
     std::string out_dir;
@@ -127,21 +123,8 @@ int Run(const Options& opt) {
 
 int main(int argc, char** argv) {
     using namespace driftcorr::synth;
-    if (argc == 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
-        PrintUsage(stdout);
-        return 0;
-    }
     Options opt;
-    const std::string error = ParseArgs(argc, argv, opt);
-    if (!error.empty()) {
-        std::fprintf(stderr, "driftcorr_make_road_scenario: %s\n", error.c_str());
-        PrintUsage(stderr);
-        return kExitBadArguments;
-    }
-    try {
-        return Run(opt);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "driftcorr_make_road_scenario: %s\n", e.what());
-        return kExitFailure;
-    }
+    return GeneratorMain(
+        argc, argv, "driftcorr_make_road_scenario", PrintUsage,
+        [&opt](int n, char** args) { return ParseArgs(n, args, opt); }, [&opt] { return Run(opt); });
 }
