@@ -1,5 +1,6 @@
 #include "driftcorr/mapping/grid.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -90,6 +91,24 @@ std::vector<float> SignedDistanceTransform(const GridSpec& spec,
         to_inside[i] = inside[i] ? -(to_outside[i] - half) : (to_inside[i] - half);
     }
     return to_inside;
+}
+
+double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                            const Eigen::Vector2d& b) {
+    const Eigen::Vector2d ab = b - a;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    return (a + t * ab - p).norm();
+}
+
+CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                     double reach) {
+    const double res = s.resolution_m;
+    const Eigen::Vector2d lo = a.cwiseMin(b).array() - reach, hi = a.cwiseMax(b).array() + reach;
+    return {std::max(0, int(std::floor((lo.x() - s.origin_m.x()) / res))),
+            std::max(0, int(std::floor((lo.y() - s.origin_m.y()) / res))),
+            std::min(s.nx - 1, int(std::ceil((hi.x() - s.origin_m.x()) / res))),
+            std::min(s.ny - 1, int(std::ceil((hi.y() - s.origin_m.y()) / res)))};
 }
 
 }  // namespace driftcorr

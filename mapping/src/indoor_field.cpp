@@ -67,24 +67,11 @@ void FillPolygon(const GridSpec& s, const FloorPolygon& poly, std::uint8_t value
     }
 }
 
-double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                            const Eigen::Vector2d& b) {
-    const Eigen::Vector2d ab = b - a;
-    const double len2 = ab.squaredNorm();
-    const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-    return (a + t * ab - p).norm();
-}
-
 // Marks the samples within half_width of the segment as traversable and records exact
 // distances within `reach` (>= half_width) in `exact`.
 void RasteriseWalkway(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                       double half_width, double reach, Mask& mask, std::vector<float>& exact) {
-    const double res = s.resolution_m;
-    const Eigen::Vector2d lo = a.cwiseMin(b).array() - reach, hi = a.cwiseMax(b).array() + reach;
-    const int i0 = std::max(0, int(std::floor((lo.x() - s.origin_m.x()) / res)));
-    const int j0 = std::max(0, int(std::floor((lo.y() - s.origin_m.y()) / res)));
-    const int i1 = std::min(s.nx - 1, int(std::ceil((hi.x() - s.origin_m.x()) / res)));
-    const int j1 = std::min(s.ny - 1, int(std::ceil((hi.y() - s.origin_m.y()) / res)));
+    const auto [i0, j0, i1, j1] = SegmentCells(s, a, b, reach);
     for (int j = j0; j <= j1; ++j) {
         for (int i = i0; i <= i1; ++i) {
             const double d = PointSegmentDistance(s.Position(i, j).head<2>(), a, b);

@@ -32,6 +32,18 @@ struct GridSpec {
     bool planar() const { return nz == 1; }
 };
 
+/// Distance from p to the segment ab [m].
+double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                            const Eigen::Vector2d& b);
+
+/// The horizontal cells [i0, i1] x [j0, j1] of `s` (clamped to the grid; empty when i0 > i1 or
+/// j0 > j1) whose samples can lie within `reach` of the segment ab.
+struct CellBox {
+    int i0, j0, i1, j1;
+};
+CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                     double reach);
+
 /// Exact Euclidean distance transform (Felzenszwalb & Huttenlocher 2012, separable lower
 /// envelope of parabolas, linear in the number of samples). Returns, for every sample, the
 /// distance in metres to the nearest sample whose `feature` is non-zero, or +infinity when the
