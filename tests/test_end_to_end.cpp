@@ -20,16 +20,13 @@ namespace {
 
 std::string TmpDir(const std::string& name) {
     static const fs::path root = test::FreshProcessDir("e2e");
-    const fs::path dir = root / name;
-    fs::remove_all(dir);
-    return dir.string();
+    return test::EmptySubdir(root, name);
 }
 
 // Runs the committed generator into a fresh folder; returns the folder.
 std::string Generate(const std::string& name, const std::string& args) {
     const std::string dir = TmpDir(name);
-    const std::string cmd = test::RoadGeneratorCommand(dir, args);
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    EXPECT_EQ(test::GenerateRoadScenario(dir, args), 0) << args;
     return dir;
 }
 

@@ -24,4 +24,16 @@ inline std::string RoadGeneratorCommand(const std::filesystem::path& dir, const 
            dir.string() + "\" " + args + " > /dev/null";
 }
 
+/// `root`/`name`, emptied (not created).
+inline std::string EmptySubdir(const std::filesystem::path& root, const std::string& name) {
+    const std::filesystem::path dir = root / name;
+    std::filesystem::remove_all(dir);
+    return dir.string();
+}
+
+/// Runs the road generator into `dir` with `args`; returns the exit status (0 on success).
+inline int GenerateRoadScenario(const std::string& dir, const std::string& args) {
+    return std::system(RoadGeneratorCommand(dir, args).c_str());
+}
+
 }  // namespace driftcorr::test
