@@ -221,11 +221,15 @@ std::size_t IncrementalCorrector::WindowFirst(std::size_t end) const {
 
 IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end) {
     assert(done_ < end && end < size() && "preview must add poses");
-    const std::vector<PoseState> saved_poses = state_.poses;
-    const std::vector<double> saved_scales = state_.scales;
-    SeedNewScales(state_, done_ + 1, end);
     Preview p;
     p.first = WindowFirst(end);
+    // A preview changes poses [lo, end] only (the window, and the poses after done() it
+    // initialises): those are saved and restored, not the whole trajectory.
+    const std::size_t lo = std::min(p.first, done_ + 1);
+    const std::vector<PoseState> saved_poses(state_.poses.begin() + lo,
+                                             state_.poses.begin() + end + 1);
+    const std::vector<double> saved_scales = state_.scales;  // one per scale segment: few
+    SeedNewScales(state_, done_ + 1, end);
     // Warm start from the previous preview while it still covers poses after done(): its poses
     // (from the window's first on) and scales, and odometry only after its end.
     std::size_t from = done_ + 1;
@@ -250,7 +254,7 @@ IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end
         p.poses.assign(state_.poses.begin() + p.first, state_.poses.begin() + end + 1);
     }
     p.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
-    state_.poses = saved_poses;
+    std::copy(saved_poses.begin(), saved_poses.end(), state_.poses.begin() + lo);
     state_.scales = saved_scales;
     last_preview_ = p;
     last_preview_end_ = end;
