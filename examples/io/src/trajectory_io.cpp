@@ -135,8 +135,9 @@ Eigen::Quaterniond KittiRotation(const double* v, const std::string& path, long 
 Trajectory ReadKittiPoses(const std::string& path) {
     const std::string text = ReadWholeFile(path);
     Trajectory traj;
-    traj.p_frame.reserve(CountLines(text));
-    traj.q_frame_body.reserve(CountLines(text));
+    const std::size_t lines_in_file = CountLines(text);
+    traj.p_frame.reserve(lines_in_file);
+    traj.q_frame_body.reserve(lines_in_file);
     DataLines lines(text);
     std::vector<std::string_view> fields;
     double v[12];
