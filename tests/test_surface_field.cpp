@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -202,6 +203,138 @@ TEST(SurfaceReaders, PcdCompressedSizesMustMatchTheHeader) {
 // A .bt file in OctoMap's legacy layout (int32 type 3, double resolution, uint32 size, tree):
 // a resolution that is not a sane length is refused (an infinite one made OctoMap convert
 // infinite coordinates to keys, found by fuzzing).
+// A PLY header over `vertex_props` (lines "property ...") and `extra` element lines after it.
+std::string PlyHeader(const std::string& format, std::size_t vertices,
+                      const std::string& vertex_props, const std::string& extra = "") {
+    return "ply\nformat " + format + " 1.0\ncomment test\nelement vertex " +
+           std::to_string(vertices) + "\n" + vertex_props + extra + "end_header\n";
+}
+
+template <typename T>
+void AppendBinary(std::string& out, T value, bool big_endian) {
+    char raw[sizeof(T)];
+    std::memcpy(raw, &value, sizeof(T));
+    if (big_endian) std::reverse(raw, raw + sizeof(T));
+    out.append(raw, sizeof(T));
+}
+
+const char* const kXyzFloat = "property float x\nproperty float y\nproperty float z\n";
+const char* const kXyzDouble = "property double x\nproperty double y\nproperty double z\n";
+// What PCL's own writer puts after the vertices: an empty face element and a camera.
+const char* const kPclCamera =
+    "element face 0\nelement camera 1\nproperty float view_px\nproperty float view_py\n"
+    "property float view_pz\nproperty int viewportx\nproperty int viewporty\n";
+
+TEST(SurfaceReaders, PlyInTheFormsWritersUseLoads) {
+    const fs::path dir = TestDir("ply_forms");
+    const Points want = {{1.5, -2.25, 3.0}, {4.0, 5.0, -6.5}};
+    // ASCII with colours + alpha, an empty face element and PCL's camera (viewport 2 x 1).
+    const std::string rgba = "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                             "property uchar alpha\n";
+    const std::string a = WriteText(
+        dir / "a.ply", PlyHeader("ascii", 2, kXyzFloat + rgba, kPclCamera) +
+                           "1.5 -2.25 3 255 0 0 255\n4 5 -6.5 0 255 0 128 \n0 0 0 2 1\n");
+    EXPECT_EQ(ReadSurfacePointsPly(a), want);
+    // Double coordinates, both byte orders, with a face list after the vertices.
+    for (const bool big : {false, true}) {
+        std::string body;
+        for (const auto& p : want) {
+            for (int k = 0; k < 3; ++k) AppendBinary<double>(body, p[k], big);
+            AppendBinary<float>(body, 0.5f, big);  // intensity
+        }
+        AppendBinary<std::uint8_t>(body, 3, big);
+        for (int k = 0; k < 3; ++k) AppendBinary<std::int32_t>(body, k % 2, big);
+        const std::string name = big ? "be.ply" : "le.ply";
+        const std::string path = WriteText(
+            dir / name,
+            PlyHeader(big ? "binary_big_endian" : "binary_little_endian", 2,
+                      std::string(kXyzDouble) + "property float intensity\n",
+                      "element face 1\nproperty list uchar int vertex_indices\n") + body);
+        EXPECT_EQ(ReadSurfacePointsPly(path), want) << name;
+    }
+}
+
+// pcl::fromPCLPointCloud2 left double coordinates at 0 (measured before the reader converted
+// them itself).
+TEST(SurfaceReaders, PcdDoubleCoordinatesAreReadNotZeroed) {
+    const fs::path dir = TestDir("pcd_double");
+    std::string pcd = AsciiPcd({"1.5 -2.25 3", "4 5 -6.5"});
+    pcd.replace(pcd.find("SIZE 4 4 4"), 10, "SIZE 8 8 8");
+    const Points want = {{1.5, -2.25, 3.0}, {4.0, 5.0, -6.5}};
+    EXPECT_EQ(ReadSurfacePointsPcd(WriteText(dir / "d.pcd", pcd)), want);
+}
+
+// PCL 1.13's PLY reader aborts (assertions are on in Debian's build) or writes out of bounds on
+// these; each must be an InputError naming the file and the problem before PCL sees it.
+TEST(SurfaceReaders, PlyHeaderIsCheckedBeforePclSeesIt) {
+    const fs::path dir = TestDir("ply_header");
+    const std::string body = "0 0 0\n1 0 0\n";
+    const std::string rgb = "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        // found by fuzzing: the keyword after a blank reaches an assert in objInfoCallback
+        {"ply\nformat ascii 1.0\n obj_info x\nelement vertex 2\n" + std::string(kXyzFloat) +
+             "end_header\n" + body, "single blanks"},
+        {PlyHeader("ascii", 2, kXyzFloat + std::string("property uchar blue\n")) + "0 0 0 1\n1 0 0 1\n",
+         "colour"},
+        {PlyHeader("ascii", 2, kXyzFloat + std::string("property uchar alpha\n")) + "0 0 0 1\n1 0 0 1\n",
+         "colour"},
+        {PlyHeader("ascii", 2, "property uchar green\n" + rgb + kXyzFloat) + body, "declared twice"},
+        {PlyHeader("ascii", 2, kXyzFloat + std::string("property list uchar float n\n")) +
+             "0 0 0 1 5\n1 0 0 1 5\n", "list property 'n' in the vertex"},
+        {PlyHeader("ascii", 2, kXyzFloat, "element range_grid 2\nproperty list uchar int vertex_indices\n") +
+             body + "1 0\n1 1\n", "range_grid"},
+        {"ply\nformat ascii 1.0\nobj_info num_cols 2\nobj_info num_rows 5\nelement vertex 2\n" +
+             std::string(kXyzFloat) + "end_header\n" + body, "num_cols"},
+        {"ply\r\nformat ascii 1.0\r\n", "CR"},
+        {PlyHeader("ascii", 2, "property float3 x\n"), "unknown property type 'float3'"},
+        {PlyHeader("ascii", 2, kXyzFloat, "element vertex 1\n"), "declared twice"},
+        {"ply\nformat ascii 1.0\nproperty float x\n", "before the first element"},
+        {"ply\nformat ascii 1.0\nelement vertex 2\n" + std::string(kXyzFloat), "no 'end_header'"},
+        {PlyHeader("ascii", 2, "property float x\nproperty float y\n") + "0 0\n1 0\n", "no 'z'"},
+        {PlyHeader("ascii", 2, kXyzFloat, "element junk 7\n") + body, "no properties"},
+        {PlyHeader("binary_middle_endian", 2, kXyzFloat), "unknown format"},
+        {PlyHeader("ascii", 0, kXyzFloat), "no points"},
+        {"ply\nformat ascii 1.0\nelement vertex -2\n", "element <name> <count>"},
+    };
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        const std::string path = WriteText(dir / ("h" + std::to_string(i) + ".ply"), cases[i].first);
+        ExpectInputError([&] { ReadSurfacePointsPly(path); }, path, cases[i].second);
+    }
+}
+
+TEST(SurfaceReaders, PlyBodyIsCheckedBeforePclSeesIt) {
+    const fs::path dir = TestDir("ply_body");
+    const std::string ascii = PlyHeader("ascii", 2, kXyzFloat);
+    const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
+    std::string le_points;
+    for (int k = 0; k < 6; ++k) AppendBinary<float>(le_points, float(k), false);
+    const std::string le = PlyHeader("binary_little_endian", 2, kXyzFloat);
+    const std::string le_face = PlyHeader("binary_little_endian", 2, kXyzFloat, face);
+    std::string negative_count = le_points;
+    AppendBinary<std::int8_t>(negative_count, -3, false);
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {ascii + "0 0 0\n1 0\n", "fewer values"},
+        {ascii + "0 0 0\n1 0 0 4\n", "more values"},
+        {ascii + "0 0 0\n1 zero 0\n", "'zero' is not a float"},
+        {ascii + "0 0 0\n", "1 of 2 lines"},
+        {ascii + "0 0 0\n1 0 0\n2 0 0\n", "more lines"},
+        {PlyHeader("ascii", 2, kXyzFloat, face) + "0 0 0\n1 0 0\n3 0 1\n", "fewer values"},
+        {PlyHeader("ascii", 2, kXyzFloat, face) + "0 0 0\n1 0 0\n-1\n", "needs a count"},
+        {le + le_points.substr(0, 20), "ends in element 'vertex'"},
+        {le + le_points + "xy", "2 bytes after the last element"},
+        {le_face + le_points + std::string("\x05\x00\x00\x00\x00", 5), "ends in element 'face'"},
+        {PlyHeader("binary_little_endian", 2, kXyzFloat,
+                   "element face 1\nproperty list char int vertex_indices\n") + negative_count,
+         "negative count -3"},
+        {PlyHeader("ascii", 2, kXyzFloat, kPclCamera) + "0 0 0\n1 0 0\n0 0 0 5 3\n", "viewport 5 x 3"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + std::string(kXyzFloat) + "end_header", "right after"},
+    };
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        const std::string path = WriteText(dir / ("b" + std::to_string(i) + ".ply"), cases[i].first);
+        ExpectInputError([&] { ReadSurfacePointsPly(path); }, path, cases[i].second);
+    }
+}
+
 TEST(SurfaceReaders, OctomapResolutionOutsideSaneRangeIsAnInputError) {
     const fs::path dir = TestDir("octomap_res");
     auto legacy = [&](const std::string& name, double res) {

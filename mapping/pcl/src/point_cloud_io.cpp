@@ -8,12 +8,15 @@
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <fstream>
 #include <stdexcept>
@@ -24,6 +27,7 @@
 
 #include "driftcorr/core/errors.h"
 #include "driftcorr/mapping/surface_io.h"
+#include "ply_check.h"
 
 namespace driftcorr {
 namespace {
@@ -272,28 +276,32 @@ void PrecheckPcdHeader(const std::string& path) {
     if (data[0] == "binary_compressed") PrecheckPcdCompressedBody(path, in, points * step);
 }
 
-// The vertex count of a PLY header ("element vertex N"), 0 when absent; a negative or
-// unparseable count is an InputError.
-std::size_t PlyVertexCount(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::string line;
-    for (int n = 0; n < 200 && std::getline(in, line); ++n) {
-        if (line.rfind("end_header", 0) == 0) break;
-        std::istringstream words(line);
-        std::string element, name;
-        long long count = -1;
-        if (!(words >> element >> name) || element != "element" || name != "vertex") continue;
-        if (!(words >> count) || count < 0) {
-            throw InputError(path, n + 1, "", "PLY header: bad vertex count in '" + line + "'");
-        }
-        return static_cast<std::size_t>(count);
-    }
-    return 0;
-}
-
 bool HasField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
     return std::any_of(cloud.fields.begin(), cloud.fields.end(),
                        [&](const pcl::PCLPointField& f) { return f.name == name; });
+}
+
+// One value of a PCL field type at `at` (unaligned), as a double; nullopt for a type PCL 1.13
+// does not define.
+template <typename T>
+double Load(const std::uint8_t* at) {
+    T value;
+    std::memcpy(&value, at, sizeof(T));
+    return static_cast<double>(value);
+}
+
+std::optional<double> FieldValue(const std::uint8_t* at, std::uint8_t datatype) {
+    switch (datatype) {
+        case pcl::PCLPointField::INT8: return Load<std::int8_t>(at);
+        case pcl::PCLPointField::UINT8: return Load<std::uint8_t>(at);
+        case pcl::PCLPointField::INT16: return Load<std::int16_t>(at);
+        case pcl::PCLPointField::UINT16: return Load<std::uint16_t>(at);
+        case pcl::PCLPointField::INT32: return Load<std::int32_t>(at);
+        case pcl::PCLPointField::UINT32: return Load<std::uint32_t>(at);
+        case pcl::PCLPointField::FLOAT32: return Load<float>(at);
+        case pcl::PCLPointField::FLOAT64: return Load<double>(at);
+        default: return std::nullopt;
+    }
 }
 
 // Checks and converts a cloud read from `path` (`kind` names the format in messages).
@@ -319,14 +327,29 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
             throw InputError(path, 0, "", kind + " file field '" + f.name + "' lies outside its point");
         }
     }
-    pcl::PointCloud<pcl::PointXYZ> cloud;
-    pcl::fromPCLPointCloud2(blob, cloud);
-    if (cloud.empty()) throw InputError(path, 0, "", kind + " file has no points");
+    // Converted here, not by pcl::fromPCLPointCloud2: that one matches fields by type as well as
+    // name and leaves x, y, z at 0 when the file stores them as doubles (measured: a PLY or PCD
+    // with double coordinates read as all zeros).
+    std::array<const pcl::PCLPointField*, 3> xyz{};
+    for (const pcl::PCLPointField& f : blob.fields) {
+        if (f.name == "x") xyz[0] = &f;
+        if (f.name == "y") xyz[1] = &f;
+        if (f.name == "z") xyz[2] = &f;
+    }
     std::vector<Eigen::Vector3d> points;
-    points.reserve(cloud.size());
+    points.reserve(count);
     std::size_t bad = 0, first_bad = 0;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::uint8_t* point = blob.data.data() + i * std::size_t(blob.point_step);
+        Eigen::Vector3d p;
+        for (int k = 0; k < 3; ++k) {
+            const std::optional<double> v = FieldValue(point + xyz[k]->offset, xyz[k]->datatype);
+            if (!v) {
+                throw InputError(path, 0, "", kind + " field '" + xyz[k]->name +
+                                                  "' has an unsupported type");
+            }
+            p[k] = *v;
+        }
         if (!p.allFinite()) {
             if (bad++ == 0) first_bad = i;
             continue;
@@ -336,7 +359,7 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
     if (bad > 0) {
         throw InputError(path, 0, "",
                          kind + " file has " + std::to_string(bad) + " of " +
-                             std::to_string(cloud.size()) +
+                             std::to_string(count) +
                              " points with a NaN or infinite coordinate (first at index " +
                              std::to_string(first_bad) + "); a surface map must be dense");
     }
@@ -414,11 +437,19 @@ std::vector<Eigen::Vector3d> ReadSurfacePointsPcd(const std::string& path) {
 std::vector<Eigen::Vector3d> ReadSurfacePointsPly(const std::string& path) {
     const QuietPcl quiet;
     RequireReadable(path, "PLY");
-    RequireDeclaredPointsFit(path, "PLY", PlyVertexCount(path));
+    const internal::PlyLayout layout = internal::PrecheckPly(path);
     pcl::PCLPointCloud2 blob;
     pcl::PLYReader reader;
     if (CallPcl(path, "PLY", [&] { return reader.read(path, blob); }) < 0) {
         throw InputError(path, 0, "", "cannot be read or parsed as a PLY point cloud");
+    }
+    // A camera element's viewport (or obj_info) makes PCL shape the cloud as width x height: a
+    // shape that is not the vertex count would drop points or read past them.
+    if (std::size_t(blob.width) * blob.height != layout.vertex_count) {
+        throw InputError(path, 0, "",
+                         "PLY camera viewport " + std::to_string(blob.width) + " x " +
+                             std::to_string(blob.height) + " does not match the " +
+                             std::to_string(layout.vertex_count) + " vertices");
     }
     return ToSurfacePoints(blob, path, "PLY");
 }
