@@ -38,6 +38,7 @@ const std::vector<Target>& Targets() {
         {"pcd", driftcorr::fuzz::RunPcd},
         {"ply", driftcorr::fuzz::RunPly},
         {"octomap", driftcorr::fuzz::RunOctomap},
+        {"octomap_ot", driftcorr::fuzz::RunOctomapOt},
     };
     return targets;
 }
@@ -125,6 +126,7 @@ TEST(FuzzCorpusSeeds, ValidSeedsParse) {
     EXPECT_EQ(driftcorr::ReadSurfacePoints((corpus / "ply/floor.ply").string()).size(), 4u);
     // 24 voxels in one layer plus one stacked below: 24 floor voxels.
     EXPECT_EQ(driftcorr::ReadSurfacePoints((corpus / "octomap/floor.bt").string()).size(), 24u);
+    EXPECT_EQ(driftcorr::ReadSurfacePoints((corpus / "octomap_ot/floor.ot").string()).size(), 12u);
     fs::remove_all(tmp);
 }
 

@@ -357,6 +357,45 @@ TEST(SurfaceReaders, OctomapResolutionOutsideSaneRangeIsAnInputError) {
     }
 }
 
+// A full OcTree file (.ot) as AbstractOcTree::write lays it out: the header, then per node a
+// float log-odds value and one byte of child bits, depth first. `levels` nested first children
+// below the root, the last one occupied.
+std::string FullTreeFile(const std::string& id, const std::string& res, int levels) {
+    std::string s = "# Octomap OcTree file\n# (comment)\n#\nid " + id + "\nsize " +
+                    std::to_string(levels + 1) + "\nres " + res + "\ndata\n";
+    const float occupied = 2.0f;
+    for (int level = 0; level <= levels; ++level) {
+        s.append(reinterpret_cast<const char*>(&occupied), sizeof(float));
+        s.push_back(level < levels ? '\x01' : '\x00');
+    }
+    return s;
+}
+
+TEST(SurfaceReaders, OctomapFullTreeFileIsCheckedBeforeOctomapReadsIt) {
+    const fs::path dir = TestDir("octomap_ot");
+    const std::string ok = WriteText(dir / "ok.ot", FullTreeFile("OcTree", "0.1", 16));
+    const Points floor = ReadFloorVoxelsOctomap(ok);
+    ASSERT_EQ(floor.size(), 1u);
+    // The finest voxel with key 0 in every axis: centre (0 - 32768 + 0.5) * 0.1 m; its top face
+    // 0.05 m higher.
+    EXPECT_NEAR(floor[0].x(), -3276.75, 1e-3);
+    EXPECT_NEAR(floor[0].z(), -3276.70, 1e-3);
+    const std::string full = FullTreeFile("OcTree", "0.1", 16);
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {full.substr(0, full.size() - 3), "runs past the file's end"},  // truncated
+        {FullTreeFile("OcTree", "0.1", 17), "deeper than 16 levels"},
+        {FullTreeFile("ColorOcTree", "0.1", 16), "type 'ColorOcTree'"},
+        {FullTreeFile("OcTree", "1e6", 16), "resolution"},
+        {FullTreeFile("OcTree", "0", 16), "resolution"},
+        {"# Octomap OcTree file\nid OcTree\nres 0.1\n", "'data' line"},
+        {"# Octomap OcTree binary file\nid OcTree\nres 0.1\ndata\n", "first line"},
+    };
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        const std::string path = WriteText(dir / ("bad" + std::to_string(i) + ".ot"), cases[i].first);
+        ExpectInputError([&] { ReadFloorVoxelsOctomap(path); }, path, cases[i].second);
+    }
+}
+
 // Floor rule: an occupied voxel with a non-occupied voxel above is floor; its top face is
 // returned. A 1 m x 1 m floor at z = 0 (100 voxels of 0.1 m) with a second occupied voxel on top
 // in one 0.3 m x 0.3 m corner (9 columns): 91 floor voxels at z = 0, 9 at z = 0.1.

@@ -194,6 +194,9 @@ inline void RunPly(std::string_view input, const std::string& tmp_dir) {
 inline void RunOctomap(std::string_view input, const std::string& tmp_dir) {
     RunSurface(input, tmp_dir, "surface.bt");
 }
+inline void RunOctomapOt(std::string_view input, const std::string& tmp_dir) {
+    RunSurface(input, tmp_dir, "surface.ot");
+}
 
 /// params.yaml. A config that loads must pass its own Validate().
 inline void RunParamsYaml(std::string_view input, const std::string& tmp_dir) {

@@ -22,7 +22,7 @@ FUZZ_SEED="${FUZZ_SEED:-1}"
 REPO="$(cd "$(dirname "$0")/../.." && pwd)"
 BUILD_DIR="${2:-$REPO/build-fuzz}"
 FUZZ_DIR="$REPO/tests/fuzz"
-TARGETS=(tum kitti scenario_yaml osm params_yaml geojson pcd ply octomap)
+TARGETS=(tum kitti scenario_yaml osm params_yaml geojson pcd ply octomap octomap_ot)
 declare -A DICTS=([tum]=numbers [kitti]=numbers [scenario_yaml]=scenario_yaml [osm]=osm
                   [params_yaml]=params_yaml)
 

@@ -42,6 +42,9 @@ private:
     std::streambuf* err_;
 };
 
+constexpr double kMinResolutionM = 0.001;  ///< [m] finer than any floor map needs
+constexpr double kMaxResolutionM = 100.0;  ///< [m]
+
 // OctoMap's binary reader (OcTree::readBinaryNode) follows the child bits of the data
 // recursively with no depth bound, so malformed data runs it off the stack (found by fuzzing).
 // This walks the same encoding first: per node two bytes, two bits per child (01 occupied leaf,
@@ -61,10 +64,61 @@ bool ValidBinaryNode(const std::string& data, std::size_t& pos, int depth) {
     return true;
 }
 
-// Where the tree data of a .bt file starts, found as OctoMap's AbstractOcTree::readHeader finds
-// it (after the first line: whitespace-separated tokens; "#" starts a comment to the end of the
-// line; id, res and size take one value; any other token skips to the end of the line; "data"
-// ends the header after the rest of its line). std::string::npos when there is no data token.
+// A full (.ot) OcTree node as OcTreeBaseImpl::readNodesRecurs reads it: a float log-odds value,
+// then one byte whose bits say which of the 8 children follow, depth first. OctoMap bounds neither
+// the depth nor the data: past the file's end it reads an uninitialised child byte and recurses
+// on it. So the data must stay within the file and OctoMap's 16 levels.
+bool ValidFullNode(const std::string& data, std::size_t& pos, int depth) {
+    if (depth > 16 || pos + sizeof(float) + 1 > data.size()) return false;
+    pos += sizeof(float);
+    const auto children = static_cast<unsigned char>(data[pos++]);
+    for (int i = 0; i < 8; ++i) {
+        if (((children >> i) & 1U) && !ValidFullNode(data, pos, depth + 1)) return false;
+    }
+    return true;
+}
+
+// What OctoMap's AbstractOcTree::readHeader takes from the lines after a file's first line
+// (whitespace-separated tokens; "#" starts a comment to the end of the line; id, res and size take
+// one value; any other token skips to the end of the line; "data" ends the header after the rest
+// of its line). data_start is std::string::npos when there is no data token.
+struct TreeHeader {
+    std::size_t data_start = std::string::npos;
+    std::string id;
+    double res = 0.0;
+};
+
+TreeHeader ParseTreeHeader(const std::string& text, const std::string& first_line) {
+    TreeHeader header;
+    if (text.compare(0, first_line.size(), first_line) != 0) return header;
+    const std::size_t pos = text.find('\n');
+    if (pos == std::string::npos) return header;
+    std::istringstream in(text.substr(pos + 1));
+    auto skip_line = [&] {
+        in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    };
+    for (std::string token; in.good() && in >> token;) {
+        if (token == "data") {
+            skip_line();
+            header.data_start = in ? pos + 1 + static_cast<std::size_t>(in.tellg()) : text.size();
+            return header;
+        }
+        // The values are read with the types OctoMap uses: "res 0.1data" is 0.1, then "data".
+        if (token == "id") {
+            in >> header.id;
+        } else if (token == "res") {
+            in >> header.res;
+        } else if (token == "size") {
+            unsigned size = 0;
+            in >> size;
+        } else {
+            skip_line();  // a comment ("#...") or a token OctoMap skips with a warning
+        }
+    }
+    return header;
+}
+
+// Where the tree data of a .bt file starts; std::string::npos when there is none.
 std::size_t BinaryDataStart(const std::string& text) {
     static const std::string kHeader = "# Octomap OcTree binary file";
     if (text.compare(0, kHeader.size(), kHeader) != 0) {
@@ -74,45 +128,52 @@ std::size_t BinaryDataStart(const std::string& text) {
         if (text.size() >= 16) std::memcpy(&type, text.data(), sizeof(type));
         return type == 3 ? 16 : std::string::npos;
     }
-    std::size_t pos = text.find('\n');
-    if (pos == std::string::npos) return std::string::npos;
-    std::istringstream in(text.substr(pos + 1));
-    auto skip_line = [&] {
-        in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
-    };
-    for (std::string token; in.good() && in >> token;) {
-        if (token == "data") {
-            skip_line();
-            return in ? pos + 1 + static_cast<std::size_t>(in.tellg()) : text.size();
-        }
-        // The values are read with the types OctoMap uses: "res 0.1data" is 0.1, then "data".
-        if (token == "id") {
-            std::string id;
-            in >> id;
-        } else if (token == "res") {
-            double res = 0.0;
-            in >> res;
-        } else if (token == "size") {
-            unsigned size = 0;
-            in >> size;
-        } else if (token.rfind('#', 0) == 0) {
-            skip_line();
-        } else {
-            skip_line();
-        }
-    }
-    return std::string::npos;
+    return ParseTreeHeader(text, kHeader).data_start;
+}
+
+std::string ReadWholeFile(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
 }
 
 void CheckBinaryTreeData(const std::string& path) {
-    std::ifstream file(path, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    const std::string text = ReadWholeFile(path);
     std::size_t pos = BinaryDataStart(text);
     if (pos == std::string::npos) return;  // no data: OctoMap reads nothing (and reports it)
     if (!ValidBinaryNode(text, pos, 0)) {
         throw InputError(path, 0, "",
                          "binary OctoMap (.bt) data is malformed (the tree runs past the file's "
                          "end or deeper than 16 levels)");
+    }
+}
+
+// A .ot file must be an OcTree ("id OcTree", or the deprecated "id 1") with a sane resolution
+// and well-formed data before OctoMap creates and fills the tree (it sets the resolution and
+// reads the data unchecked).
+void CheckFullTreeFile(const std::string& path) {
+    const std::string text = ReadWholeFile(path);
+    const TreeHeader header = ParseTreeHeader(text, "# Octomap OcTree file");
+    if (header.data_start == std::string::npos) {
+        throw InputError(path, 1, "",
+                         "not an OctoMap (.ot) file: the first line must start with '# Octomap "
+                         "OcTree file' and the header end with a 'data' line");
+    }
+    if (header.id != "OcTree" && header.id != "1") {
+        throw InputError(path, 0, "",
+                         "OctoMap file holds a tree of type '" + header.id.substr(0, 40) +
+                             "', not an OcTree");
+    }
+    if (!(header.res >= kMinResolutionM && header.res <= kMaxResolutionM)) {
+        throw InputError(path, 0, "",
+                         "OctoMap resolution " + std::to_string(header.res) + " m is outside [" +
+                             std::to_string(kMinResolutionM) + ", " +
+                             std::to_string(kMaxResolutionM) + "] m");
+    }
+    std::size_t pos = header.data_start;
+    if (!ValidFullNode(text, pos, 0)) {
+        throw InputError(path, 0, "",
+                         "OctoMap (.ot) data is malformed (the tree runs past the file's end or "
+                         "deeper than 16 levels)");
     }
 }
 
@@ -123,6 +184,7 @@ std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
     }
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext == ".ot" || ext == ".OT") {
+        CheckFullTreeFile(path);
         const QuietStreams quiet;
         std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
         auto* tree = dynamic_cast<octomap::OcTree*>(any.get());
@@ -155,8 +217,6 @@ bool OccupiedAt(const octomap::OcTree& tree, double x, double y, double z) {
 
 // 4 M floor voxels: 100 m x 100 m of floor at 0.05 m, or 4 floors of it at 0.1 m.
 constexpr std::size_t kMaxFloorVoxels = 4'000'000;
-constexpr double kMinResolutionM = 0.001;  ///< [m] finer than any floor map needs
-constexpr double kMaxResolutionM = 100.0;  ///< [m]
 
 std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
     const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
