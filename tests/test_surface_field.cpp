@@ -421,6 +421,34 @@ TEST(SurfaceReaders, OctomapFloorVoxelsAreOccupiedWithFreeOrUnknownAbove) {
     EXPECT_EQ(high, 9);
 }
 
+// OctoMap prunes a uniform block into one leaf: its whole top face is floor except where an
+// occupied voxel sits on it. An 8 x 8 x 8 block of 0.1 m voxels (one 0.8 m leaf) with one voxel
+// on top of its corner: 63 floor voxels at z = 0.8, 1 at z = 0.9.
+TEST(SurfaceReaders, OctomapPrunedLeafFloorExcludesWhatStandsOnIt) {
+    const fs::path dir = TestDir("octomap_pruned");
+    Points pts;
+    for (int layer = 1; layer <= 8; ++layer) {
+        AddRect(
+            0.0, 0.0, 0.8, 0.8, [&](double) { return 0.1 * layer; }, pts);
+    }
+    const std::string block = (dir / "block.bt").string();
+    WriteOctomapFromPoints(block, pts, 0.1);
+    EXPECT_EQ(ReadFloorVoxelsOctomap(block).size(), 64u);
+    pts.emplace_back(0.05, 0.05, 0.9);
+    const std::string box = (dir / "block_box.bt").string();
+    WriteOctomapFromPoints(box, pts, 0.1);
+    const Points floor = ReadFloorVoxelsOctomap(box);
+    ASSERT_EQ(floor.size(), 64u);
+    int low = 0, high = 0;
+    for (const auto& p : floor) {
+        const bool corner = p.x() < 0.1 && p.y() < 0.1;
+        EXPECT_NEAR(p.z(), corner ? 0.9 : 0.8, 1e-6) << p.transpose();
+        (corner ? high : low)++;
+    }
+    EXPECT_EQ(low, 63);
+    EXPECT_EQ(high, 1);
+}
+
 // --- BuildSurfaceField ---------------------------------------------------------------------
 
 double Corridor(const TraversableField& f, const Eigen::Vector3d& p) {

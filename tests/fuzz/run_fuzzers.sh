@@ -4,11 +4,14 @@
 #   tests/fuzz/run_fuzzers.sh [seconds_per_target=30] [build_dir=<repo>/build-fuzz]
 #   FUZZ_SEED=random tests/fuzz/run_fuzzers.sh 600     # exploratory: a new random seed per run
 #
-# The seed is fixed by default (FUZZ_SEED=1): libFuzzer's mutation sequence then depends only on
-# the seed corpus and the binary, so a CI run explores a prefix of what a longer local run with
-# the same seed explores, and a crash it reports is found again by rerunning the script here.
-# Exploring new ground is a separate, longer run with FUZZ_SEED=random (its finds become
-# regression-* files in the seed corpus).
+# The seed is fixed by default (FUZZ_SEED=1), but that does not make two machines explore the
+# same inputs: libFuzzer's order of equal-sized seed files follows the directory listing, and a
+# time budget ends after however many runs the machine managed (session 3: CI found a PLY crash
+# at seed 1 that a local seed-1 run of the same length had not). So a CI run is a short
+# exploration, and longer ones belong here before a change is submitted:
+#   FUZZ_SEED=random tests/fuzz/run_fuzzers.sh 600
+# Every find is fixed and its input becomes a regression-* file in the seed corpus (replayed by
+# the test_fuzz_regressions test in the ordinary build).
 #
 # Each target runs on a copy of its seed corpus (tests/fuzz/corpus/<target>, never grown by a run)
 # with its dictionary (tests/fuzz/dict/) when there is one. Prints executions per second and the
