@@ -713,7 +713,7 @@ std::vector<BadInputCase> BadInputCases() {
                      "{path: floor.ply, format: ply}");
          }),
          kExitBadInput,
-         {R"(floor\.ply: cannot be read or parsed as a PLY point cloud)"}},
+         {R"(floor\.ply: PLY header: the file is empty)"}},
         {"OctomapGarbage",
          IndoorPcd([](const fs::path& s) {
              WriteFile(s / "floor.bt", "# Octomap OcTree binary file\ngarbage\n");

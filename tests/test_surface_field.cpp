@@ -295,6 +295,7 @@ TEST(SurfaceReaders, PlyHeaderIsCheckedBeforePclSeesIt) {
         {PlyHeader("binary_middle_endian", 2, kXyzFloat), "unknown format"},
         {PlyHeader("ascii", 0, kXyzFloat), "no points"},
         {"ply\nformat ascii 1.0\nelement vertex -2\n", "element <name> <count>"},
+        {"", "the file is empty"},
     };
     for (std::size_t i = 0; i < cases.size(); ++i) {
         const std::string path = WriteText(dir / ("h" + std::to_string(i) + ".ply"), cases[i].first);

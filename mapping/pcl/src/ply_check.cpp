@@ -121,6 +121,7 @@ public:
             }
             ParseLine(line);
         }
+        if (header_.lines == 0) Bad("the file is empty (a PLY file starts with a 'ply' line)");
         Bad("no 'end_header' line within the first " + std::to_string(kMaxHeaderLines) + " lines");
         return header_;
     }
