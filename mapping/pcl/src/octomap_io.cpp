@@ -274,12 +274,13 @@ std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
         const octomap::OcTreeNode* above =
             tree->search(c.x(), c.y(), c.z() + size, static_cast<unsigned>(it.getDepth()));
         const bool open_above = !above || (!tree->nodeHasChildren(above) && !tree->isNodeOccupied(above));
+        // Empty when open above: most leaves are single voxels, no allocation per leaf.
         const std::vector<bool> blocked =
-            open_above ? std::vector<bool>(std::size_t(n) * n, false)
+            open_above ? std::vector<bool>()
                        : OccupiedAbove(*tree, c, size, res, n, z_top_centre + res);
         for (int a = 0; a < n; ++a) {
             for (int b = 0; b < n; ++b) {
-                if (blocked[std::size_t(a) * n + b]) continue;
+                if (!blocked.empty() && blocked[std::size_t(a) * n + b]) continue;
                 const double x = c.x() - 0.5 * size + res * (a + 0.5);
                 const double y = c.y() - 0.5 * size + res * (b + 0.5);
                 floor.emplace_back(x, y, z_top_centre + 0.5 * res);
