@@ -78,6 +78,18 @@ void ExpectInputError(Fn fn, const std::string& path, const std::string& needle)
     }
 }
 
+// Writes each (file text, expected message part) case into `dir` as case<i><ext> and expects
+// `read` to throw an InputError naming that file and containing the part.
+using BadFiles = std::vector<std::pair<std::string, std::string>>;
+template <typename Read>
+void ExpectEachInputError(const fs::path& dir, const std::string& ext, const BadFiles& cases,
+                          Read read) {
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        const std::string path = WriteText(dir / ("case" + std::to_string(i) + ext), cases[i].first);
+        ExpectInputError([&] { read(path); }, path, cases[i].second);
+    }
+}
+
 // --- readers -------------------------------------------------------------------------------
 
 TEST(SurfaceReaders, AsciiPcdAndPlyRoundTrip) {
@@ -270,7 +282,7 @@ TEST(SurfaceReaders, PlyHeaderIsCheckedBeforePclSeesIt) {
     const fs::path dir = TestDir("ply_header");
     const std::string body = "0 0 0\n1 0 0\n";
     const std::string rgb = "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    const std::vector<std::pair<std::string, std::string>> cases = {
+    const BadFiles cases = {
         // found by fuzzing: the keyword after a blank reaches an assert in objInfoCallback
         {"ply\nformat ascii 1.0\n obj_info x\nelement vertex 2\n" + std::string(kXyzFloat) +
              "end_header\n" + body, "single blanks"},
@@ -297,10 +309,7 @@ TEST(SurfaceReaders, PlyHeaderIsCheckedBeforePclSeesIt) {
         {"ply\nformat ascii 1.0\nelement vertex -2\n", "element <name> <count>"},
         {"", "the file is empty"},
     };
-    for (std::size_t i = 0; i < cases.size(); ++i) {
-        const std::string path = WriteText(dir / ("h" + std::to_string(i) + ".ply"), cases[i].first);
-        ExpectInputError([&] { ReadSurfacePointsPly(path); }, path, cases[i].second);
-    }
+    ExpectEachInputError(dir, ".ply", cases, [](const std::string& f) { ReadSurfacePointsPly(f); });
 }
 
 TEST(SurfaceReaders, PlyBodyIsCheckedBeforePclSeesIt) {
@@ -313,7 +322,7 @@ TEST(SurfaceReaders, PlyBodyIsCheckedBeforePclSeesIt) {
     const std::string le_face = PlyHeader("binary_little_endian", 2, kXyzFloat, face);
     std::string negative_count = le_points;
     AppendBinary<std::int8_t>(negative_count, -3, false);
-    const std::vector<std::pair<std::string, std::string>> cases = {
+    const BadFiles cases = {
         {ascii + "0 0 0\n1 0\n", "fewer values"},
         {ascii + "0 0 0\n1 0 0 4\n", "more values"},
         {ascii + "0 0 0\n1 zero 0\n", "'zero' is not a float"},
@@ -330,10 +339,7 @@ TEST(SurfaceReaders, PlyBodyIsCheckedBeforePclSeesIt) {
         {PlyHeader("ascii", 2, kXyzFloat, kPclCamera) + "0 0 0\n1 0 0\n0 0 0 5 3\n", "viewport 5 x 3"},
         {"ply\nformat ascii 1.0\nelement vertex 1\n" + std::string(kXyzFloat) + "end_header", "right after"},
     };
-    for (std::size_t i = 0; i < cases.size(); ++i) {
-        const std::string path = WriteText(dir / ("b" + std::to_string(i) + ".ply"), cases[i].first);
-        ExpectInputError([&] { ReadSurfacePointsPly(path); }, path, cases[i].second);
-    }
+    ExpectEachInputError(dir, ".ply", cases, [](const std::string& f) { ReadSurfacePointsPly(f); });
 }
 
 TEST(SurfaceReaders, OctomapResolutionOutsideSaneRangeIsAnInputError) {
@@ -382,7 +388,7 @@ TEST(SurfaceReaders, OctomapFullTreeFileIsCheckedBeforeOctomapReadsIt) {
     EXPECT_NEAR(floor[0].x(), -3276.75, 1e-3);
     EXPECT_NEAR(floor[0].z(), -3276.70, 1e-3);
     const std::string full = FullTreeFile("OcTree", "0.1", 16);
-    const std::vector<std::pair<std::string, std::string>> cases = {
+    const BadFiles cases = {
         {full.substr(0, full.size() - 3), "runs past the file's end"},  // truncated
         {FullTreeFile("OcTree", "0.1", 17), "deeper than 16 levels"},
         {FullTreeFile("ColorOcTree", "0.1", 16), "type 'ColorOcTree'"},
@@ -391,10 +397,7 @@ TEST(SurfaceReaders, OctomapFullTreeFileIsCheckedBeforeOctomapReadsIt) {
         {"# Octomap OcTree file\nid OcTree\nres 0.1\n", "'data' line"},
         {"# Octomap OcTree binary file\nid OcTree\nres 0.1\ndata\n", "first line"},
     };
-    for (std::size_t i = 0; i < cases.size(); ++i) {
-        const std::string path = WriteText(dir / ("bad" + std::to_string(i) + ".ot"), cases[i].first);
-        ExpectInputError([&] { ReadFloorVoxelsOctomap(path); }, path, cases[i].second);
-    }
+    ExpectEachInputError(dir, ".ot", cases, [](const std::string& f) { ReadFloorVoxelsOctomap(f); });
 }
 
 // Floor rule: an occupied voxel with a non-occupied voxel above is floor; its top face is

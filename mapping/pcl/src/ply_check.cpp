@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
+#include "header_text.h"
 
 namespace driftcorr::internal {
 namespace {
@@ -76,21 +77,6 @@ struct Header {
     std::optional<unsigned long long> num_cols, num_rows;  // obj_info
     long obj_info_line = 0;
 };
-
-std::vector<std::string> SplitBlanks(const std::string& line) {
-    std::vector<std::string> words;
-    std::istringstream in(line);
-    for (std::string w; in >> w;) words.push_back(w);
-    return words;
-}
-
-bool WholeNumber(const std::string& s, unsigned long long max, unsigned long long& value) {
-    if (s.empty() || s.size() > 19 || s.find_first_not_of("0123456789") != std::string::npos) {
-        return false;
-    }
-    value = std::strtoull(s.c_str(), nullptr, 10);
-    return value <= max;
-}
 
 bool IsName(const std::string& s) {
     return !s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
@@ -163,7 +149,7 @@ private:
     }
 
     void ParseFormat(const std::string& line) {
-        const std::vector<std::string> w = SplitBlanks(line);
+        const std::vector<std::string> w = SplitWords(line);
         if (w.size() != 3 || w[0] != "format" || w[2] != "1.0") {
             Bad("the second line must be 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
         }
@@ -179,7 +165,7 @@ private:
     }
 
     void ParseLine(const std::string& line) {
-        const std::vector<std::string> w = SplitBlanks(line);
+        const std::vector<std::string> w = SplitWords(line);
         if (w[0] == "comment") return;
         if (w[0] == "obj_info") return ParseObjInfo(w);
         if (w[0] == "element") return ParseElement(w);
@@ -194,7 +180,7 @@ private:
         if (w.size() < 2 || (w[1] != "num_cols" && w[1] != "num_rows")) return;
         std::optional<unsigned long long>& slot = w[1] == "num_cols" ? header_.num_cols : header_.num_rows;
         unsigned long long value = 0;
-        if (w.size() != 3 || !WholeNumber(w[2], std::numeric_limits<std::int32_t>::max(), value)) {
+        if (w.size() != 3 || !ParseWholeNumber(w[2], std::numeric_limits<std::int32_t>::max(), value)) {
             Bad("obj_info " + w[1] + " must be followed by one whole number");
         }
         if (slot) Bad("obj_info " + w[1] + " given twice");
@@ -204,7 +190,7 @@ private:
 
     void ParseElement(const std::vector<std::string>& w) {
         unsigned long long count = 0;
-        if (w.size() != 3 || !IsName(w[1]) || !WholeNumber(w[2], kMaxCount, count)) {
+        if (w.size() != 3 || !IsName(w[1]) || !ParseWholeNumber(w[2], kMaxCount, count)) {
             Bad("an element line is 'element <name> <count>' (a name of letters, digits, '_', "
                 "'-', '.', a whole count up to 2^40)");
         }
@@ -357,7 +343,7 @@ void CheckAsciiBody(const std::string& path, std::istream& in, const Header& hea
             for (const char c : line) {
                 if (c != '\t' && (c < 0x20 || c > 0x7e)) bad("a control or non-ASCII byte");
             }
-            const std::vector<std::string> tokens = SplitBlanks(line);
+            const std::vector<std::string> tokens = SplitWords(line);
             std::size_t t = 0;
             for (const Property& p : e.properties) {
                 long long count = 1;
@@ -385,10 +371,15 @@ void CheckAsciiBody(const std::string& path, std::istream& in, const Header& hea
     }
 }
 
-// Reads the binary body forward through a buffer, for the list counts.
+// Walks the binary body: skips are arithmetic; a list count is read where it lies, moving the
+// stream forward by reading through its buffer when the gap is small (a seek per count would
+// discard the buffer: measured 1.06 s of system time for 2 M faces).
 class BinaryCursor {
 public:
-    BinaryCursor(std::istream& in, unsigned long long size) : in_(in), size_(size) {}
+    BinaryCursor(std::istream& in, std::streamoff base, unsigned long long size)
+        : in_(in), base_(base), size_(size) {
+        in_.seekg(base_);
+    }
     unsigned long long position() const { return pos_; }
     bool Skip(unsigned long long bytes) {
         if (bytes > size_ - pos_) return false;
@@ -398,9 +389,15 @@ public:
     bool ReadCount(const PlyType& type, bool big_endian, long long& value) {
         unsigned char raw[8] = {};
         if (std::uint64_t(type.bytes) > size_ - pos_) return false;
-        in_.seekg(std::streamoff(base_ + pos_));
+        const unsigned long long gap = pos_ - stream_at_;
+        if (gap > 65536) {
+            in_.seekg(std::streamoff(base_ + pos_));
+        } else if (gap > 0) {
+            in_.ignore(std::streamsize(gap));
+        }
         if (!in_.read(reinterpret_cast<char*>(raw), type.bytes)) return false;
         pos_ += type.bytes;
+        stream_at_ = pos_;
         std::uint64_t u = 0;
         for (int k = 0; k < type.bytes; ++k) {
             const int shift = 8 * (big_endian ? type.bytes - 1 - k : k);
@@ -414,21 +411,20 @@ public:
         }
         return true;
     }
-    void SetBase(std::streamoff base) { base_ = base; }
 
 private:
     std::istream& in_;
+    std::streamoff base_;
     unsigned long long size_;
-    unsigned long long pos_ = 0;
-    std::streamoff base_ = 0;
+    unsigned long long pos_ = 0;        // where the walk is, from the body's start
+    unsigned long long stream_at_ = 0;  // where the stream is, from the body's start
 };
 
 void CheckBinaryBody(const std::string& path, std::istream& in, const Header& header) {
     in.seekg(0, std::ios::end);
     const std::streamoff end = in.tellg();
     const unsigned long long size = end > header.body_start ? end - header.body_start : 0;
-    BinaryCursor cursor(in, size);
-    cursor.SetBase(header.body_start);
+    BinaryCursor cursor(in, header.body_start, size);
     const bool big = header.format == PlyFormat::kBinaryBigEndian;
     for (const Element& e : header.elements) {
         auto short_body = [&](unsigned long long i) {

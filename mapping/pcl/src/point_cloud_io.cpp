@@ -27,6 +27,7 @@
 
 #include "driftcorr/core/errors.h"
 #include "driftcorr/mapping/surface_io.h"
+#include "header_text.h"
 #include "ply_check.h"
 
 namespace driftcorr {
@@ -90,35 +91,14 @@ void RequireDeclaredDataFits(const std::string& path, std::size_t count, std::si
     }
 }
 
-// PCL's PCDReader::readHeader misbehaves on malformed headers: it allocates what the header
-// declares (8 GB for "SIZE 4 5555555555") and corrupts the heap on some garbled lines (found by
-// fuzzing, ASan allocator check in readHeader). So PCL only sees headers validated here first:
-// the keys of the PCD v0.7 header, each at most once, in a sane form (FIELDS, SIZE, TYPE and
-// COUNT of one length; SIZE 1, 2, 4 or 8; TYPE F, I or U; COUNT 1..4096; WIDTH, HEIGHT, POINTS
-// whole numbers with POINTS = WIDTH * HEIGHT; DATA ascii, binary or binary_compressed), and the
-// declared data must fit the file (RequireDeclaredDataFits).
-std::vector<std::string> Words(std::istringstream& in) {
-    std::vector<std::string> out;
-    for (std::string w; in >> w;) out.push_back(w);
-    return out;
-}
-
-bool WholeNumber(const std::string& s, long long max, long long& value) {
-    if (s.empty() || s.size() > 18 || s.find_first_not_of("0123456789") != std::string::npos) {
-        return false;
-    }
-    value = std::stoll(s);
-    return value <= max;
-}
-
 // PCL's ASCII body reader writes past its point buffer on some malformed bodies (valgrind:
 // invalid write in PCDReader::readBodyASCII, found by fuzzing). So the body is checked first:
 // exactly `points` lines (empty lines are skipped, as PCL does), each with `elems` numbers
 // separated by single blanks; a number is what strtod reads whole (nan and inf included: the
 // NaN check names them later).
 void PrecheckPcdAsciiBody(const std::string& path, std::istream& in, long header_lines,
-                          long long points, long long elems) {
-    long long seen = 0;
+                          unsigned long long points, unsigned long long elems) {
+    unsigned long long seen = 0;
     long n = header_lines;
     for (std::string line; std::getline(in, line);) {
         ++n;
@@ -127,7 +107,7 @@ void PrecheckPcdAsciiBody(const std::string& path, std::istream& in, long header
             throw InputError(path, n, "", "PCD data: " + what);
         };
         if (++seen > points) bad("more point lines than POINTS (" + std::to_string(points) + ")");
-        long long count = 0;
+        unsigned long long count = 0;
         std::size_t pos = 0;
         for (;;) {
             const std::size_t end = std::min(line.find(' ', pos), line.size());
@@ -157,7 +137,8 @@ void PrecheckPcdAsciiBody(const std::string& path, std::istream& in, long header
 // PCL's compressed reader trusts the sizes at the start of the data: it resizes its buffer to
 // the declared uncompressed size and then writes every point (a heap overflow when that is
 // smaller). The declared sizes must match the header and the file.
-void PrecheckPcdCompressedBody(const std::string& path, std::istream& in, long long bytes) {
+void PrecheckPcdCompressedBody(const std::string& path, std::istream& in,
+                               unsigned long long bytes) {
     std::uint32_t sizes[2] = {0, 0};
     const std::streampos start = in.tellg();
     if (start < 0 || !in.read(reinterpret_cast<char*>(sizes), sizeof(sizes))) {
@@ -165,7 +146,7 @@ void PrecheckPcdCompressedBody(const std::string& path, std::istream& in, long l
     }
     std::error_code ec;
     const std::uintmax_t file = std::filesystem::file_size(path, ec);
-    if (sizes[1] != static_cast<unsigned long long>(bytes) ||
+    if (sizes[1] != bytes ||
         (!ec && static_cast<std::uintmax_t>(start) + 8 + sizes[0] > file)) {
         throw InputError(path, 0, "",
                          "PCD data: binary_compressed sizes (" + std::to_string(sizes[0]) +
@@ -175,6 +156,13 @@ void PrecheckPcdCompressedBody(const std::string& path, std::istream& in, long l
     }
 }
 
+// PCL's PCDReader::readHeader misbehaves on malformed headers: it allocates what the header
+// declares (8 GB for "SIZE 4 5555555555") and corrupts the heap on some garbled lines (found by
+// fuzzing, ASan allocator check in readHeader). So PCL only sees headers validated here first:
+// the keys of the PCD v0.7 header, each at most once, in a sane form (FIELDS, SIZE, TYPE and
+// COUNT of one length; SIZE 1, 2, 4 or 8; TYPE F, I or U; COUNT 1..4096; WIDTH, HEIGHT, POINTS
+// whole numbers with POINTS = WIDTH * HEIGHT; DATA ascii, binary or binary_compressed), and the
+// declared data must fit the file (RequireDeclaredDataFits).
 void PrecheckPcdHeader(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     auto bad = [&](long line, const std::string& what) {
@@ -203,14 +191,13 @@ void PrecheckPcdHeader(const std::string& path) {
                        " is not single-blank separated (no tabs, CR, leading, trailing or double "
                        "blanks in a PCD header)");
         }
-        std::istringstream words(line);
-        std::string key;
-        words >> key;
+        const std::vector<std::string> words = internal::SplitWords(line);
+        const std::string& key = words.front();  // the line is not empty and starts with a word
         static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",      "TYPE", "COUNT",
                                                     "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
         if (!kKeys.count(key)) bad(n, "unknown line '" + line.substr(0, 40) + "'");
         if (keys.count(key)) bad(n, key + " given twice");
-        keys[key] = Words(words);
+        keys[key] = std::vector<std::string>(words.begin() + 1, words.end());
         if (key == "DATA") break;
     }
     for (const char* k : {"FIELDS", "SIZE", "TYPE", "WIDTH", "POINTS", "DATA"}) {
@@ -238,26 +225,27 @@ void PrecheckPcdHeader(const std::string& path) {
         }
         if (!ok) bad(0, "VIEWPOINT must be 7 finite numbers (tx ty tz qw qx qy qz)");
     }
-    long long step = 0, v = 0;
+    unsigned long long step = 0, elems = 0;  // bytes and values per point
     for (std::size_t k = 0; k < nf; ++k) {
         const std::string& s = keys["SIZE"][k];
         if (s != "1" && s != "2" && s != "4" && s != "8") bad(0, "SIZE must be 1, 2, 4 or 8");
         const std::string& type = keys["TYPE"][k];
         if (type != "F" && type != "I" && type != "U") bad(0, "TYPE must be F, I or U");
-        long long count = 1;
-        if (keys.count("COUNT") && (!WholeNumber(keys["COUNT"][k], 4096, count) || count < 1)) {
+        unsigned long long count = 1;
+        if (keys.count("COUNT") &&
+            (!internal::ParseWholeNumber(keys["COUNT"][k], 4096, count) || count < 1)) {
             bad(0, "COUNT must be 1..4096");
         }
-        step += std::stoll(s) * count;
+        step += std::stoull(s) * count;
+        elems += count;
     }
-    long long width = 0, height = 1, points = 0;
-    if (keys["WIDTH"].size() != 1 || !WholeNumber(keys["WIDTH"][0], 1LL << 40, width)) bad(0, "bad WIDTH");
-    if (keys.count("HEIGHT") &&
-        (keys["HEIGHT"].size() != 1 || !WholeNumber(keys["HEIGHT"][0], 1LL << 40, height))) {
-        bad(0, "bad HEIGHT");
-    }
-    if (keys["POINTS"].size() != 1 || !WholeNumber(keys["POINTS"][0], 1LL << 40, points) ||
-        points != width * height) {
+    unsigned long long width = 0, height = 1, points = 0;
+    auto whole = [&](const char* key, unsigned long long& value) {
+        return keys[key].size() == 1 && internal::ParseWholeNumber(keys[key][0], 1ULL << 40, value);
+    };
+    if (!whole("WIDTH", width)) bad(0, "bad WIDTH");
+    if (keys.count("HEIGHT") && !whole("HEIGHT", height)) bad(0, "bad HEIGHT");
+    if (!whole("POINTS", points) || points != width * height) {
         bad(0, "POINTS must be a whole number equal to WIDTH * HEIGHT");
     }
     const auto& data = keys["DATA"];
@@ -265,13 +253,6 @@ void PrecheckPcdHeader(const std::string& path) {
         bad(0, "DATA must be ascii, binary or binary_compressed");
     }
     RequireDeclaredDataFits(path, std::size_t(points), std::size_t(step));
-    (void)v;
-    long long elems = 0;
-    for (std::size_t k = 0; k < nf; ++k) {
-        long long count = 1;
-        if (keys.count("COUNT")) WholeNumber(keys["COUNT"][k], 4096, count);
-        elems += count;
-    }
     if (data[0] == "ascii") PrecheckPcdAsciiBody(path, in, n, points, elems);
     if (data[0] == "binary_compressed") PrecheckPcdCompressedBody(path, in, points * step);
 }
