@@ -3,6 +3,8 @@
 // at its real rate, KITTI 10 Hz, where a window solve takes far less than a chunk's duration) and
 // for the threaded mode replayed as fast as possible (the solver lags; a worst case).
 // Run: build/tests/eval_online [scenario dir ...]  (default: the 7 KITTI scenarios)
+//      DUMP_CAUSAL=file writes, per epoch of the synchronous run: index, time, causal, estimate
+//      and batch error [m] (the last scenario run overwrites it).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -86,6 +88,18 @@ void Evaluate(const std::string& dir) {
         const double smooth =
             Usable(o.smoothed.status) ? ComputeMetrics(o.smoothed.corrected, gt).ate_m : -1.0;
         const AlongCross c = AlongCrossRms(o.causal, gt);
+        if (const char* dump = std::getenv("DUMP_CAUSAL"); dump && sync) {
+            // index, time, causal error, estimate error, batch error [m]
+            if (FILE* f = std::fopen(dump, "w")) {
+                for (std::size_t i = 0; i < gt.size() && i < o.causal.size(); ++i) {
+                    std::fprintf(f, "%zu %.3f %.3f %.3f %.3f\n", i, gt.t_s[i],
+                                 (o.causal.p_en[i] - gt.p_en[i]).norm(),
+                                 (run.estimate.p_en[i] - gt.p_en[i]).norm(),
+                                 (run.result.corrected.p_en[i] - gt.p_en[i]).norm());
+                }
+                std::fclose(f);
+            }
+        }
         std::printf(" %s causal %7.2f (x%.2f; along %.2f cross %.2f) smoothed %7.2f |",
                     sync ? "sync" : "fast", causal, causal / run.after->ate_m, c.along_m,
                     c.cross_m, smooth);

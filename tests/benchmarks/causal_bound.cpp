@@ -1,0 +1,87 @@
+// What a causal estimate can reach with this model and map: at sampled epochs i, the batch
+// corrector run on the estimate's prefix [0, i] (everything known at epoch i, solved as well as
+// the batch mode solves a whole drive), and the error of its last pose. Compared at the same
+// epochs with the online corrector's causal output (synchronous: every window solved) and with
+// the batch result of the whole drive. If the prefix-batch error is itself far above the batch
+// error, the gap is the information only later epochs carry (a turn that fixes the along-track
+// position), not the online machinery.
+// Run: build/tests/causal_bound [scenario dir ...]  (default: the 7 KITTI scenarios)
+//      CAUSAL_STRIDE=n samples every n-th epoch (default 25).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "scenario_list.h"
+#include "driftcorr/pipeline/online.h"
+
+namespace {
+
+using namespace driftcorr;
+
+PlanarTrajectory Prefix(const PlanarTrajectory& t, std::size_t n) {
+    PlanarTrajectory out;
+    out.t_s.assign(t.t_s.begin(), t.t_s.begin() + n);
+    out.p_en.assign(t.p_en.begin(), t.p_en.begin() + n);
+    out.up_m.assign(t.up_m.begin(), t.up_m.begin() + n);
+    out.yaw_rad.assign(t.yaw_rad.begin(), t.yaw_rad.begin() + n);
+    return out;
+}
+
+void Evaluate(const std::string& dir) {
+    const pipeline::PipelineConfig cfg;
+    const pipeline::CorrectionRun run = pipeline::RunCorrection(dir, cfg);
+    const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(dir, cfg);
+    const PlanarTrajectory& gt = *run.ground_truth;
+    const PlanarTrajectory& est = run.estimate;
+    std::size_t stride = 25;
+    if (const char* s = std::getenv("CAUSAL_STRIDE")) stride = std::max(1, std::atoi(s));
+
+    OnlineConfig oc;
+    oc.synchronous = true;
+    OnlineCorrector online(&setup.field, oc);
+    std::vector<Eigen::Vector2d> causal;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        const PushResult r =
+            online.Push({est.t_s[i], est.p_en[i], est.up_m[i], est.yaw_rad[i]});
+        causal.push_back(r.corrected.p_en);
+    }
+
+    double s_prefix = 0.0, s_online = 0.0, s_batch = 0.0;
+    std::size_t count = 0, failed = 0;
+    for (std::size_t i = stride; i < est.size(); i += stride) {
+        const CorrectionResult r = CorrectTrajectory(Prefix(est, i + 1), &setup.field, cfg.corrector);
+        if (!Usable(r.status)) {
+            ++failed;
+            continue;
+        }
+        const double e_prefix = (r.corrected.p_en[i] - gt.p_en[i]).norm();
+        const double e_online = (causal[i] - gt.p_en[i]).norm();
+        const double e_batch = (run.result.corrected.p_en[i] - gt.p_en[i]).norm();
+        s_prefix += e_prefix * e_prefix;
+        s_online += e_online * e_online;
+        s_batch += e_batch * e_batch;
+        ++count;
+        if (std::getenv("CAUSAL_VERBOSE")) {
+            std::printf("  %zu prefix-batch %.2f online %.2f batch %.2f\n", i, e_prefix, e_online,
+                        e_batch);
+        }
+    }
+    if (count == 0) {
+        std::printf("%-30s no epoch sampled\n", run.scenario.name.c_str());
+        return;
+    }
+    const double prefix = std::sqrt(s_prefix / count), onl = std::sqrt(s_online / count),
+                 batch = std::sqrt(s_batch / count);
+    std::printf("%-30s %zu epochs (every %zu, %zu failed): RMS error batch %.2f | prefix-batch "
+                "last pose %.2f (x%.2f) | online causal %.2f (x%.2f)\n",
+                run.scenario.name.c_str(), count, stride, failed, batch, prefix, prefix / batch,
+                onl, onl / batch);
+    std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    return driftcorr::bench::ForEachScenario(argc, argv, Evaluate);
+}
