@@ -13,12 +13,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <optional>
 #include <string>
-#include <vector>
 
 #include "scenario_list.h"
-#include "driftcorr/pipeline/online.h"
+#include "driftcorr/eval/evaluation.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace {
@@ -35,47 +33,40 @@ PlanarTrajectory Prefix(const PlanarTrajectory& t, std::size_t n) {
 }
 
 void Evaluate(const std::string& dir) {
-    const pipeline::PipelineConfig cfg;
-    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(dir, cfg);
-    if (!ps.ground_truth) {
-        std::printf("%-30s no ground truth, skipped\n", ps.scenario.name.c_str());
+    // Batch and online causal output exactly as `driftcorr eval` runs them (its per-pose errors).
+    eval::EvalConfig ec;
+    ec.methods = {eval::Method::kDriftcorr, eval::Method::kOnline};
+    const eval::ScenarioEvaluation ev = eval::EvaluateScenario(dir, ec);
+    const eval::MethodResult* batch = ev.Find(eval::Method::kDriftcorr);
+    const eval::MethodResult* online = ev.Find(eval::Method::kOnline);
+    if (!ev.ok() || !ev.has_ground_truth || !batch || !batch->ok || !online || !online->ok) {
+        std::printf("%-30s skipped: %s\n", ev.label.c_str(),
+                    !ev.ok()                 ? ev.error.c_str()
+                    : !ev.has_ground_truth   ? "no ground truth"
+                    : !batch || !batch->ok   ? "batch failed"
+                                             : "online failed");
         return;
     }
-    const CorrectorConfig& corrector = pipeline::CorrectorFor(ps.scenario, cfg);
-    const CorrectionResult batch_run = pipeline::Correct(ps, cfg);
-    if (!Usable(batch_run.status)) {
-        std::printf("%-30s batch failed: %s\n", ps.scenario.name.c_str(), batch_run.message.c_str());
-        return;
-    }
+    // The same scenario, field and settings for the prefix solves.
+    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(dir, ec.pipeline);
+    const CorrectorConfig& corrector = pipeline::CorrectorFor(ps.scenario, ec.pipeline);
     const PlanarTrajectory& gt = *ps.ground_truth;
     const PlanarTrajectory& est = ps.estimate;
-    const PlanarTrajectory& batch_traj = batch_run.corrected;
     std::size_t stride = 25;
     if (const char* s = std::getenv("CAUSAL_STRIDE")) stride = std::max(1, std::atoi(s));
 
-    OnlineConfig oc = cfg.online;
-    oc.corrector = corrector;  // as driftcorr eval runs the online method
-    oc.synchronous = true;
-    OnlineCorrector online(&ps.field, oc);
-    std::vector<Eigen::Vector2d> causal;
-    for (std::size_t i = 0; i < est.size(); ++i) {
-        PlanarPose pose{est.t_s[i], est.p_en[i], est.up_m[i], std::nullopt};
-        if (est.HasYaw()) pose.yaw_rad = est.yaw_rad[i];
-        const PushResult r = online.Push(pose);
-        causal.push_back(r.corrected.p_en);
-    }
-
     double s_prefix = 0.0, s_online = 0.0, s_batch = 0.0;
     std::size_t count = 0, failed = 0;
-    for (std::size_t i = stride; i < est.size(); i += stride) {
+    const std::size_t n = std::min(batch->errors_m.size(), online->errors_m.size());
+    for (std::size_t i = stride; i < n && i < est.size(); i += stride) {
         const CorrectionResult r = CorrectTrajectory(Prefix(est, i + 1), &ps.field, corrector);
         if (!Usable(r.status)) {
             ++failed;
             continue;
         }
         const double e_prefix = (r.corrected.p_en[i] - gt.p_en[i]).norm();
-        const double e_online = (causal[i] - gt.p_en[i]).norm();
-        const double e_batch = (batch_traj.p_en[i] - gt.p_en[i]).norm();
+        const double e_online = online->errors_m[i];
+        const double e_batch = batch->errors_m[i];
         s_prefix += e_prefix * e_prefix;
         s_online += e_online * e_online;
         s_batch += e_batch * e_batch;
@@ -90,11 +81,11 @@ void Evaluate(const std::string& dir) {
         return;
     }
     const double prefix = std::sqrt(s_prefix / count), onl = std::sqrt(s_online / count),
-                 batch = std::sqrt(s_batch / count);
+                 bat = std::sqrt(s_batch / count);
     std::printf("%-30s %zu epochs (every %zu, %zu failed): RMS error batch %.2f | prefix-batch "
                 "last pose %.2f (x%.2f) | online causal %.2f (x%.2f)\n",
-                ps.scenario.name.c_str(), count, stride, failed, batch, prefix, prefix / batch,
-                onl, onl / batch);
+                ps.scenario.name.c_str(), count, stride, failed, bat, prefix, prefix / bat, onl,
+                onl / bat);
     std::fflush(stdout);
 }
 

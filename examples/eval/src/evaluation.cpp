@@ -46,8 +46,7 @@ MethodResult RunOnline(const pipeline::PreparedScenario& ps, const pipeline::Pip
     MethodResult r;
     r.method = Method::kOnline;
     OnlineConfig oc = base.online;
-    oc.corrector = ps.scenario.mode == io::ScenarioMode::kIndoor3d ? base.indoor_corrector
-                                                                    : base.corrector;
+    oc.corrector = pipeline::CorrectorFor(ps.scenario, base);
     oc.synchronous = true;
     const auto t0 = std::chrono::steady_clock::now();
     OnlineCorrector online(&ps.field, oc);
