@@ -17,6 +17,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "driftcorr/core/errors.h"
@@ -400,6 +401,19 @@ TEST(SurfaceReaders, OctomapFullTreeFileIsCheckedBeforeOctomapReadsIt) {
     ExpectEachInputError(dir, ".ot", cases, [](const std::string& f) { ReadFloorVoxelsOctomap(f); });
 }
 
+// Floor voxels in the corner x, y < corner_m must lie at z_high, all others at z_low (checked
+// per voxel); returns how many are at {z_low, z_high}.
+std::pair<int, int> CountFloorLevels(const Points& floor, double corner_m, double z_low,
+                                     double z_high) {
+    int low = 0, high = 0;
+    for (const auto& p : floor) {
+        const bool corner = p.x() < corner_m && p.y() < corner_m;
+        EXPECT_NEAR(p.z(), corner ? z_high : z_low, 1e-6) << p.transpose();
+        (corner ? high : low)++;
+    }
+    return {low, high};
+}
+
 // Floor rule: an occupied voxel with a non-occupied voxel above is floor; its top face is
 // returned. A 1 m x 1 m floor at z = 0 (100 voxels of 0.1 m) with a second occupied voxel on top
 // in one 0.3 m x 0.3 m corner (9 columns): 91 floor voxels at z = 0, 9 at z = 0.1.
@@ -414,15 +428,12 @@ TEST(SurfaceReaders, OctomapFloorVoxelsAreOccupiedWithFreeOrUnknownAbove) {
     WriteOctomapFromPoints(bt, pts, 0.1);
     const Points floor = ReadFloorVoxelsOctomap(bt);
     ASSERT_EQ(floor.size(), 100u);
-    int low = 0, high = 0;
-    for (const auto& p : floor) {
-        const bool corner = p.x() < 0.3 && p.y() < 0.3;
-        EXPECT_NEAR(p.z(), corner ? 0.1 : 0.0, 1e-6) << p.transpose();
-        (corner ? high : low)++;
-        EXPECT_NEAR(std::fmod(p.x() + 1.0, 0.1), 0.05, 1e-6);  // voxel centres, 0.05 + 0.1 i
-    }
+    const auto [low, high] = CountFloorLevels(floor, 0.3, 0.0, 0.1);
     EXPECT_EQ(low, 91);
     EXPECT_EQ(high, 9);
+    for (const auto& p : floor) {
+        EXPECT_NEAR(std::fmod(p.x() + 1.0, 0.1), 0.05, 1e-6);  // voxel centres, 0.05 + 0.1 i
+    }
 }
 
 // OctoMap prunes a uniform block into one leaf: its whole top face is floor except where an
@@ -443,12 +454,7 @@ TEST(SurfaceReaders, OctomapPrunedLeafFloorExcludesWhatStandsOnIt) {
     WriteOctomapFromPoints(box, pts, 0.1);
     const Points floor = ReadFloorVoxelsOctomap(box);
     ASSERT_EQ(floor.size(), 64u);
-    int low = 0, high = 0;
-    for (const auto& p : floor) {
-        const bool corner = p.x() < 0.1 && p.y() < 0.1;
-        EXPECT_NEAR(p.z(), corner ? 0.9 : 0.8, 1e-6) << p.transpose();
-        (corner ? high : low)++;
-    }
+    const auto [low, high] = CountFloorLevels(floor, 0.1, 0.8, 0.9);
     EXPECT_EQ(low, 63);
     EXPECT_EQ(high, 1);
 }
