@@ -124,9 +124,9 @@ INSTANTIATE_TEST_SUITE_P(
 namespace {
 
 // Real indoor PDR walk on GeoJSON floor plans and walkways of three floors: the corrector must
-// pick the right floor itself (all poses) and remove most of the drift. (The issue's target is
-// ATE <= 1.0 m; measured 1.06 m, so this test asserts what is reached, not the target.)
-TEST(EndToEndIndoor, HcuEightStaysOnItsFloorAndImproves) {
+// pick the right floor itself (all poses) and meet the issue's ATE <= 1.0 m (measured 0.95 m with
+// the pedestrian defaults, which were chosen on another walk: pipeline.cpp).
+TEST(EndToEndIndoor, HcuEightMeetsTheIndoorIssueFigures) {
     const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
     if (!fs::exists(dir + "/scenario.yaml")) {
         GTEST_SKIP() << "real data not present: " << dir;
@@ -135,8 +135,7 @@ TEST(EndToEndIndoor, HcuEightStaysOnItsFloorAndImproves) {
     ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
     ASSERT_TRUE(run.before && run.after);
     EXPECT_EQ(run.after->floor_accuracy, 1.0);
-    EXPECT_LE(run.after->ate_m, 0.4 * run.before->ate_m);
-    EXPECT_LE(run.after->ate_m, 1.2);
+    EXPECT_LE(run.after->ate_m, 1.0);
 }
 
 }  // namespace
