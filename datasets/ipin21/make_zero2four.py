@@ -63,8 +63,11 @@ def main(argv):
     maps = {f"{kind}{fl}": os.path.join(src, "MapMaterial", f"{kind}{fl}.geojson")
             for kind in ("Plan", "Route") for fl, _ in FLOORS}
     missing = [p for p in list(need.values()) + list(maps.values()) if not os.path.isfile(p)]
-    if missing or len(waypoint_files) != 1:
-        fail("not an IPIN21Data clone: missing " + (", ".join(missing) or "Zero2fourWaypoints.csv"))
+    if len(waypoint_files) != 1:
+        missing.append(os.path.join(src, "Zero2fourWaypoints.csv") +
+                       (f" (found {len(waypoint_files)})" if waypoint_files else ""))
+    if missing:
+        fail("not an IPIN21Data clone: missing " + ", ".join(missing))
 
     length = [r[0] for r in rows(need["Zero2fourStepLengths.csv"], 1)]
     heading = [r[0] for r in rows(need["Zero2fourStepHeadigs.csv"], 1)]
