@@ -401,6 +401,33 @@ TEST(SurfaceReaders, OctomapFullTreeFileIsCheckedBeforeOctomapReadsIt) {
     ExpectEachInputError(dir, ".ot", cases, [](const std::string& f) { ReadFloorVoxelsOctomap(f); });
 }
 
+// OctoMap's header reader skips from the "data" token to the next newline. With none after it (a
+// vertical tab ends the token too) it reaches the file's end, and its tree reader then followed
+// child bits it had not read, off the stack (found by fuzzing). Same tree, three separators.
+TEST(SurfaceReaders, OctomapBinaryDataWithoutNewlineAfterTheDataTokenIsAnInputError) {
+    const fs::path dir = TestDir("octomap_data_line");
+    std::string tree;  // 16 inner nodes down to one finest leaf, as in the legacy test above
+    for (int level = 0; level < 15; ++level) tree += std::string("\x03\x00", 2);
+    tree += std::string("\x02\x00", 2);
+    auto file = [&](const std::string& name, const std::string& size, const std::string& sep) {
+        return WriteText(dir / name, "# Octomap OcTree binary file\n# (comment)\n#\nid OcTree\n"
+                                     "size " + size + "\nres 0.1\ndata" + sep + tree);
+    };
+    EXPECT_EQ(ReadFloorVoxelsOctomap(file("newline.bt", "17", "\n")).size(), 1u);
+    const std::string tab = file("vtab.bt", "17", "\v");
+    ExpectInputError([&] { ReadFloorVoxelsOctomap(tab); }, tab, "runs past the file's end");
+    const std::string ot = WriteText(dir / "vtab.ot", [] {
+        std::string s = FullTreeFile("OcTree", "0.1", 16);
+        s[s.find("data\n") + 4] = '\v';
+        return s;
+    }());
+    ExpectInputError([&] { ReadFloorVoxelsOctomap(ot); }, ot, "runs past the file's end");
+    // "size 0": OctoMap reads no data at all, so what follows "data" does not matter; the tree is
+    // empty and has no floor.
+    const std::string empty = file("empty.bt", "0", "\v");
+    ExpectInputError([&] { ReadFloorVoxelsOctomap(empty); }, empty, "");
+}
+
 // Floor voxels in the corner x, y < corner_m must lie at z_high, all others at z_low (checked
 // per voxel); returns how many are at {z_low, z_high}.
 std::pair<int, int> CountFloorLevels(const Points& floor, double corner_m, double z_low,

@@ -86,6 +86,7 @@ struct TreeHeader {
     std::size_t data_start = std::string::npos;
     std::string id;
     double res = 0.0;
+    unsigned size = 0;  ///< the node count the header promises
 };
 
 TreeHeader ParseTreeHeader(const std::string& text, const std::string& first_line) {
@@ -99,8 +100,12 @@ TreeHeader ParseTreeHeader(const std::string& text, const std::string& first_lin
     };
     for (std::string token; in.good() && in >> token;) {
         if (token == "data") {
+            // When no newline follows, OctoMap's stream ends up at the end of the file and its
+            // reader then works on child bits it never read: the data is empty. (tellg() cannot
+            // say so: at the end of the stream it returns -1.)
             skip_line();
-            header.data_start = in ? pos + 1 + static_cast<std::size_t>(in.tellg()) : text.size();
+            header.data_start =
+                in && !in.eof() ? pos + 1 + static_cast<std::size_t>(in.tellg()) : text.size();
             return header;
         }
         // The values are read with the types OctoMap uses: "res 0.1data" is 0.1, then "data".
@@ -109,8 +114,7 @@ TreeHeader ParseTreeHeader(const std::string& text, const std::string& first_lin
         } else if (token == "res") {
             in >> header.res;
         } else if (token == "size") {
-            unsigned size = 0;
-            in >> size;
+            in >> header.size;
         } else {
             skip_line();  // a comment ("#...") or a token OctoMap skips with a warning
         }
@@ -118,17 +122,23 @@ TreeHeader ParseTreeHeader(const std::string& text, const std::string& first_lin
     return header;
 }
 
-// Where the tree data of a .bt file starts; std::string::npos when there is none.
+// Where OctoMap starts reading the tree data of a .bt file; std::string::npos when it reads none
+// (no header it accepts, or a size of 0 nodes, for which it skips the data).
 std::size_t BinaryDataStart(const std::string& text) {
     static const std::string kHeader = "# Octomap OcTree binary file";
     if (text.compare(0, kHeader.size(), kHeader) != 0) {
         // OctoMap then tries its legacy layout: int32 tree type 3, double resolution, uint32
         // size, and the tree data right after (byte 16).
         std::int32_t type = 0;
-        if (text.size() >= 16) std::memcpy(&type, text.data(), sizeof(type));
-        return type == 3 ? 16 : std::string::npos;
+        std::uint32_t size = 0;
+        if (text.size() >= 16) {
+            std::memcpy(&type, text.data(), sizeof(type));
+            std::memcpy(&size, text.data() + 12, sizeof(size));
+        }
+        return type == 3 && size > 0 ? 16 : std::string::npos;
     }
-    return ParseTreeHeader(text, kHeader).data_start;
+    const TreeHeader header = ParseTreeHeader(text, kHeader);
+    return header.size > 0 ? header.data_start : std::string::npos;
 }
 
 std::string ReadWholeFile(const std::string& path) {
