@@ -187,6 +187,49 @@ TEST_F(OnlineSynthetic, GapAndOutsideMapAreFlagged) {
     EXPECT_TRUE(off.corrected.p_en.allFinite());
 }
 
+// A 3D field (20 m x 20 m x 4 m, 0.5 m cells) whose corridor distance is corridor(p) everywhere.
+template <typename F>
+TraversableField LinearCorridorField(F corridor) {
+    GridSpec spec;
+    spec.resolution_m = 0.5;
+    spec.nx = spec.ny = 41;
+    spec.nz = 9;
+    std::vector<float> centre(spec.size(), 0.0f), values(spec.size());
+    for (int k = 0; k < spec.nz; ++k) {
+        for (int j = 0; j < spec.ny; ++j) {
+            for (int i = 0; i < spec.nx; ++i) {
+                values[spec.Index(i, j, k)] = static_cast<float>(corridor(spec.Position(i, j, k)));
+            }
+        }
+    }
+    return TraversableField(InterpolatedField(spec, centre), InterpolatedField(spec, values), 5.0);
+}
+
+// The causal output is moved into the corridor horizontally, but only where the corridor
+// distance falls horizontally. Where it falls with height (between floors, on stairs) it is left
+// where it is: a Newton step along a small horizontal slope took a pose on a real walk 165 m away.
+TEST(Online, OutputIsProjectedOnlyAlongAHorizontalSlope) {
+    const PlanarPose pose{0.0, {9.5, 10.0}, 1.0, 0.0};
+    auto first_output = [&](const TraversableField& field) {
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        OnlineCorrector online(&field, cfg);
+        const PushResult r = online.Push(pose);
+        EXPECT_TRUE(r.Accepted() && !r.outside_map) << r.message;
+        return r.corrected;
+    };
+    // Outside by 1.5 m, slope 1 along x: moved onto the edge x = 8 (slack 0).
+    const PlanarPose across = first_output(
+        LinearCorridorField([](const Eigen::Vector3d& p) { return p.x() - 8.0; }));
+    EXPECT_NEAR(across.p_en.x(), 8.0, 0.05);
+    EXPECT_NEAR(across.p_en.y(), 10.0, 1e-6);
+    // Outside by 0.89 m, falling with height (slope 1 in z, 0.02 along x): not moved.
+    const PlanarPose below = first_output(LinearCorridorField(
+        [](const Eigen::Vector3d& p) { return 2.0 - p.z() - 0.3 + 0.02 * p.x(); }));
+    EXPECT_NEAR((below.p_en - pose.p_en).norm(), 0.0, 1e-9) << below.p_en.transpose();
+    EXPECT_EQ(below.up_m, pose.up_m);
+}
+
 TEST(Online, TooFewPosesIsAStatusNotACrash) {
     OnlineCorrector online(nullptr, OnlineConfig{});
     online.Push(PlanarPose{0.0, {0.0, 0.0}, 0.0, 0.0});

@@ -164,11 +164,22 @@ bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
     if (!q) return false;
     const ModelConfig& m = cfg_.corrector.model;
     if (!cfg_.project_output || !m.hard_corridor || q->corridor.value > m.corridor_gate_m) return true;
-    for (int k = 0; k < 3 && q && q->corridor.value > m.corridor_slack_m; ++k) {
+    // Only the horizontal position moves. Where the corridor distance falls mostly with height
+    // (a pose between floors, on stairs) its horizontal slope is small and a Newton step along it
+    // would be long: on a real walk one went 165 m. So a step is taken only where the slope is at
+    // least kMinSlope (a step is then at most excess / kMinSlope long, the excess being at most
+    // corridor_gate_m), and kept only when it lowers the corridor distance.
+    constexpr double kMinSlope = 0.5;
+    for (int k = 0; k < 3 && q->corridor.value > m.corridor_slack_m; ++k) {
         const Eigen::Vector2d g = q->corridor.gradient.head<2>();
-        if (!(g.squaredNorm() > 1e-6)) break;
-        pose.p.head<2>() -= (q->corridor.value - m.corridor_slack_m) * g / g.squaredNorm();
-        q = field_->Query(pose.p);
+        const double slope = g.norm();
+        if (!(slope >= kMinSlope)) break;
+        Eigen::Vector3d p = pose.p;
+        p.head<2>() -= (q->corridor.value - m.corridor_slack_m) / slope * (g / slope);
+        const auto next = field_->Query(p);
+        if (!next || !(next->corridor.value < q->corridor.value)) break;
+        pose.p = p;
+        q = next;
     }
     return true;
 }

@@ -61,8 +61,9 @@ struct OnlineConfig {
     double gap_warn_s = 1.0;     ///< Push flags a step longer than this in time [s]
     /// The returned causal pose is moved into the traversable corridor when it lies outside it but
     /// within corridor.model.corridor_gate_m (what the refinement's hard constraint does to the
-    /// smoothed poses), along the corridor distance gradient, in at most 3 Newton steps. Only the
-    /// output is moved; the solver state is not.
+    /// smoothed poses), horizontally along the corridor distance gradient, in at most 3 Newton
+    /// steps, each taken only where the horizontal slope is >= 0.5 and kept only when it lowers
+    /// the distance. Only the output is moved; the solver state is not.
     bool project_output = true;
     /// Path between look-ahead solves for the causal output, as a share of corrector.chunk_m
     /// (0.125: every 10 m with the road chunks of 80 m); 0: only the chunk solves.
