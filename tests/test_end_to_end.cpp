@@ -143,15 +143,17 @@ TEST(EndToEndIndoor, HcuEightMeetsTheIndoorIssueFigures) {
 namespace {
 
 // The synthetic three-floor building (stairs and a lift, heading bias, step scale error, height
-// drift) from the committed generator: the same correction whichever map format carries the
-// walkable surfaces, ATE <= 0.5 m and every pose on the right floor.
+// drift) from the committed generator: the same correction whichever map format (PCD, PLY,
+// OctoMap .bt or .ot) carries the walkable surfaces, ATE <= 0.5 m and every pose on the right
+// floor.
 TEST(EndToEndIndoor, SyntheticBuildingSameResultFromPcdPlyOctomap) {
     const std::string dir = TmpDir("building");
     const std::string cmd = std::string(DRIFTCORR_BINARY_DIR) +
                             "/datasets/driftcorr_make_building_scenario " + dir + " > /dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     std::vector<double> ates;
-    for (const char* yaml : {"scenario.yaml", "scenario_ply.yaml", "scenario_octomap.yaml"}) {
+    for (const char* yaml :
+         {"scenario.yaml", "scenario_ply.yaml", "scenario_octomap.yaml", "scenario_ot.yaml"}) {
         const pipeline::CorrectionRun run =
             pipeline::RunCorrection(dir + "/" + yaml, pipeline::PipelineConfig{});
         ASSERT_TRUE(Usable(run.result.status)) << yaml << ": " << run.result.message;
@@ -163,6 +165,7 @@ TEST(EndToEndIndoor, SyntheticBuildingSameResultFromPcdPlyOctomap) {
     }
     EXPECT_NEAR(ates[1], ates[0], 0.05);  // PLY holds the same points as PCD
     EXPECT_NEAR(ates[2], ates[0], 0.05);  // OctoMap quantises heights to 0.1 m voxels
+    EXPECT_EQ(ates[3], ates[2]);          // .ot holds the same tree as .bt
 }
 
 }  // namespace

@@ -643,9 +643,10 @@ std::vector<Eigen::Vector3d> ReadTumPositions(const fs::path& path) {
     return out;
 }
 
-const char* const kScenarioFiles[] = {"building.pcd",          "building.ply",     "building.bt",
-                                      "ground_truth.tum",      "estimate.tum",     "scenario.yaml",
-                                      "scenario_octomap.yaml", "scenario_ply.yaml"};
+const char* const kScenarioFiles[] = {
+    "building.pcd",     "building.ply", "building.bt",   "building.ot",
+    "ground_truth.tum", "estimate.tum", "scenario.yaml", "scenario_octomap.yaml",
+    "scenario_ot.yaml", "scenario_ply.yaml"};
 
 TEST(SynthBuilding, SameSeedSameBytes) {
     const fs::path a = TestDir("gen_a"), b = TestDir("gen_b"), c = TestDir("gen_c");
@@ -669,7 +670,8 @@ TEST(SynthBuilding, SameSeedSameBytes) {
 // The three map files give the same field: every ground-truth pose (floors, stairs, the lift
 // ride) lies inside the traversable set, and the corridor values at the poses agree. PCD and PLY
 // hold the same float points, so their fields are identical; the OctoMap quantises heights to its
-// 0.1 m voxels (stairs, lift levels), so its corridor values may differ by up to 0.15 m.
+// 0.1 m voxels (stairs, lift levels), so its corridor values may differ by up to 0.15 m. The .bt
+// and .ot files hold the same tree (occupancy bits, log-odds), so their fields are identical.
 TEST(SynthBuilding, PcdPlyAndOctomapGiveTheSameField) {
     const fs::path dir = TestDir("formats");
     RunGenerator(dir);
@@ -693,16 +695,20 @@ TEST(SynthBuilding, PcdPlyAndOctomapGiveTheSameField) {
         BuildSurfaceField(ReadSurfacePoints((dir / "building.ply").string()), {});
     const TraversableField bt =
         BuildSurfaceField(ReadSurfacePoints((dir / "building.bt").string()), {});
-    double max_ply = 0.0, max_bt = 0.0, worst_inside = -1e9;
+    const TraversableField ot =
+        BuildSurfaceField(ReadSurfacePoints((dir / "building.ot").string()), {});
+    double max_ply = 0.0, max_bt = 0.0, max_ot = 0.0, worst_inside = -1e9;
     for (const auto& p : gt) {
         const double c = Corridor(pcd, p);
         worst_inside = std::max(worst_inside, c);
         max_ply = std::max(max_ply, std::abs(Corridor(ply, p) - c));
         max_bt = std::max(max_bt, std::abs(Corridor(bt, p) - c));
+        max_ot = std::max(max_ot, std::abs(Corridor(ot, p) - Corridor(bt, p)));
     }
     EXPECT_LT(worst_inside, -0.1);  // every pose inside, >= 0.1 m from the edge
     EXPECT_EQ(max_ply, 0.0);
     EXPECT_LT(max_bt, 0.15);
+    EXPECT_EQ(max_ot, 0.0);
     RecordProperty("max_corridor_difference_octomap_m", std::to_string(max_bt));
     std::printf(
         "max |corridor difference| at the %zu GT poses: PLY %.4f m, OctoMap %.4f m; "

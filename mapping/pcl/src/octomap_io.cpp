@@ -316,9 +316,10 @@ void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Ve
     }
     tree.updateInnerOccupancy();
     const std::string tmp = path + ".tmp";
+    const bool full = std::filesystem::path(path).extension() == ".ot";
     const bool written = [&] {
         const QuietStreams quiet;
-        return tree.writeBinary(tmp);
+        return full ? tree.write(tmp) : tree.writeBinary(tmp);
     }();
     if (!written) throw std::runtime_error(tmp + ": cannot write OctoMap");
     std::error_code ec;

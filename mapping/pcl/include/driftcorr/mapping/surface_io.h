@@ -41,10 +41,11 @@ std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path);
 void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points);
 void WriteSurfacePointsPly(const std::string& path, const std::vector<Eigen::Vector3d>& points);
 
-/// Writes a binary OctoMap (.bt) of resolution resolution_m in which, for every surface point,
-/// the voxel just below it (containing the point minus half a voxel in z) is occupied, so that
-/// its top face is at the surface height up to the voxel quantisation; all other space is
-/// unknown. Precondition: resolution_m > 0.
+/// Writes an OctoMap of resolution resolution_m in which, for every surface point, the voxel just
+/// below it (containing the point minus half a voxel in z) is occupied, so that its top face is at
+/// the surface height up to the voxel quantisation; all other space is unknown. A path ending in
+/// ".ot" gets the full format (occupancy log-odds per node, AbstractOcTree::write), any other the
+/// binary one (.bt, occupancy bits only). Precondition: resolution_m > 0.
 void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Vector3d>& points,
                             double resolution_m);
 
