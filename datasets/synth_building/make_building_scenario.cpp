@@ -1,6 +1,7 @@
 // driftcorr_make_building_scenario: writes the deterministic synthetic building scenario
 // (building.pcd/.ply/.bt/.ot, ground_truth.tum, estimate.tum, scenario.yaml, scenario_ply.yaml,
-// scenario_octomap.yaml, scenario_ot.yaml) into a folder. See datasets/README.md, "Synthetic building".
+// scenario_octomap.yaml, scenario_ot.yaml) into a folder. See datasets/README.md, "Synthetic
+// building".
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -2,6 +2,7 @@
 #include <octomap/AbstractOcTree.h>
 #include <octomap/OcTree.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <cstdint>
@@ -187,13 +188,21 @@ void CheckFullTreeFile(const std::string& path) {
     }
 }
 
+// The one rule for which OctoMap format a path names, for reading and writing alike: ".ot" in any
+// case (as ReadSurfacePoints dispatches it) is the full format (AbstractOcTree::read / write),
+// anything else the binary one (.bt).
+bool IsFullTreePath(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    return ext == ".ot";
+}
+
 std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
         throw InputError(path, 0, "", "OctoMap file does not exist or is not a regular file");
     }
-    const std::string ext = std::filesystem::path(path).extension().string();
-    if (ext == ".ot" || ext == ".OT") {
+    if (IsFullTreePath(path)) {
         CheckFullTreeFile(path);
         const QuietStreams quiet;
         std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
@@ -316,10 +325,9 @@ void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Ve
     }
     tree.updateInnerOccupancy();
     const std::string tmp = path + ".tmp";
-    const bool full = std::filesystem::path(path).extension() == ".ot";
     const bool written = [&] {
         const QuietStreams quiet;
-        return full ? tree.write(tmp) : tree.writeBinary(tmp);
+        return IsFullTreePath(path) ? tree.write(tmp) : tree.writeBinary(tmp);
     }();
     if (!written) throw std::runtime_error(tmp + ": cannot write OctoMap");
     std::error_code ec;

@@ -43,9 +43,10 @@ void WriteSurfacePointsPly(const std::string& path, const std::vector<Eigen::Vec
 
 /// Writes an OctoMap of resolution resolution_m in which, for every surface point, the voxel just
 /// below it (containing the point minus half a voxel in z) is occupied, so that its top face is at
-/// the surface height up to the voxel quantisation; all other space is unknown. A path ending in
-/// ".ot" gets the full format (occupancy log-odds per node, AbstractOcTree::write), any other the
-/// binary one (.bt, occupancy bits only). Precondition: resolution_m > 0.
+/// the surface height up to the voxel quantisation; all other space is unknown. The format follows
+/// the extension as ReadFloorVoxelsOctomap reads it: ".ot" (either case) the full format
+/// (occupancy log-odds per node), any other the binary one (.bt, occupancy bits only).
+/// Precondition: resolution_m > 0.
 void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Vector3d>& points,
                             double resolution_m);
 
