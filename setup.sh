@@ -2,6 +2,7 @@
 # One-command set-up for a fresh Debian 12 machine (run as root):
 #   bash setup.sh demo   installs what is missing, builds, corrects the default (synthetic) scenario
 #   bash setup.sh test   installs what is missing, builds, runs the whole test suite
+#   bash setup.sh packages   prints the Debian packages it installs, one a line
 # Everything comes from Debian packages; nothing is downloaded at configure or build time.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -10,7 +11,7 @@ mode=${1:-demo}
 build_dir=${BUILD_DIR:-build}
 packages=(build-essential cmake pkg-config libeigen3-dev coinor-libipopt-dev liblapack-dev
           libblas-dev libyaml-cpp-dev libgeographiclib-dev libproj-dev libexpat1-dev
-          libgtest-dev libbenchmark-dev libpcl-dev liboctomap-dev)
+          libgtest-dev libbenchmark-dev libpcl-dev liboctomap-dev nlohmann-json3-dev)
 
 install_missing() {
     local missing=()
@@ -31,6 +32,9 @@ build() {
 }
 
 case "$mode" in
+    packages)
+        printf '%s\n' "${packages[@]}"
+        ;;
     demo)
         install_missing
         build
@@ -45,7 +49,7 @@ case "$mode" in
         (cd "$build_dir" && ctest --output-on-failure -j "$(nproc)")
         ;;
     *)
-        echo "usage: bash setup.sh [demo|test]" >&2
+        echo "usage: bash setup.sh [demo|test|packages]" >&2
         exit 1
         ;;
 esac
