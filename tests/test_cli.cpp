@@ -519,6 +519,19 @@ std::vector<BadInputCase> BadInputCases() {
          }),
          kExitBadInput,
          {R"(scenario\.yaml:\d+: anchor\.lon_deg: missing required key)"}},
+        {"ScenarioAnchorWithoutYaw",
+         Edit([](const fs::path& s) {
+             RegexReplace(s / "scenario.yaml", "\n  yaw_deg: [^\n]*", "");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml:\d+: anchor\.yaw_deg: missing required key)"}},
+        {"ScenarioFileIsAFolder",
+         Edit([](const fs::path& s) {
+             fs::remove(s / "scenario.yaml");
+             fs::create_directory(s / "scenario.yaml");
+         }),
+         kExitBadInput,
+         {R"(scenario\.yaml: is a folder, not a file)"}},
         {"ScenarioNoAnchor",
          Edit([](const fs::path& s) {
              RegexReplace(s / "scenario.yaml", "\nanchor:\n(  [^\n]*\n)+", "\n");

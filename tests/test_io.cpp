@@ -329,7 +329,7 @@ TEST(Scenario, LoadsFolderWithDefaultsAndResolvedPaths) {
     EXPECT_EQ(s.frame, FrameAxes::kKittiCamera);
     EXPECT_TRUE(s.anchor.IsGeographic());
     EXPECT_EQ(s.anchor.alt_m, 0.0);
-    EXPECT_DOUBLE_EQ(s.anchor.yaw_deg, -30.5);
+    EXPECT_DOUBLE_EQ(*s.anchor.yaw_deg, -30.5);
     EXPECT_EQ(s.anchor.z_m, 0.0);
     ASSERT_EQ(s.map.size(), 6u);
     EXPECT_EQ(s.map[0].format, MapFormat::kOsm);
@@ -353,7 +353,7 @@ TEST(Scenario, LoadsYamlFileAndDefaultsNameToFolder) {
     const std::string yaml = WriteText(dir / "other.yml", R"(mode: indoor3d
 estimate: {path: e.tum, format: tum}
 frame: enu
-anchor: {crs: "urn:ogc:def:crs:EPSG::32632", easting_m: 566578.7, northing_m: 5932830.4, z_m: 19.6}
+anchor: {crs: "urn:ogc:def:crs:EPSG::32632", easting_m: 566578.7, northing_m: 5932830.4, z_m: 19.6, yaw_deg: 0}
 map: [{path: r.geojson, format: geojson, role: walkways, floor_z_m: 19.6}]
 )");
     const Scenario s = LoadScenario(yaml);
@@ -387,6 +387,29 @@ std::string Replace(std::string text, const std::string& from, const std::string
     EXPECT_NE(pos, std::string::npos) << from;
     if (pos != std::string::npos) text.replace(pos, from.size(), to);
     return text;
+}
+
+TEST(Scenario, YawAutoAndPositionSearch) {
+    const fs::path dir = TestDir() / "auto_scenario";
+    fs::create_directories(dir);
+    WriteText(dir / "scenario.yaml",
+              Replace(kGoodScenario, "  yaw_deg: -30.5\n",
+                      "  yaw_deg: AUTO\n  position_search_m: 25\n"));
+    const Scenario s = LoadScenario(dir.string());
+    EXPECT_FALSE(s.anchor.yaw_deg.has_value());
+    EXPECT_EQ(s.anchor.position_search_m, 25.0);
+    WriteText(dir / "scenario.yaml", kGoodScenario);
+    EXPECT_EQ(LoadScenario(dir.string()).anchor.position_search_m, 0.0);
+}
+
+// A folder where the scenario file should be is bad input naming the path, not a read error.
+TEST(Scenario, FolderNamedLikeTheScenarioFileIsAnInputError) {
+    const fs::path dir = TestDir() / "folder_yaml";
+    fs::create_directories(dir / "scenario.yaml");
+    const std::string yaml = (dir / "scenario.yaml").string();
+    ExpectInputError([&] { LoadScenario(dir.string()); }, {yaml + ": is a folder, not a file"});
+    // Named directly, the folder is taken as a scenario folder, and it has no scenario.yaml.
+    ExpectInputError([&] { LoadScenario(yaml); }, {yaml, "has no scenario.yaml"});
 }
 
 /// A broken scenario: kGoodScenario with one edit, and what the error must name.
@@ -454,6 +477,15 @@ INSTANTIATE_TEST_SUITE_P(
         BadScenarioCase{"lat_out_of_range", "48.98", "98.4", ":13: anchor.lat_deg: must be within"},
         BadScenarioCase{"lat_is_list", "48.98", "[1, 2]", ":13: anchor.lat_deg: must be a single"},
         BadScenarioCase{"yaw_garbage", "-30.5", "-30.5deg", ":15: anchor.yaw_deg"},
+        BadScenarioCase{"yaw_missing", "  yaw_deg: -30.5\n", "",
+                        ":13: anchor.yaw_deg: missing required key"},
+        BadScenarioCase{"yaw_null", "  yaw_deg: -30.5\n", "  yaw_deg:\n",
+                        ":13: anchor.yaw_deg: missing required key"},
+        BadScenarioCase{"indoor_without_z", "mode: road2d", "mode: indoor3d",
+                        ":13: anchor.z_m: missing required key in indoor3d mode"},
+        BadScenarioCase{"position_search_negative", "  yaw_deg: -30.5\n",
+                        "  yaw_deg: -30.5\n  position_search_m: -5\n",
+                        ":16: anchor.position_search_m: must be within"},
         BadScenarioCase{"bad_crs", "  lat_deg: 48.98\n  lon_deg: 8.39\n",
                         "  crs: WGS84\n  easting_m: 1\n  northing_m: 2\n",
                         ":13: anchor.crs: unknown CRS"},
@@ -657,14 +689,15 @@ TEST(ScenarioWarnings, UnknownKeysAreReportedWithLine) {
                                             "anchor:\n"
                                             "  lat_deg: 48.9\n"
                                             "  lon_deg: 8.3\n"
-                                            "  yaw_dge: 30\n"
+                                            "  alt_n: 116\n"
+                                            "  yaw_deg: 30\n"
                                             "map:\n"
                                             "  - {path: map.osm, format: osm, widht: 3}\n"
                                             "colour: blue\n";
     const driftcorr::io::Scenario s = driftcorr::io::LoadScenario(dir.string());
     ASSERT_EQ(s.warnings.size(), 3u);
-    EXPECT_NE(s.warnings[0].find("scenario.yaml:10: colour: unknown key"), std::string::npos) << s.warnings[0];
-    EXPECT_NE(s.warnings[1].find("scenario.yaml:7: anchor.yaw_dge: unknown key"), std::string::npos) << s.warnings[1];
+    EXPECT_NE(s.warnings[0].find("scenario.yaml:11: colour: unknown key"), std::string::npos) << s.warnings[0];
+    EXPECT_NE(s.warnings[1].find("scenario.yaml:7: anchor.alt_n: unknown key"), std::string::npos) << s.warnings[1];
     EXPECT_NE(s.warnings[2].find("map[0].widht: unknown key"), std::string::npos) << s.warnings[2];
     fs::remove_all(dir);
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/trajectory_io.h"
@@ -94,6 +95,29 @@ void PrintMetricsRow(const char* label, const driftcorr::ErrorMetrics& m, bool f
     std::printf("\n");
 }
 
+// How the start fits the map: the estimated start, or the given one and the best other heading.
+void PrintAnchorFit(const driftcorr::pipeline::CorrectionRun& run) {
+    using driftcorr::RadToDeg;
+    const driftcorr::AnchorFitResult& f = *run.anchor_fit;
+    const auto& a = run.scenario.anchor;
+    const bool estimated = !a.yaw_deg || a.position_search_m > 0.0;
+    std::printf("anchor     %s yaw %.2f deg, start (%.1f, %.1f) m: the first %.0f m lie RMS %.2f m "
+                "from the map (%.0f %% beyond reach)", estimated ? "estimated" : "given",
+                RadToDeg(run.anchor.yaw_rad), run.anchor.origin_en.x(), run.anchor.origin_en.y(),
+                f.lead_path_m, estimated ? f.best.rms_m : f.given.rms_m,
+                100.0 * (estimated ? f.best.off_share : f.given.off_share));
+    if (!estimated && f.best.dyaw_rad != 0.0) {
+        std::printf("; best other heading %+.1f deg: RMS %.2f m", RadToDeg(f.best.dyaw_rad),
+                    f.best.rms_m);
+    }
+    if (f.runner_up) {
+        std::printf("; next distinct start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
+                    RadToDeg(f.runner_up->dyaw_rad), f.runner_up->offset_en.x(),
+                    f.runner_up->offset_en.y(), f.runner_up->rms_m);
+    }
+    std::printf("\n");
+}
+
 void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::string& out,
                   driftcorr::pipeline::Solver solver) {
     const auto& r = run.result;
@@ -116,6 +140,7 @@ void PrintSummary(const driftcorr::pipeline::CorrectionRun& run, const std::stri
                 " incremental %.3f, refine %.3f)\n", total, run.timings.load_s, run.timings.map_s,
                 run.timings.solve_s, run.estimate.size() / std::max(1e-9, run.timings.solve_s),
                 r.incremental_s, r.refine_s);
+    if (run.anchor_fit) PrintAnchorFit(run);
     if (run.before) PrintMetricsRow("estimate", *run.before, indoor);
     if (run.after) PrintMetricsRow("corrected", *run.after, indoor);
     if (!out.empty()) std::printf("wrote      %s\n", out.c_str());

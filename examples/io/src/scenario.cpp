@@ -166,6 +166,8 @@ std::string ResolveYamlPath(const std::string& path) {
 }
 
 YAML::Node ParseYamlFile(const std::string& file) {
+    std::error_code ec;
+    if (fs::is_directory(file, ec)) throw InputError(file, 0, "", "is a folder, not a file");
     std::ifstream in(file, std::ios::binary);
     if (!in) throw InputError(file, 0, "", "cannot open file");
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -220,9 +222,10 @@ void ParseGridAnchor(const Block& block, AnchorSpec& anchor) {
     anchor.northing_m = block.Double("northing_m");
 }
 
-AnchorSpec ParseAnchor(const Block& block, std::vector<std::string>& warnings) {
+AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::string>& warnings) {
     block.WarnUnknownKeys(
-        {"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m", "yaw_deg", "z_m"},
+        {"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m", "yaw_deg", "z_m",
+         "position_search_m"},
         warnings);
     const bool geographic = block.Has("lat_deg") || block.Has("lon_deg") || block.Has("alt_m");
     const bool grid = block.Has("crs") || block.Has("easting_m") || block.Has("northing_m");
@@ -238,7 +241,20 @@ AnchorSpec ParseAnchor(const Block& block, std::vector<std::string>& warnings) {
     } else {
         ParseGridAnchor(block, anchor);
     }
-    anchor.yaw_deg = block.OptDouble("yaw_deg").value_or(0.0);
+    if (!block.Has("yaw_deg")) {
+        block.Fail("yaw_deg", "missing required key (the heading of the trajectory frame in "
+                              "East-North, degrees counter-clockwise, or `auto` to estimate it "
+                              "from the map)");
+    }
+    if (Lower(block.String("yaw_deg")) != "auto") anchor.yaw_deg = block.Double("yaw_deg");
+    anchor.position_search_m = block.OptDouble("position_search_m").value_or(0.0);
+    if (!(anchor.position_search_m >= 0.0 && anchor.position_search_m <= 1000.0)) {
+        block.Fail("position_search_m", "must be within [0, 1000] m");
+    }
+    if (mode == ScenarioMode::kIndoor3d && !block.Has("z_m")) {
+        block.Fail("z_m", "missing required key in indoor3d mode (the height of the trajectory "
+                          "frame's origin in the map's height datum: it picks the floor)");
+    }
     anchor.z_m = block.OptDouble("z_m").value_or(0.0);
     return anchor;
 }
@@ -308,7 +324,7 @@ void ParseRoot(const Block& root, Scenario& s) {
     const std::optional<FrameAxes> axes = ParseFrameAxes(frame);
     if (!axes) root.Fail("frame", "unknown value '" + frame + "' (expected kitti_camera | enu)");
     s.frame = *axes;
-    s.anchor = ParseAnchor(root.Child("anchor"), s.warnings);
+    s.anchor = ParseAnchor(root.Child("anchor"), s.mode, s.warnings);
     s.map = ParseMap(root, dir, s.warnings);
 }
 

@@ -10,6 +10,11 @@ StreamSetup LoadStreamSetup(const std::string& scenario_path, const PipelineConf
     StreamSetup setup;
     setup.scenario = io::LoadScenario(scenario_path);
     const io::Scenario& sc = setup.scenario;
+    if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
+        throw InputError(sc.yaml_path, 0, sc.anchor.yaw_deg ? "anchor.position_search_m" : "anchor.yaw_deg",
+                         "a start estimated from the map (yaw_deg: auto, position_search_m) needs "
+                         "the whole trajectory: use correct, or give the start for stream");
+    }
     std::unique_ptr<WorldFrame> world;
     try {
         world = std::make_unique<WorldFrame>(sc.anchor);

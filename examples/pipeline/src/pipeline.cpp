@@ -12,6 +12,7 @@
 #include "driftcorr/mapping/floor_plan.h"
 #include "driftcorr/mapping/osm_reader.h"
 #include "driftcorr/mapping/surface_io.h"
+#include "driftcorr/optim/anchor_fit.h"
 
 namespace driftcorr::pipeline {
 namespace {
@@ -131,6 +132,39 @@ TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig
     }
 }
 
+// The anchor check matches the leading path against the map with the mode's reach of the map
+// term (a pose farther than that from every traversable place is off the map).
+AnchorFitConfig AnchorFitFor(const io::Scenario& sc, const PipelineConfig& config) {
+    AnchorFitConfig c = config.anchor_fit;
+    c.reach_m = CorrectorFor(sc, config).model.map_giveup_m;
+    return c;
+}
+
+// `yaw_deg: auto` / `position_search_m`: the leading path is matched against a field that covers
+// every heading and position searched, then the estimate is placed where it fits best and the
+// anchor takes that heading and position.
+void PlaceStart(const WorldFrame& world, const PipelineConfig& config, PreparedScenario& ps) {
+    const io::Scenario& sc = ps.scenario;
+    const AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
+    double reach_m = 0.0, path_m = 0.0;
+    for (std::size_t i = 0; i < ps.estimate.size() && path_m <= fit_cfg.lead_path_m; ++i) {
+        if (i > 0) path_m += (ps.estimate.p_en[i] - ps.estimate.p_en[i - 1]).norm();
+        reach_m = std::max(reach_m, (ps.estimate.p_en[i] - ps.anchor.origin_en).norm());
+    }
+    const double half = reach_m + sc.anchor.position_search_m + fit_cfg.reach_m;
+    const Eigen::Vector2d c = ps.anchor.origin_en;
+    const Eigen::AlignedBox2d region(c - Eigen::Vector2d(half, half), c + Eigen::Vector2d(half, half));
+    RoadNetwork unused;
+    const TraversableField lead_field =
+        LoadMapField(sc, world, config, region, ps.anchor.origin_up_m, unused);
+    ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, lead_field,
+                              !sc.anchor.yaw_deg, sc.anchor.position_search_m, fit_cfg);
+    const AnchorPlacement& best = ps.anchor_fit->best;
+    ps.estimate = ApplyPlacement(ps.estimate, ps.anchor.origin_en, best);
+    ps.anchor.yaw_rad += best.dyaw_rad;
+    ps.anchor.origin_en += best.offset_en;
+}
+
 }  // namespace
 
 // The sigmas of the walkway pull, the heading walk and the step scale were chosen on a real walk
@@ -170,7 +204,8 @@ struct WorldFrame::Impl {
 };
 
 WorldFrame::WorldFrame(const io::AnchorSpec& a) : impl_(std::make_unique<Impl>()) {
-    anchor_.yaw_rad = DegToRad(a.yaw_deg);
+    // `yaw_deg: auto`: the heading is estimated from the map (PrepareScenario), starting from 0.
+    anchor_.yaw_rad = DegToRad(a.yaw_deg.value_or(0.0));
     anchor_.origin_up_m = a.z_m;
     if (a.IsGeographic()) {
         impl_->ltp.emplace(GeoPoint{*a.lat_deg, *a.lon_deg, a.alt_m.value_or(0.0)});
@@ -214,21 +249,36 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     }();
     ps.anchor = world.planar_anchor();
     ps.estimate = ToPlanar(ps.estimate_frame, sc.frame, ps.anchor);
+    std::optional<Trajectory> gt;
     if (sc.ground_truth) {
-        const Trajectory gt = io::LoadTrajectory(*sc.ground_truth);
-        if (gt.size() != ps.estimate_frame.size()) {
+        gt = io::LoadTrajectory(*sc.ground_truth);
+        if (gt->size() != ps.estimate_frame.size()) {
             throw InputError(sc.ground_truth->path, 0, "",
-                             "ground truth has " + std::to_string(gt.size()) + " poses, the estimate " +
+                             "ground truth has " + std::to_string(gt->size()) + " poses, the estimate " +
                                  std::to_string(ps.estimate_frame.size()));
         }
-        ps.ground_truth = ToPlanar(gt, sc.frame, ps.anchor);
     }
     ps.timings.load_s = Since(t0);
 
     t0 = std::chrono::steady_clock::now();
+    if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
+        PlaceStart(world, config, ps);
+        if (gt) {
+            ps.scenario.warnings.push_back(
+                "the ground truth is placed with the start estimated from the map (the anchor "
+                "gives none): its errors do not include an error of that start");
+        }
+    }
+    // The ground truth shares the estimate's frame, so the anchor places both.
+    if (gt) ps.ground_truth = ToPlanar(*gt, sc.frame, ps.anchor);
     std::vector<double> up = ps.estimate.up_m;
     std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network);
+    if (!ps.anchor_fit) {
+        // The anchor check: the given start, scored against every other heading.
+        const AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
+        ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, true, 0.0, fit_cfg);
+    }
     ps.timings.map_s = Since(t0);
     return ps;
 }
@@ -282,6 +332,8 @@ CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConf
     run.estimate = std::move(ps.estimate);
     run.ground_truth = std::move(ps.ground_truth);
     run.network = std::move(ps.network);
+    run.anchor = ps.anchor;
+    run.anchor_fit = ps.anchor_fit;
     return run;
 }
 

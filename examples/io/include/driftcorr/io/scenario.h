@@ -27,7 +27,14 @@ struct AnchorSpec {
     std::optional<double> lat_deg, lon_deg, alt_m;
     std::optional<std::string> crs;         ///< e.g. "EPSG:32632", as written
     std::optional<double> easting_m, northing_m;
-    double yaw_deg = 0.0;
+    /// Heading of the trajectory frame in East-North (FORMAT.md); std::nullopt when the file says
+    /// `yaw_deg: auto`: the start is then estimated from the map (the key itself is required).
+    std::optional<double> yaw_deg;
+    /// `position_search_m` (optional): radius around the given position within which the start
+    /// is estimated from the map together with the yaw [m]; 0: the position is taken as given.
+    double position_search_m = 0.0;
+    /// Height of the frame's origin in the map's height datum; required in indoor3d, where it
+    /// picks the floor (road2d ignores heights: 0 when absent).
     double z_m = 0.0;
     bool IsGeographic() const { return lat_deg.has_value(); }
 };

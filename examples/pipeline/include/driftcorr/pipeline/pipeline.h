@@ -12,6 +12,7 @@
 #include "driftcorr/mapping/indoor_field.h"
 #include "driftcorr/mapping/surface_field.h"
 #include "driftcorr/mapping/road_network.h"
+#include "driftcorr/optim/anchor_fit.h"
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/online_corrector.h"
 #include "driftcorr/optim/paper_solver.h"
@@ -43,6 +44,9 @@ struct PipelineConfig {
     /// driftcorr stream and the online method of eval (section `online`); its `corrector` is
     /// not read from the file: the mode's corrector above is used.
     OnlineConfig online;
+    /// The anchor check and `yaw_deg: auto` (section `anchor_fit`; reach_m is the mode's
+    /// map_giveup_m and is not read from the file).
+    AnchorFitConfig anchor_fit;
 
     std::string Validate() const;
 };
@@ -79,6 +83,8 @@ struct CorrectionRun {
     PlanarTrajectory estimate;          ///< in the world plane
     std::optional<PlanarTrajectory> ground_truth;
     RoadNetwork network;
+    PlanarAnchor anchor;                ///< as given, or as estimated from the map
+    std::optional<AnchorFitResult> anchor_fit;  ///< see PreparedScenario
     std::size_t map_grid_cells = 0;
     CorrectionResult result;
     Trajectory corrected_frame;         ///< valid only when Usable(result.status)
@@ -93,7 +99,10 @@ struct PreparedScenario {
     Trajectory estimate_frame;          ///< as read
     PlanarTrajectory estimate;          ///< in the world plane
     std::optional<PlanarTrajectory> ground_truth;
-    PlanarAnchor anchor;
+    PlanarAnchor anchor;                ///< as given, or as estimated from the map
+    /// How the start fits the map: the estimated start (`yaw_deg: auto`, `position_search_m`), or
+    /// the given anchor scored against every other heading (the anchor check).
+    std::optional<AnchorFitResult> anchor_fit;
     RoadNetwork network;
     TraversableField field;
     Timings timings;                    ///< load_s and map_s

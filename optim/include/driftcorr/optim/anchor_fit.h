@@ -1,0 +1,67 @@
+#pragma once
+// Where the start of a trajectory fits the map: the leading part of the estimate is turned about
+// the trajectory frame's origin, where the anchor puts it (and shifted, when a position search
+// radius is given) and scored by its distance to the nearest traversable place. Serves two
+// purposes:
+//  - `yaw_deg: auto` (and `position_search_m`): the start is estimated from the map;
+//  - the anchor check: a given anchor whose start lies far from every road while another heading
+//    or position fits well is reported (the correction cannot repair a wrong start).
+// A straight leading path fits a road in both directions, and a grid of streets fits every 90 deg:
+// the result names the best placement clearly apart from the best one (the runner-up), so the
+// caller can tell an ambiguous start. No I/O.
+#include <optional>
+#include <string>
+
+#include "driftcorr/core/types.h"
+#include "driftcorr/mapping/traversable_field.h"
+
+namespace driftcorr {
+
+struct AnchorFitConfig {
+    double lead_path_m = 400.0;     ///< leading path of the estimate matched to the map [m]
+    double sample_spacing_m = 2.0;  ///< one pose per this much path is scored [m]
+    double yaw_step_deg = 2.0;      ///< coarse heading grid; refined to ~0.1 deg [deg]
+    double position_step_m = 4.0;   ///< coarse position grid; refined to ~0.25 m [m]
+    /// Distances are truncated here: a pose farther from every traversable place (or outside
+    /// the field) counts as off the map [m].
+    double reach_m = 8.0;
+    /// Two placements are distinct when their headings differ by more than this... [deg]
+    double distinct_yaw_deg = 15.0;
+    /// ...or their positions by more than this [m].
+    double distinct_position_m = 10.0;
+
+    /// Empty if valid, else a message naming the bad field.
+    std::string Validate() const;
+};
+
+/// One placement of the leading path: turned by `dyaw_rad` about the pivot (the frame origin) and
+/// moved by `offset_en`, relative to the estimate as handed in.
+struct AnchorPlacement {
+    double dyaw_rad = 0.0;
+    Eigen::Vector2d offset_en = Eigen::Vector2d::Zero();  ///< [m]
+    double rms_m = 0.0;      ///< RMS of the truncated distance over the scored poses [m]
+    double off_share = 0.0;  ///< share of scored poses beyond reach_m or outside the field
+};
+
+struct AnchorFitResult {
+    AnchorPlacement given;                     ///< the estimate as handed in (dyaw 0, offset 0)
+    AnchorPlacement best;                      ///< lowest RMS found
+    std::optional<AnchorPlacement> runner_up;  ///< lowest RMS among placements distinct from best
+    std::size_t samples = 0;                   ///< poses scored
+    double lead_path_m = 0.0;                  ///< path length they cover [m]
+};
+
+/// Scores placements of `estimate` (world ENU plane, >= 2 poses) against `field`: headings over
+/// the whole circle when `search_yaw`, else only the given one; positions within `radius_m` of the
+/// given one (0: only the given position). Precondition: config.Validate() is empty.
+/// Placements turn about `pivot_en` (the trajectory frame's origin in the world plane).
+AnchorFitResult FitAnchor(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
+                          const TraversableField& field, bool search_yaw, double radius_m,
+                          const AnchorFitConfig& config);
+
+/// `estimate` turned by placement.dyaw_rad about `pivot_en` and moved by placement.offset_en
+/// (positions and headings).
+PlanarTrajectory ApplyPlacement(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
+                                const AnchorPlacement& placement);
+
+}  // namespace driftcorr

@@ -1,0 +1,172 @@
+#include "driftcorr/optim/anchor_fit.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "driftcorr/core/angles.h"
+
+namespace driftcorr {
+namespace {
+
+// The scored poses: one per sample_spacing_m of path, up to lead_path_m, relative to the pivot.
+struct Lead {
+    std::vector<Eigen::Vector2d> p_rel;  // position minus pivot
+    std::vector<double> up_m;
+    double path_m = 0.0;
+};
+
+Lead LeadSamples(const PlanarTrajectory& t, const Eigen::Vector2d& pivot,
+                 const AnchorFitConfig& c) {
+    Lead lead;
+    double next_m = 0.0;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+        if (i > 0) lead.path_m += (t.p_en[i] - t.p_en[i - 1]).norm();
+        if (lead.path_m > c.lead_path_m) break;
+        if (lead.path_m < next_m) continue;
+        lead.p_rel.push_back(t.p_en[i] - pivot);
+        lead.up_m.push_back(t.up_m[i]);
+        next_m = lead.path_m + c.sample_spacing_m;
+    }
+    return lead;
+}
+
+Eigen::Matrix2d Rot(double a) {
+    Eigen::Matrix2d r;
+    r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+    return r;
+}
+
+// Scores one placement (fills rms_m and off_share).
+void Score(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableField& field,
+           double reach_m, AnchorPlacement& pl) {
+    const Eigen::Matrix2d r = Rot(pl.dyaw_rad);
+    const Eigen::Vector2d shift = pivot + pl.offset_en;
+    double sum = 0.0;
+    std::size_t off = 0;
+    for (std::size_t k = 0; k < lead.p_rel.size(); ++k) {
+        const Eigen::Vector2d p = r * lead.p_rel[k] + shift;
+        const auto q = field.Query(Eigen::Vector3d(p.x(), p.y(), lead.up_m[k]));
+        const double d = q ? std::min(std::max(q->centre.value, 0.0), reach_m) : reach_m;
+        if (!q || q->centre.value > reach_m) ++off;
+        sum += d * d;
+    }
+    const double n = double(std::max<std::size_t>(1, lead.p_rel.size()));
+    pl.rms_m = std::sqrt(sum / n);
+    pl.off_share = double(off) / n;
+}
+
+bool Distinct(const AnchorPlacement& a, const AnchorPlacement& b, const AnchorFitConfig& c) {
+    return std::abs(WrapAngle(a.dyaw_rad - b.dyaw_rad)) > DegToRad(c.distinct_yaw_deg) ||
+           (a.offset_en - b.offset_en).norm() > c.distinct_position_m;
+}
+
+// Pattern search around `pl`: halves the heading and position steps until they are small.
+void Refine(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableField& field,
+            const AnchorFitConfig& c, bool search_yaw, double radius_m, AnchorPlacement& pl) {
+    double dyaw = search_yaw ? DegToRad(c.yaw_step_deg) : 0.0;
+    double dpos = radius_m > 0.0 ? c.position_step_m : 0.0;
+    while (dyaw > DegToRad(0.1) || dpos > 0.25) {
+        bool moved = false;
+        const AnchorPlacement centre = pl;
+        for (int k = 0; k < 6; ++k) {
+            AnchorPlacement cand = centre;
+            if (k < 2) {
+                if (dyaw == 0.0) continue;
+                cand.dyaw_rad += k == 0 ? dyaw : -dyaw;
+            } else {
+                if (dpos == 0.0) continue;
+                cand.offset_en[(k - 2) / 2] += (k % 2 == 0) ? dpos : -dpos;
+                if (cand.offset_en.norm() > radius_m) continue;
+            }
+            Score(lead, pivot, field, c.reach_m, cand);
+            if (cand.rms_m < pl.rms_m) pl = cand, moved = true;
+        }
+        if (!moved) dyaw *= 0.5, dpos *= 0.5;
+    }
+}
+
+}  // namespace
+
+std::string AnchorFitConfig::Validate() const {
+    if (!(lead_path_m > 0.0)) return "anchor_fit.lead_path_m: must be > 0";
+    if (!(sample_spacing_m > 0.0)) return "anchor_fit.sample_spacing_m: must be > 0";
+    if (!(yaw_step_deg > 0.0 && yaw_step_deg <= 45.0))
+        return "anchor_fit.yaw_step_deg: must be in (0, 45]";
+    if (!(position_step_m > 0.0)) return "anchor_fit.position_step_m: must be > 0";
+    if (!(reach_m > 0.0)) return "anchor_fit.reach_m: must be > 0";
+    if (!(distinct_yaw_deg > 0.0)) return "anchor_fit.distinct_yaw_deg: must be > 0";
+    if (!(distinct_position_m > 0.0)) return "anchor_fit.distinct_position_m: must be > 0";
+    return "";
+}
+
+AnchorFitResult FitAnchor(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
+                          const TraversableField& field, bool search_yaw, double radius_m,
+                          const AnchorFitConfig& c) {
+    const Lead lead = LeadSamples(estimate, pivot_en, c);
+    AnchorFitResult res;
+    res.samples = lead.p_rel.size();
+    res.lead_path_m = std::min(lead.path_m, c.lead_path_m);
+    Score(lead, pivot_en, field, c.reach_m, res.given);
+
+    // Coarse grid over headings and positions.
+    std::vector<AnchorPlacement> grid;
+    const int n_yaw = search_yaw ? int(std::lround(360.0 / c.yaw_step_deg)) : 1;
+    const int n_pos = radius_m > 0.0 ? int(std::floor(radius_m / c.position_step_m)) : 0;
+    for (int iy = 0; iy < n_yaw; ++iy) {
+        for (int ix = -n_pos; ix <= n_pos; ++ix) {
+            for (int jy = -n_pos; jy <= n_pos; ++jy) {
+                AnchorPlacement pl;
+                pl.dyaw_rad = WrapAngle(DegToRad(iy * c.yaw_step_deg));
+                pl.offset_en = c.position_step_m * Eigen::Vector2d(ix, jy);
+                if (pl.offset_en.norm() > radius_m + 1e-9) continue;
+                Score(lead, pivot_en, field, c.reach_m, pl);
+                grid.push_back(pl);
+            }
+        }
+    }
+    std::sort(grid.begin(), grid.end(),
+              [](const AnchorPlacement& a, const AnchorPlacement& b) { return a.rms_m < b.rms_m; });
+    // Refine the best few distinct coarse placements; the best refined one wins.
+    std::vector<AnchorPlacement> refined;
+    for (const AnchorPlacement& pl : grid) {
+        if (refined.size() >= 6) break;
+        const bool seen =
+            std::any_of(refined.begin(), refined.end(),
+                        [&](const AnchorPlacement& r) { return !Distinct(r, pl, c); });
+        if (seen) continue;
+        refined.push_back(pl);
+        Refine(lead, pivot_en, field, c, search_yaw, radius_m, refined.back());
+    }
+    std::sort(refined.begin(), refined.end(),
+              [](const AnchorPlacement& a, const AnchorPlacement& b) { return a.rms_m < b.rms_m; });
+    res.best = refined.empty() ? res.given : refined.front();
+    if (res.given.rms_m <= res.best.rms_m) res.best = res.given;
+    // The runner-up: the best refined placement that is still distinct from the best one (a
+    // coarse placement next to the best may refine into its basin).
+    std::vector<AnchorPlacement> tried;
+    for (const AnchorPlacement& coarse : grid) {
+        if (tried.size() >= 8) break;
+        const auto near = [&](const AnchorPlacement& t) { return !Distinct(t, coarse, c); };
+        if (!Distinct(coarse, res.best, c) || std::any_of(tried.begin(), tried.end(), near)) {
+            continue;
+        }
+        tried.push_back(coarse);
+        AnchorPlacement pl = coarse;
+        Refine(lead, pivot_en, field, c, search_yaw, radius_m, pl);
+        if (Distinct(pl, res.best, c) && (!res.runner_up || pl.rms_m < res.runner_up->rms_m)) {
+            res.runner_up = pl;
+        }
+    }
+    return res;
+}
+
+PlanarTrajectory ApplyPlacement(const PlanarTrajectory& t, const Eigen::Vector2d& pivot_en,
+                                const AnchorPlacement& pl) {
+    PlanarTrajectory out = t;
+    const Eigen::Matrix2d r = Rot(pl.dyaw_rad);
+    for (auto& p : out.p_en) p = r * (p - pivot_en) + pivot_en + pl.offset_en;
+    for (double& y : out.yaw_rad) y += pl.dyaw_rad;
+    return out;
+}
+
+}  // namespace driftcorr
