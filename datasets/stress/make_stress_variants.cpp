@@ -1,0 +1,125 @@
+// driftcorr_make_stress_variants: writes stress variants of a scenario (one complete scenario
+// folder per variant: clean, drop_steps, heading_bias_*, yaw_off_*, anchor_off_20m,
+// road_removed). See datasets/README.md, "Stress variants".
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/errors.h"
+#include "scenario_output.h"
+#include "synth_common.h"
+#include "variants.h"
+
+namespace driftcorr::stress {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kName = "driftcorr_make_stress_variants";
+constexpr int kExitBadInput = 2;
+
+struct Options {
+    std::string input;
+    std::string out_dir;
+    StressConfig config;
+};
+
+void PrintUsage(std::FILE* stream) {
+    std::fprintf(
+        stream,
+        "usage: driftcorr_make_stress_variants <scenario dir or scenario.yaml> <out_dir> "
+        "[--seed N]\n"
+        "  Writes one scenario folder per variant into <out_dir>/<variant>/: clean, drop_steps,\n"
+        "  heading_bias_0.1, heading_bias_0.3, heading_bias_0.5, yaw_off_10, yaw_off_20,\n"
+        "  yaw_off_30, anchor_off_20m, road_removed. A variant that cannot be made is skipped\n"
+        "  with a message.\n"
+        "  --seed N   seed of the drop_steps episodes and the anchor_off direction, unsigned\n"
+        "             64-bit (default %llu)\n",
+        static_cast<unsigned long long>(StressConfig().seed));
+}
+
+std::string ParseArgs(int argc, char** argv, Options& opt) {
+    std::vector<std::string> positional;
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg.empty() || arg[0] != '-') {
+            positional.push_back(arg);
+            continue;
+        }
+        if (i + 1 >= argc) return arg + ": missing value";
+        const std::string error = synth::ApplySeedOrNumberFlag(arg, argv[++i], opt.config.seed, {});
+        if (!error.empty()) return error;
+    }
+    if (positional.size() != 2) {
+        return "expected <scenario dir or scenario.yaml> and <out_dir>, got " +
+               std::to_string(positional.size()) + " positional arguments";
+    }
+    opt.input = positional[0];
+    opt.out_dir = positional[1];
+    return opt.config.drop.Validate();
+}
+
+std::vector<std::string> GeneratedBy(const Options& opt, const InputScenario& input,
+                                     const std::string& variant) {
+    return {std::string(kGeneratedMarker) +
+                " (driftcorr repository, datasets/stress); do not edit, regenerate instead.",
+            "input: " + input.scenario.yaml_path + " (scenario '" + input.scenario.name + "')",
+            "variant: " + variant + "; seed " + std::to_string(opt.config.seed),
+            "regenerate: driftcorr_make_stress_variants " + input.scenario.yaml_path +
+                " <out_dir> --seed " + std::to_string(opt.config.seed)};
+}
+
+/// A skipped variant must not leave an earlier run's scenario behind under its name: removes
+/// dir/scenario.yaml when this generator wrote it.
+void RemoveStaleVariant(const fs::path& dir) {
+    const fs::path yaml = dir / "scenario.yaml";
+    std::ifstream in(yaml);
+    std::string first_line;
+    if (!in || !std::getline(in, first_line)) return;
+    if (first_line.rfind(std::string("# ") + kGeneratedMarker, 0) != 0) return;
+    in.close();
+    fs::remove(yaml);
+    std::printf("  (removed %s of an earlier run)\n", yaml.string().c_str());
+}
+
+int Run(const Options& opt) {
+    InputScenario input;
+    std::vector<VariantOutcome> variants;
+    try {
+        input = LoadInputScenario(opt.input);
+        variants = MakeVariants(input, opt.config);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "%s: %s\n", kName, e.what());
+        return kExitBadInput;
+    }
+    std::size_t written = 0;
+    for (const VariantOutcome& v : variants) {
+        const fs::path dir = fs::path(opt.out_dir) / v.name;
+        if (!v.spec) {
+            std::printf("skipped %-17s %s\n", v.name.c_str(), v.note.c_str());
+            RemoveStaleVariant(dir);
+            continue;
+        }
+        WriteVariant(input, *v.spec, GeneratedBy(opt, input, v.name), dir);
+        std::printf("wrote   %-17s %s\n", v.name.c_str(), v.note.c_str());
+        ++written;
+    }
+    std::printf("%s: %zu of %zu variants of '%s' written to %s (seed %llu)\n", kName, written,
+                variants.size(), input.scenario.name.c_str(), opt.out_dir.c_str(),
+                static_cast<unsigned long long>(opt.config.seed));
+    return 0;
+}
+
+}  // namespace
+}  // namespace driftcorr::stress
+
+int main(int argc, char** argv) {
+    using namespace driftcorr::stress;
+    Options opt;
+    return driftcorr::synth::GeneratorMain(
+        argc, argv, kName, PrintUsage,
+        [&opt](int n, char** args) { return ParseArgs(n, args, opt); },
+        [&opt] { return Run(opt); });
+}
