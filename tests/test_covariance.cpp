@@ -16,6 +16,7 @@
 
 #include "driftcorr/core/observables.h"
 #include "driftcorr/mapping/road_network.h"
+#include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/window_problem.h"
 
@@ -510,6 +511,27 @@ TEST(Covariance, RedundancyNumbersAddUpAndTheVarianceFactorScales) {
         EXPECT_NEAR(scaled.poses[i].yaw_rad2, raw.variance_factor * raw.poses[i].yaw_rad2,
                     1e-12 * scaled.poses[i].yaw_rad2);
     }
+}
+
+// The batch corrector reports the covariance of its solution (CorrectionResult::covariance).
+TEST(Covariance, TheCorrectorReportsIt) {
+    const PlanarTrajectory truth = Curve(40);
+    const TraversableField field = RoadAlong(truth);
+    PlanarTrajectory estimate = Curve(40, 0.044, true, 2.04);  // heading and scale drift
+    CorrectorConfig cfg;
+    cfg.model.scale_segment_m = 20.0;
+    const CorrectionResult r = CorrectTrajectory(estimate, &field, cfg);
+    ASSERT_TRUE(Usable(r.status)) << r.message;
+    ASSERT_EQ(r.covariance.status, CovarianceStatus::kOk) << r.covariance.message;
+    ASSERT_EQ(r.covariance.poses.size(), estimate.size());
+    EXPECT_GE(r.covariance_s, 0.0);
+    for (std::size_t i = 1; i < estimate.size(); ++i) {
+        EXPECT_GT(r.covariance.poses[i].xy_m2.determinant(), 0.0) << "pose " << i;
+        EXPECT_GT(r.covariance.poses[i].yaw_rad2, 0.0) << "pose " << i;
+    }
+    cfg.compute_covariance = false;
+    EXPECT_EQ(CorrectTrajectory(estimate, &field, cfg).covariance.status,
+              CovarianceStatus::kNotComputed);
 }
 
 TEST(Covariance, BadStatesAreAStatusNotGarbage) {
