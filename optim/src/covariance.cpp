@@ -348,7 +348,8 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
         return r;
     }
     TrajectoryState copy = state;  // WindowProblem writes solutions back; this one never does
-    const WindowProblem problem(copy, field, model, 1, n - 1, std::vector<std::uint8_t>(n - 1, 0));
+    const WindowProblem problem(copy, field, model, 1, n - 1, std::vector<std::uint8_t>(n - 1, 0),
+                                WindowUse::kLinearise);
     std::vector<double> x(problem.NumVariables());
     problem.InitialPoint(x.data());
     std::vector<LinearisedTerm> terms;

@@ -73,7 +73,7 @@ std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double s
 
 WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* field,
                              const ModelConfig& cfg, std::size_t first, std::size_t last,
-                             std::vector<std::uint8_t> constrained)
+                             std::vector<std::uint8_t> constrained, WindowUse use)
     : state_(state), field_(field), cfg_(cfg), first_(first), last_(last) {
     assert(first >= 1 && first <= last && last < state.poses.size() && "bad window");
     assert(constrained.size() == last - first + 1 && "one constraint flag per window pose");
@@ -83,7 +83,7 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
     for (std::size_t k = 0; k < constrained.size(); ++k) {
         if (constrained[k] && field_) constraint_pose_.push_back(first + k);
     }
-    BuildStructure();
+    BuildStructure(use);
 }
 
 int WindowProblem::PoseVar(std::size_t pose, int component) const {
@@ -134,9 +134,9 @@ SpeedVector WindowProblem::GatherSpeed(const double* x, std::size_t i) const {
     return v;
 }
 
-void WindowProblem::BuildStructure() {
+void WindowProblem::BuildStructure(WindowUse use) {
     std::unordered_map<std::int64_t, int> slots;
-    auto slot = [&](int r, int c) { return Slot(slots, r, c); };
+    auto slot = [&](int r, int c) { return use == WindowUse::kSolve ? Slot(slots, r, c) : -1; };
     steps_.resize(last_ - first_ + 1);
     for (std::size_t i = first_; i <= last_; ++i) {
         StepSlots& s = steps_[i - first_];
@@ -345,6 +345,7 @@ void WindowProblem::JacobianValues(const double* x, double* values) const {
 
 void WindowProblem::HessianValues(const double* x, double obj_factor, const double* lambda,
                                   double* values) const {
+    assert(!pose_hess_slot_.empty() && pose_hess_slot_[0][0] >= 0 && "built with kLinearise");
     for (std::size_t k = 0; k < hess_.size(); ++k) values[k] = 0.0;
     StepMatrix h;
     for (std::size_t i = first_; i <= last_; ++i) {

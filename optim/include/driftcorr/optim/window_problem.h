@@ -71,12 +71,18 @@ struct LinearisedTerm {
 /// Assigns scale segments from the estimated path length (one per `segment_m`).
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
 
+/// What a WindowProblem is built for: kSolve also builds the sparsity of the Hessian (Ipopt needs
+/// it; a hash map of ~50 entries per pose), kLinearise only what LineariseTerms needs.
+enum class WindowUse { kSolve, kLinearise };
+
 class WindowProblem {
 public:
     /// `constrained[k]` (k = pose - first) marks poses that carry the hard corridor constraint.
-    /// Preconditions: 1 <= first <= last < poses.size(); field may be null (no map terms).
+    /// Preconditions: 1 <= first <= last < poses.size(); field may be null (no map terms);
+    /// HessianValues only with use == kSolve (with kLinearise HessianStructure() is empty).
     WindowProblem(TrajectoryState& state, const TraversableField* field, const ModelConfig& cfg,
-                  std::size_t first, std::size_t last, std::vector<std::uint8_t> constrained);
+                  std::size_t first, std::size_t last, std::vector<std::uint8_t> constrained,
+                  WindowUse use = WindowUse::kSolve);
 
     int NumVariables() const { return n_vars_; }
     int NumConstraints() const { return static_cast<int>(constraint_pose_.size()); }
@@ -155,7 +161,7 @@ private:
     /// Map field samples of every window pose at x, queried once per distinct x (Ipopt evaluates
     /// objective, gradient, constraints and Hessians at the same point).
     const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
-    void BuildStructure();
+    void BuildStructure(WindowUse use);
 
     TrajectoryState& state_;
     const TraversableField* field_;
