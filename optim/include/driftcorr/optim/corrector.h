@@ -35,7 +35,7 @@ struct CorrectorConfig {
     IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
     /// Per-pose covariance of the corrected trajectory (optim/covariance.h) into
     /// CorrectionResult::covariance. Linear in the number of poses; KITTI 00 (4541 poses):
-    /// 20-40 ms, about 1 % of the correction.
+    /// 15-20 ms, about 2 % of the correction.
     bool compute_covariance = true;
     CovarianceConfig covariance;
 

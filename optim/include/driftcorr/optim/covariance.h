@@ -70,10 +70,10 @@ struct CovarianceConfig {
     /// sigmas as they are.
     bool family_variance_components = true;
     /// Multiply the covariances by the a posteriori variance factor sigma0^2 (method step 5;
-    /// always reported). Off: on every drive measured it is far below 1 (0.08-0.8), because the
+    /// always reported). Off: on every drive measured it is far below 1 (0.08-0.5), because the
     /// map terms, most of the redundancy, fit the solution closer than their sigma (the solution
     /// absorbs the map's offset) and the heading-preservation prior is deliberately weak; applied,
-    /// it shrinks covariances that are already too small (README, covariance calibration).
+    /// it shrinks covariances that are already too small (README, Uncertainty).
     bool apply_variance_factor = false;
 
     /// Empty if valid, else a message naming the bad field.
