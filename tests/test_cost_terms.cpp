@@ -90,6 +90,34 @@ StepFn MakeTerm(TermKind kind, const StepParams& p) {
     }
 }
 
+using LinFn = std::function<Linearisation<9>(const StepVector&)>;
+
+/// The same term's Linearise.
+LinFn MakeLinearisation(TermKind kind, const StepParams& p) {
+    switch (kind) {
+        case TermKind::kLength: {
+            const StepLengthTerm t{p.length_m, p.direction_rad, p.sigma, p.weight};
+            return [t](const StepVector& x) { return t.Linearise(x); };
+        }
+        case TermKind::kDirection: {
+            const StepDirectionTerm t{p.direction_rad, p.sigma, p.weight};
+            return [t](const StepVector& x) { return t.Linearise(x); };
+        }
+        case TermKind::kHeadingChange: {
+            const HeadingChangeTerm t{p.dheading_rad, p.sigma, p.weight};
+            return [t](const StepVector& x) { return t.Linearise(x); };
+        }
+        case TermKind::kPreservation: {
+            const HeadingPreservationTerm t{p.sigma, p.weight};
+            return [t](const StepVector& x) { return t.Linearise(x); };
+        }
+        default: {
+            const HeightChangeTerm t{p.dup_m, p.sigma, p.weight};
+            return [t](const StepVector& x) { return t.Linearise(x); };
+        }
+    }
+}
+
 /// Pose a at (3, -2, 1) with yaw 0.4; pose b displaced by s * L along yaw_a + direction, raised
 /// by dup and turned by dheading: the block every step observation agrees with.
 StepVector TruthBlock(const StepParams& p) {
@@ -204,6 +232,41 @@ TEST_P(StepTermTest, StationaryStepIsFiniteEverywhere) {
         EXPECT_NEAR(f(x, &g, nullptr), 0.0, 1e-20);
         EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-12);
     }
+}
+
+// Linearise: its Jacobian is the residual's (central differences of the residual it reports);
+// the Gaussian term's gradient is information * r * J and its cost 0.5 * information * r^2 =
+// 0.5 * chi2; at the truth information * J J^T is the exact Hessian.
+TEST_P(StepTermTest, LinearisationMatchesTheTerm) {
+    std::mt19937 rng(4321u + static_cast<unsigned>(GetParam()));
+    for (int trial = 0; trial < 30; ++trial) {
+        const StepParams p = RandomParams(rng);
+        const StepVector x = RandomBlock(rng);
+        const StepFn f = MakeTerm(GetParam(), p);
+        const LinFn lin = MakeLinearisation(GetParam(), p);
+        const Linearisation<9> l = lin(x);
+        for (int k = 0; k < kStepVars; ++k) {
+            StepVector xp = x, xm = x;
+            xp[k] += kStep;
+            xm[k] -= kStep;
+            const double num = (lin(xp).residual - lin(xm).residual) / (2.0 * kStep);
+            EXPECT_PRED2(Close, l.jacobian[k], num) << "trial " << trial << " dr/dx[" << k << "]";
+        }
+        StepVector g;
+        const double cost = f(x, &g, nullptr);
+        EXPECT_NEAR(l.information, p.weight / (p.sigma * p.sigma), 1e-12 * l.information);
+        EXPECT_NEAR(cost, 0.5 * l.chi2, 1e-12 * (1.0 + cost));
+        EXPECT_LT((g - l.information * l.residual * l.jacobian).cwiseAbs().maxCoeff(),
+                  1e-9 * (1.0 + g.cwiseAbs().maxCoeff()));
+    }
+    StepParams p;
+    if (GetParam() == TermKind::kPreservation) p.dheading_rad = 0.0;
+    const Linearisation<9> l = MakeLinearisation(GetParam(), p)(TruthBlock(p));
+    StepMatrix h;
+    MakeTerm(GetParam(), p)(TruthBlock(p), nullptr, &h);
+    EXPECT_NEAR(l.residual, 0.0, 1e-12);
+    EXPECT_LT((h - l.information * l.jacobian * l.jacobian.transpose()).cwiseAbs().maxCoeff(),
+              1e-9 * h.cwiseAbs().maxCoeff());
 }
 
 INSTANTIATE_TEST_SUITE_P(AllStepTerms, StepTermTest,
@@ -367,6 +430,34 @@ TEST(MapDistanceTerm, DerivativesWithRespectToDistanceMatch) {
     }
 }
 
+// The map term's Gauss-Newton curvature: max(rho''(d), 0) along grad d, the exact Hessian on the
+// centre (d = 0) and for a linear distance (zero Hessian of d) wherever rho'' >= 0; none beyond.
+TEST(MapDistanceTerm, LinearisationIsThePositivePartOfTheCurvature) {
+    const MapDistanceTerm t{2.0, 8.0, 0.7};
+    const Eigen::Vector3d u = Eigen::Vector3d(0.6, -0.8, 0.0);
+    const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
+    for (double d : {0.0, 0.5, 3.0, 7.9, 8.1, 20.0}) {
+        const Linearisation<3> l = t.Linearise(d, u);
+        Eigen::Vector3d g;
+        Eigen::Matrix3d h;
+        const double cost = t.Evaluate(d, u, zero, &g, &h);
+        EXPECT_EQ(l.residual, d);
+        EXPECT_EQ(l.jacobian, u);
+        EXPECT_GE(l.information, 0.0);
+        if (d < 8.0) {
+            EXPECT_LT((h - l.information * u * u.transpose()).cwiseAbs().maxCoeff(), 1e-12)
+                << "d " << d;
+        } else {
+            EXPECT_EQ(l.information, 0.0) << "d " << d;
+        }
+        // chi2 is the IRLS weight rho'(d) / d times d^2; the cost is its Gaussian near zero.
+        EXPECT_NEAR(l.chi2, g.dot(u) * d, 1e-12 * (1.0 + l.chi2)) << "d " << d;
+        if (d <= 0.5) {
+            EXPECT_NEAR(cost, 0.5 * l.chi2, 0.01 * l.chi2 + 1e-15) << "d " << d;
+        }
+    }
+}
+
 TEST(MapDistanceTerm, GaussianNearTheCentreAndGivesUpFarAway) {
     const double sigma = 2.0, giveup = 8.0, w = 0.7;
     const MapDistanceTerm t{sigma, giveup, w};
@@ -475,6 +566,67 @@ TEST(StepLengthRobust, DerivativesAndOutlierDownweighting) {
     moved[driftcorr::kScale] = 1.0;
     EXPECT_LT(dropped_robust.Evaluate(moved, nullptr, nullptr),
               0.05 * dropped_gauss.Evaluate(moved, nullptr, nullptr));  // 23.3 vs 800
+}
+
+// Linearisation of the terms outside the step block and of the robust ones: Jacobian against
+// central differences of the residual, gradient = information * r * J (IRLS), and the exact
+// Hessian at r = 0.
+template <typename Term, typename Vec, typename Mat>
+void ExpectLinearisationMatches(const Term& term, const Vec& x, double tol) {
+    const auto l = term.Linearise(x);
+    const double eps = 1e-6;
+    for (int k = 0; k < x.size(); ++k) {
+        Vec xp = x, xm = x;
+        xp[k] += eps;
+        xm[k] -= eps;
+        const double num = (term.Linearise(xp).residual - term.Linearise(xm).residual) / (2 * eps);
+        EXPECT_NEAR(l.jacobian[k], num, tol * (1.0 + std::abs(num))) << "dr/dx " << k;
+    }
+    Vec g;
+    term.Evaluate(x, &g, nullptr);
+    const Vec irls = l.information * l.residual * l.jacobian;
+    EXPECT_LT((g - irls).cwiseAbs().maxCoeff(), tol * (1.0 + g.cwiseAbs().maxCoeff()));
+    EXPECT_NEAR(l.chi2, l.information * l.residual * l.residual, 1e-12 * (1.0 + l.chi2));
+}
+
+TEST(Linearisation, RobustSpeedAndScaleTerms) {
+    std::mt19937 rng(8080u);
+    std::uniform_real_distribution<double> u(-2.0, 2.0);
+    const driftcorr::StepLengthTerm robust{1.2, 0.1, 0.03, 0.8, 3.0};
+    const driftcorr::SpeedChangeTerm speed{0.05, 0.1, -0.03, 0.12, 0.5, 0.9};
+    const driftcorr::ScaleRandomWalkTerm walk{0.02, 0.7, 0.0}, robust_walk{0.02, 0.7, 3.0};
+    for (int n = 0; n < 20; ++n) {
+        driftcorr::StepVector xs;
+        for (int k = 0; k < xs.size(); ++k) xs[k] = u(rng);
+        xs[driftcorr::kScale] = 1.0 + 0.1 * u(rng);
+        ExpectLinearisationMatches<driftcorr::StepLengthTerm, driftcorr::StepVector,
+                                   driftcorr::StepMatrix>(robust, xs, 1e-5);
+        driftcorr::SpeedVector xv;
+        for (int k = 0; k < xv.size(); ++k) xv[k] = u(rng);
+        ExpectLinearisationMatches<driftcorr::SpeedChangeTerm, driftcorr::SpeedVector,
+                                   driftcorr::SpeedMatrix>(speed, xv, 1e-5);
+        const Eigen::Vector2d x2(1.0 + 0.05 * u(rng), 1.0 + 0.05 * u(rng));
+        ExpectLinearisationMatches<driftcorr::ScaleRandomWalkTerm, Eigen::Vector2d,
+                                   Eigen::Matrix2d>(walk, x2, 1e-5);
+        ExpectLinearisationMatches<driftcorr::ScaleRandomWalkTerm, Eigen::Vector2d,
+                                   Eigen::Matrix2d>(robust_walk, x2, 1e-5);
+    }
+    // At r = 0 the Cauchy weight is the Gaussian's: information * J J^T is the exact Hessian.
+    driftcorr::StepVector at = driftcorr::StepVector::Zero();
+    at[driftcorr::kXb] = 1.2 * std::cos(0.1), at[driftcorr::kYb] = 1.2 * std::sin(0.1);
+    at[driftcorr::kScale] = 1.0;
+    driftcorr::StepMatrix h;
+    robust.Evaluate(at, nullptr, &h);
+    const auto l = robust.Linearise(at);
+    EXPECT_NEAR(l.residual, 0.0, 1e-12);
+    EXPECT_LT((h - l.information * l.jacobian * l.jacobian.transpose()).cwiseAbs().maxCoeff(),
+              1e-9 * h.cwiseAbs().maxCoeff());
+    const driftcorr::ScalePriorTerm prior{0.1, 0.9};
+    double hp = 0.0;
+    prior.Evaluate(1.3, nullptr, &hp);
+    const auto lp = prior.Linearise(1.3);
+    EXPECT_NEAR(lp.residual, 0.3, 1e-15);
+    EXPECT_NEAR(lp.information * lp.jacobian[0] * lp.jacobian[0], hp, 1e-12);
 }
 
 TEST(SpeedChange, ZeroAtConstantSpeedAndDerivatives) {

@@ -1,5 +1,6 @@
 #include "driftcorr/core/cost_terms.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace driftcorr {
@@ -35,6 +36,30 @@ double Cauchy(double r, const Eigen::Matrix<double, N, 1>& j,
     return 0.5 * weight * k2 * std::log(q);
 }
 
+// The Gauss-Newton linearisation of a Gaussian term (see Linearisation).
+template <int N>
+Linearisation<N> LinearGaussian(double r, const Eigen::Matrix<double, N, 1>& j, double sigma,
+                                double weight) {
+    const double k = weight / (sigma * sigma);
+    return {r, j, k, k * r * r};
+}
+
+// The IRLS linearisation of a Cauchy term: the weight rho'(z) / z of the normalised residual z.
+template <int N>
+Linearisation<N> LinearCauchy(double r, const Eigen::Matrix<double, N, 1>& j, double sigma,
+                              double k, double weight) {
+    const double z = r / sigma, q = 1.0 + z * z / (k * k);
+    const double info = weight / (q * sigma * sigma);
+    return {r, j, info, info * r * r};
+}
+
+// A residual of the step block with its Jacobian J and Hessian Hr.
+struct StepResidual {
+    double r;
+    StepVector j;
+    StepMatrix hr;
+};
+
 // Displacement and direction angle of a step block.
 struct StepGeometry {
     double dx, dy, c, s;
@@ -53,26 +78,62 @@ double LinearYawDifference(const StepVector& x, double offset, double sigma, dou
     return Gaussian<9>(x[kYawB] - x[kYawA] - offset, j, nullptr, sigma, weight, grad, hess);
 }
 
-}  // namespace
-
-double StepLengthTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
+StepResidual StepLengthResidual(const StepVector& x, double length_m, double direction_rad) {
     const StepGeometry g = Geometry(x, direction_rad);
     const double along = g.c * g.dx + g.s * g.dy;  // projection of the displacement
     const double side = -g.s * g.dx + g.c * g.dy;
-    const double r = along - x[kScale] * length_m;
-    StepVector j = StepVector::Zero();
+    StepResidual res{along - x[kScale] * length_m, StepVector::Zero(), StepMatrix::Zero()};
+    StepVector& j = res.j;
     j[kXa] = -g.c, j[kYa] = -g.s, j[kXb] = g.c, j[kYb] = g.s;
     j[kYawA] = side;
     j[kScale] = -length_m;
-    StepMatrix hr = StepMatrix::Zero();
+    StepMatrix& hr = res.hr;
     // d2 along / d yaw_a^2 = -along; d2 along / d yaw_a d(x_b, y_b) = (-s, c) = -(d2/d(x_a, y_a)).
     hr(kYawA, kYawA) = -along;
     hr(kYawA, kXb) = hr(kXb, kYawA) = -g.s;
     hr(kYawA, kYb) = hr(kYb, kYawA) = g.c;
     hr(kYawA, kXa) = hr(kXa, kYawA) = g.s;
     hr(kYawA, kYa) = hr(kYa, kYawA) = -g.c;
-    if (robust_k <= 0.0) return Gaussian<9>(r, j, &hr, sigma_m, weight, grad, hess);
-    return Cauchy<9>(r, j, &hr, sigma_m, robust_k, weight, grad, hess);
+    return res;
+}
+
+StepResidual StepDirectionResidual(const StepVector& x, double direction_rad) {
+    const StepGeometry g = Geometry(x, direction_rad);
+    const double along = g.c * g.dx + g.s * g.dy;
+    StepResidual res{-g.s * g.dx + g.c * g.dy, StepVector::Zero(), StepMatrix::Zero()};
+    StepVector& j = res.j;
+    j[kXa] = g.s, j[kYa] = -g.c, j[kXb] = -g.s, j[kYb] = g.c;
+    j[kYawA] = -along;
+    StepMatrix& hr = res.hr;
+    hr(kYawA, kYawA) = -res.r;
+    hr(kYawA, kXb) = hr(kXb, kYawA) = -g.c;
+    hr(kYawA, kYb) = hr(kYb, kYawA) = -g.s;
+    hr(kYawA, kXa) = hr(kXa, kYawA) = g.c;
+    hr(kYawA, kYa) = hr(kYa, kYawA) = g.s;
+    return res;
+}
+
+// r = v[b] - v[a] - offset, linear.
+Linearisation<9> LinearDifference(const StepVector& x, int a, int b, double offset, double sigma,
+                                  double weight) {
+    StepVector j = StepVector::Zero();
+    j[b] = 1.0;
+    j[a] = -1.0;
+    return LinearGaussian<9>(x[b] - x[a] - offset, j, sigma, weight);
+}
+
+}  // namespace
+
+double StepLengthTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
+    const StepResidual res = StepLengthResidual(x, length_m, direction_rad);
+    if (robust_k <= 0.0) return Gaussian<9>(res.r, res.j, &res.hr, sigma_m, weight, grad, hess);
+    return Cauchy<9>(res.r, res.j, &res.hr, sigma_m, robust_k, weight, grad, hess);
+}
+
+Linearisation<9> StepLengthTerm::Linearise(const StepVector& x) const {
+    const StepResidual res = StepLengthResidual(x, length_m, direction_rad);
+    if (robust_k <= 0.0) return LinearGaussian<9>(res.r, res.j, sigma_m, weight);
+    return LinearCauchy<9>(res.r, res.j, sigma_m, robust_k, weight);
 }
 
 namespace {
@@ -102,39 +163,54 @@ Along AlongTrack(const double* v, double direction_rad) {
     return a;
 }
 
+// r = along_bc / dt_bc - along_ab / dt_ab with its Jacobian and Hessian.
+void SpeedResidual(const SpeedChangeTerm& t, const SpeedVector& x, double* r, SpeedVector* j,
+                   SpeedMatrix* hr) {
+    const Along ab = AlongTrack(x.data(), t.direction_ab_rad);
+    const Along bc = AlongTrack(x.data() + 4, t.direction_bc_rad);
+    *r = bc.value / t.dt_bc_s - ab.value / t.dt_ab_s;
+    j->setZero();
+    j->segment<8>(0) -= ab.j / t.dt_ab_s;
+    j->segment<8>(4) += bc.j / t.dt_bc_s;
+    if (!hr) return;
+    hr->setZero();
+    hr->block<8, 8>(0, 0) -= ab.h / t.dt_ab_s;
+    hr->block<8, 8>(4, 4) += bc.h / t.dt_bc_s;
+}
+
 }  // namespace
 
 double SpeedChangeTerm::Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const {
-    const Along ab = AlongTrack(x.data(), direction_ab_rad);
-    const Along bc = AlongTrack(x.data() + 4, direction_bc_rad);
-    const double r = bc.value / dt_bc_s - ab.value / dt_ab_s;
-    SpeedVector j = SpeedVector::Zero();
-    j.segment<8>(0) -= ab.j / dt_ab_s;
-    j.segment<8>(4) += bc.j / dt_bc_s;
-    SpeedMatrix hr = SpeedMatrix::Zero();
-    hr.block<8, 8>(0, 0) -= ab.h / dt_ab_s;
-    hr.block<8, 8>(4, 4) += bc.h / dt_bc_s;
+    double r;
+    SpeedVector j;
+    SpeedMatrix hr;
+    SpeedResidual(*this, x, &r, &j, &hr);
     return Gaussian<12>(r, j, &hr, sigma_mps, weight, grad, hess);
 }
 
+Linearisation<12> SpeedChangeTerm::Linearise(const SpeedVector& x) const {
+    double r;
+    SpeedVector j;
+    SpeedResidual(*this, x, &r, &j, nullptr);
+    return LinearGaussian<12>(r, j, sigma_mps, weight);
+}
+
 double StepDirectionTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    const StepGeometry g = Geometry(x, direction_rad);
-    const double along = g.c * g.dx + g.s * g.dy;
-    const double r = -g.s * g.dx + g.c * g.dy;
-    StepVector j = StepVector::Zero();
-    j[kXa] = g.s, j[kYa] = -g.c, j[kXb] = -g.s, j[kYb] = g.c;
-    j[kYawA] = -along;
-    StepMatrix hr = StepMatrix::Zero();
-    hr(kYawA, kYawA) = -r;
-    hr(kYawA, kXb) = hr(kXb, kYawA) = -g.c;
-    hr(kYawA, kYb) = hr(kYb, kYawA) = -g.s;
-    hr(kYawA, kXa) = hr(kXa, kYawA) = g.c;
-    hr(kYawA, kYa) = hr(kYa, kYawA) = g.s;
-    return Gaussian<9>(r, j, &hr, sigma_m, weight, grad, hess);
+    const StepResidual res = StepDirectionResidual(x, direction_rad);
+    return Gaussian<9>(res.r, res.j, &res.hr, sigma_m, weight, grad, hess);
+}
+
+Linearisation<9> StepDirectionTerm::Linearise(const StepVector& x) const {
+    const StepResidual res = StepDirectionResidual(x, direction_rad);
+    return LinearGaussian<9>(res.r, res.j, sigma_m, weight);
 }
 
 double HeadingChangeTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
     return LinearYawDifference(x, dheading_rad, sigma_rad, weight, grad, hess);
+}
+
+Linearisation<9> HeadingChangeTerm::Linearise(const StepVector& x) const {
+    return LinearDifference(x, kYawA, kYawB, dheading_rad, sigma_rad, weight);
 }
 
 double HeadingPreservationTerm::Evaluate(const StepVector& x, StepVector* grad,
@@ -142,11 +218,19 @@ double HeadingPreservationTerm::Evaluate(const StepVector& x, StepVector* grad,
     return LinearYawDifference(x, 0.0, sigma_rad, weight, grad, hess);
 }
 
+Linearisation<9> HeadingPreservationTerm::Linearise(const StepVector& x) const {
+    return LinearDifference(x, kYawA, kYawB, 0.0, sigma_rad, weight);
+}
+
 double HeightChangeTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
     StepVector j = StepVector::Zero();
     j[kZb] = 1.0;
     j[kZa] = -1.0;
     return Gaussian<9>(x[kZb] - x[kZa] - dup_m, j, nullptr, sigma_m, weight, grad, hess);
+}
+
+Linearisation<9> HeightChangeTerm::Linearise(const StepVector& x) const {
+    return LinearDifference(x, kZa, kZb, dup_m, sigma_m, weight);
 }
 
 double ScaleRandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
@@ -162,11 +246,21 @@ double ScaleRandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* 
     return 0.5 * weight * k2 * std::log(q);
 }
 
+Linearisation<2> ScaleRandomWalkTerm::Linearise(const Eigen::Vector2d& x) const {
+    const Eigen::Vector2d j(-1.0, 1.0);
+    if (robust_k <= 0.0) return LinearGaussian<2>(x[1] - x[0], j, sigma, weight);
+    return LinearCauchy<2>(x[1] - x[0], j, sigma, robust_k, weight);
+}
+
 double ScalePriorTerm::Evaluate(double s, double* grad, double* hess) const {
     const double k = weight / (sigma * sigma);
     if (grad) *grad = k * (s - 1.0);
     if (hess) *hess = k;
     return 0.5 * k * (s - 1.0) * (s - 1.0);
+}
+
+Linearisation<1> ScalePriorTerm::Linearise(double s) const {
+    return LinearGaussian<1>(s - 1.0, Eigen::Matrix<double, 1, 1>(1.0), sigma, weight);
 }
 
 double MapDistanceTerm::Evaluate(double d, const Eigen::Vector3d& grad_d,
@@ -180,6 +274,14 @@ double MapDistanceTerm::Evaluate(double d, const Eigen::Vector3d& grad_d,
     if (grad) *grad = rho_d * grad_d;
     if (hess) *hess = rho_dd * grad_d * grad_d.transpose() + rho_d * hess_d;
     return k * c2 * (1.0 - e);
+}
+
+Linearisation<3> MapDistanceTerm::Linearise(double d, const Eigen::Vector3d& grad_d) const {
+    const double c2 = giveup_m * giveup_m;
+    const double k = weight / (sigma_m * sigma_m);
+    const double e = std::exp(-d * d / (2.0 * c2));
+    const double rho_dd = k * e * (1.0 - d * d / c2);  // d2 rho / d d2
+    return {d, grad_d, std::max(rho_dd, 0.0), k * e * d * d};
 }
 
 }  // namespace driftcorr

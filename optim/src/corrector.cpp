@@ -17,6 +17,7 @@ std::string CorrectorConfig::Validate() const {
     if (max_chunk_poses < 1) return "corrector.max_chunk_poses: must be >= 1";
     if (max_window_poses < max_chunk_poses) return "corrector.max_window_poses: must be >= max_chunk_poses";
     if (!(stationary_m >= 0.0)) return "corrector.stationary_m: must be >= 0";
+    if (std::string m = covariance.Validate(); !m.empty()) return m;
     return "";
 }
 

@@ -288,6 +288,11 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
     result.scale_min = *std::min_element(state_.scales.begin(), state_.scales.end());
     result.scale_max = *std::max_element(state_.scales.begin(), state_.scales.end());
     if (Usable(result.status)) result.corrected = ToTrajectory(t_s, state_);
+    if (Usable(result.status) && cfg_.compute_covariance) {
+        const auto t1 = std::chrono::steady_clock::now();
+        result.covariance = ComputeCovariance(state_, field_, cfg_.model, cfg_.covariance);
+        result.covariance_s = SecondsSince(t1);
+    }
     return result;
 }
 

@@ -1,4 +1,5 @@
-// Speed of the parts that matter: distance-field build (cells/s), the whole correction (poses/s).
+// Speed of the parts that matter: distance-field build (cells/s), the whole correction (poses/s),
+// the per-pose covariance (linear in the number of poses).
 // Run: build/tests/bench_driftcorr [--benchmark_filter=...]. The correction benchmarks read the
 // real KITTI scenarios from ../shared/datasets and are skipped (with a message) when absent.
 #include <benchmark/benchmark.h>
@@ -7,6 +8,8 @@
 #include <filesystem>
 #include <string>
 
+#include "driftcorr/core/observables.h"
+#include "driftcorr/optim/covariance.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace {
@@ -68,6 +71,58 @@ BENCHMARK_CAPTURE(BM_CorrectKitti, kitti00_cvo, std::string("kitti00_cvo_stereo_
     ->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK_CAPTURE(BM_CorrectKitti, kitti00_orb2, std::string("kitti00_orb2_longruidong"))
     ->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// A car driving laps of a circular road (radius 160 m, 2 m steps at 10 Hz) on its centre line,
+// with the road's field: the covariance of n poses of it.
+void BM_Covariance(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    const double radius_m = 160.0, step_m = 2.0;
+    PlanarTrajectory lap;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double a = step_m * double(i) / radius_m;
+        lap.t_s.push_back(0.1 * double(i));
+        lap.p_en.emplace_back(radius_m * std::sin(a), radius_m * (1.0 - std::cos(a)));
+        lap.up_m.push_back(0.0);
+        lap.yaw_rad.push_back(a);
+    }
+    RoadNetwork net;
+    RoadPolyline road{1, "residential", 3.5, {}};
+    for (int k = 0; k <= 400; ++k)
+        road.points_en.push_back(lap.p_en[0] +
+                                 radius_m * Eigen::Vector2d(std::sin(2.0 * M_PI * k / 400.0),
+                                                            -std::cos(2.0 * M_PI * k / 400.0)) +
+                                 Eigen::Vector2d(0.0, radius_m));
+    net.roads.push_back(road);
+    RoadFieldConfig field_cfg;
+    field_cfg.margin_m = 30.0;
+    const TraversableField field = RasteriseRoads(net, net.Bounds(), field_cfg);
+    const CorrectorConfig cfg;
+    TrajectoryState s;
+    s.obs = ComputeObservations(lap);
+    s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
+    s.scales.assign(s.scale_segment.back() + 1, 1.0);
+    for (std::size_t i = 0; i < n; ++i) {
+        s.poses.push_back(
+            PoseState{Eigen::Vector3d(lap.p_en[i].x(), lap.p_en[i].y(), 0.0), lap.yaw_rad[i]});
+    }
+    std::size_t unknowns = 0;
+    for (auto _ : state) {
+        const CovarianceResult r = ComputeCovariance(s, &field, cfg.model, cfg.covariance);
+        if (r.status != CovarianceStatus::kOk) state.SkipWithError(r.message.c_str());
+        unknowns = r.unknowns;
+        benchmark::DoNotOptimize(r);
+    }
+    state.counters["unknowns"] = double(unknowns);
+    state.counters["us_per_pose"] = benchmark::Counter(
+        double(n) * state.iterations(), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.SetComplexityN(state.range(0));
+}
+BENCHMARK(BM_Covariance)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMillisecond)
+    ->Complexity(benchmark::oN);
 
 }  // namespace
 

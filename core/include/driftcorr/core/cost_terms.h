@@ -4,6 +4,9 @@
 // local variables. A Gaussian term with residual r, standard deviation sigma and weight w in (0, 1]
 // costs 0.5 * w * (r / sigma)^2 (Eq. 1 of our method notes: the NLL of a Gaussian observation).
 //
+// For the curvature of the NLL at a solution (optim/covariance.h) each term also linearises:
+// Linearise returns its residual, the residual's Jacobian and a curvature weight (Linearisation).
+//
 // Step block layout (the variables a step term sees), poses a = i-1 and b = i:
 //   [x_a, y_a, z_a, yaw_a, x_b, y_b, z_b, yaw_b, s]
 // positions in the East-North-Up map frame [m], yaw CCW from East [rad], s the step-length scale.
@@ -13,6 +16,26 @@ namespace driftcorr {
 
 using StepVector = Eigen::Matrix<double, 9, 1>;
 using StepMatrix = Eigen::Matrix<double, 9, 9>;
+
+/// A term linearised at a point, for the Gauss-Newton curvature of the NLL: residual r, its
+/// Jacobian J = dr/dx over the term's variables, and a curvature weight `information` such that
+/// information * J J^T (positive semi-definite) approximates the term's Hessian. What is dropped
+/// is r times the residual's own Hessian and the derivative of a robust down-weighting, so the
+/// approximation equals the exact Hessian where r = 0.
+///  - Gaussian terms: information = w / sigma^2.
+///  - Cauchy terms: the IRLS weight w / (sigma^2 (1 + (r / sigma)^2 / k^2)).
+///  - The map distance term (r = d, J = grad d): max(rho''(d), 0).
+/// `chi2` is the term's squared normalised residual as IRLS weighs it: information * r^2 for
+/// Gaussian and Cauchy terms, w exp(-d^2 / (2 c^2)) (d / sigma)^2 for the map term; summed over
+/// the terms it is twice the NLL of the Gaussian model those weights describe (a posteriori
+/// variance factors).
+template <int N>
+struct Linearisation {
+    double residual = 0.0;
+    Eigen::Matrix<double, N, 1> jacobian = Eigen::Matrix<double, N, 1>::Zero();
+    double information = 0.0;
+    double chi2 = 0.0;
+};
 
 enum StepVar : int { kXa = 0, kYa, kZa, kYawA, kXb, kYb, kZb, kYawB, kScale, kStepVars };
 
@@ -26,6 +49,7 @@ struct StepLengthTerm {
     double length_m, direction_rad, sigma_m, weight;
     double robust_k = 0.0;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
+    Linearisation<9> Linearise(const StepVector& x) const;
 };
 
 /// Speed continuity over two consecutive steps (poses a, b, c): the along-track speed changes
@@ -37,6 +61,7 @@ using SpeedMatrix = Eigen::Matrix<double, 12, 12>;
 struct SpeedChangeTerm {
     double direction_ab_rad, dt_ab_s, direction_bc_rad, dt_bc_s, sigma_mps, weight;
     double Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const;
+    Linearisation<12> Linearise(const SpeedVector& x) const;
 };
 
 /// Sideways motion relative to the observed step direction: r = n(yaw_a + direction) . (p_b - p_a),
@@ -44,24 +69,28 @@ struct SpeedChangeTerm {
 struct StepDirectionTerm {
     double direction_rad, sigma_m, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
+    Linearisation<9> Linearise(const StepVector& x) const;
 };
 
 /// Heading change: r = yaw_b - yaw_a - dheading (headings unwrapped).
 struct HeadingChangeTerm {
     double dheading_rad, sigma_rad, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
+    Linearisation<9> Linearise(const StepVector& x) const;
 };
 
 /// Heading preservation prior (turns are small): r = yaw_b - yaw_a.
 struct HeadingPreservationTerm {
     double sigma_rad, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
+    Linearisation<9> Linearise(const StepVector& x) const;
 };
 
 /// Height change: r = z_b - z_a - dup.
 struct HeightChangeTerm {
     double dup_m, sigma_m, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
+    Linearisation<9> Linearise(const StepVector& x) const;
 };
 
 /// Scale random walk between consecutive scale segments, variables [s_prev, s_next]:
@@ -75,10 +104,12 @@ struct ScaleRandomWalkTerm {
     double sigma, weight;
     double robust_k = 0.0;
     double Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad, Eigen::Matrix2d* hess) const;
+    Linearisation<2> Linearise(const Eigen::Vector2d& x) const;
 };
 struct ScalePriorTerm {
     double sigma, weight;
     double Evaluate(double s, double* grad, double* hess) const;
+    Linearisation<1> Linearise(double s) const;
 };
 
 /// Map distance term on one pose: the distance d(p) to the nearest traversable centre should be
@@ -90,6 +121,8 @@ struct MapDistanceTerm {
     double sigma_m, giveup_m, weight;
     double Evaluate(double d, const Eigen::Vector3d& grad_d, const Eigen::Matrix3d& hess_d,
                     Eigen::Vector3d* grad, Eigen::Matrix3d* hess) const;
+    /// r = d, J = grad_d (see Linearisation; the field's Hessian of d is not needed).
+    Linearisation<3> Linearise(double d, const Eigen::Vector3d& grad_d) const;
 };
 
 }  // namespace driftcorr

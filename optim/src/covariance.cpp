@@ -1,0 +1,388 @@
+#include "driftcorr/optim/covariance.h"
+
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <optional>
+
+namespace driftcorr {
+namespace {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// The map's lateral error as a Gauss-Markov process along the path (method step 2): one unknown
+// offset b_k per stretch of 1 / kStretchesPerCorrelation of the correlation length that holds map
+// terms, numbered after the window's variables.
+constexpr double kStretchesPerCorrelation = 4.0;
+
+// A family's variance component is estimated only from at least one redundant observation.
+constexpr double kMinRedundancy = 1.0;
+
+struct MapOffset {
+    int first_var = 0;                   // variable of b_0
+    std::vector<std::size_t> last_pose;  // per stretch: its last pose with a map term
+};
+
+// The signed lateral residual: +-d, positive on the left of the pose's heading, so that one
+// offset b shifts the poses to one side of their roads.
+void MakeLateral(LinearisedTerm& t, double yaw, int x_var) {
+    double left = 0.0;  // J . (-sin yaw, cos yaw)
+    for (int a = 0; a < t.size; ++a) {
+        if (t.var[a] == x_var) left -= std::sin(yaw) * t.jacobian[a];
+        if (t.var[a] == x_var + 1) left += std::cos(yaw) * t.jacobian[a];
+    }
+    if (left >= 0.0) return;
+    t.residual = -t.residual;
+    for (int a = 0; a < t.size; ++a) t.jacobian[a] = -t.jacobian[a];
+}
+
+LinearisedTerm OffsetPrior(int var_a, double rho, int var_b, double information) {
+    LinearisedTerm t;
+    t.family = TermFamily::kMapOffset;
+    if (var_a >= 0) t.var[t.size] = var_a, t.jacobian[t.size++] = -rho;
+    t.var[t.size] = var_b, t.jacobian[t.size++] = 1.0;
+    t.information = information;
+    return t;
+}
+
+// Makes each map term's residual s - b_k (variance (1 - share) map_sigma^2) and adds the
+// process b_0 ~ N(0, share map_sigma^2), b_k+1 - rho b_k ~ N(0, (1 - rho^2) share map_sigma^2)
+// with rho = exp(-path between the stretches / correlation length).
+MapOffset AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const ModelConfig& model,
+                       const CovarianceConfig& config, std::vector<LinearisedTerm>& terms) {
+    MapOffset offset;
+    offset.first_var = p.NumVariables();
+    if (!(config.map_offset_share > 0.0)) return offset;
+    std::vector<double> path_m(s.poses.size(), 0.0);
+    for (std::size_t i = 1; i < s.poses.size(); ++i) path_m[i] = path_m[i - 1] + s.obs[i].length_m;
+    const double stretch_m = config.map_offset_correlation_m / kStretchesPerCorrelation;
+    std::vector<double> centre_m;  // mean path position of each stretch's map terms
+    std::vector<int> count;
+    long last_stretch = -1;
+    for (LinearisedTerm& t : terms) {
+        if (t.family != TermFamily::kMapDistance || !(t.information > 0.0)) continue;
+        const auto stretch = static_cast<long>(path_m[t.pose] / stretch_m);
+        if (stretch != last_stretch) {  // map terms come in pose order
+            last_stretch = stretch;
+            offset.last_pose.push_back(0), centre_m.push_back(0.0), count.push_back(0);
+        }
+        offset.last_pose.back() = static_cast<std::size_t>(t.pose);
+        centre_m.back() += path_m[t.pose], ++count.back();
+        t.information /= 1.0 - config.map_offset_share;
+        t.chi2 /= 1.0 - config.map_offset_share;
+        MakeLateral(t, s.poses[t.pose].yaw_rad, p.PoseVar(static_cast<std::size_t>(t.pose), 0));
+        t.var[t.size] = offset.first_var + static_cast<int>(offset.last_pose.size()) - 1;
+        t.jacobian[t.size++] = -1.0;
+    }
+    const double info =
+        model.map_weight / (config.map_offset_share * model.map_sigma_m * model.map_sigma_m);
+    for (std::size_t k = 0; k < offset.last_pose.size(); ++k) {
+        centre_m[k] /= count[k];
+        const int var = offset.first_var + static_cast<int>(k);
+        if (k == 0) {
+            terms.push_back(OffsetPrior(-1, 0.0, var, info));
+            continue;
+        }
+        const double rho =
+            std::exp(-(centre_m[k] - centre_m[k - 1]) / config.map_offset_correlation_m);
+        terms.push_back(OffsetPrior(var - 1, rho, var, info / std::max(1.0 - rho * rho, 1e-9)));
+    }
+    return offset;
+}
+
+// The unknowns of the covariance: every variable that is not held fixed, in the chain's order
+// (method step 3). of_var[v] is the index of variable v, -1 when v is fixed.
+struct Ordering {
+    std::vector<int> of_var;
+    int size = 0;
+};
+
+Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s, const MapOffset& offset) {
+    Ordering o;
+    o.of_var.assign(p.NumVariables() + offset.last_pose.size(), -1);
+    const std::size_t n = s.poses.size();
+    int next_segment = s.scale_segment[1];
+    std::size_t next_stretch = 0;
+    for (std::size_t i = 1; i < n; ++i) {
+        for (int c = 0; c < 4; ++c) {
+            if (c != 2 || !s.fix_height) o.of_var[p.PoseVar(i, c)] = o.size++;
+        }
+        // The scale segments no later step uses and the map stretches ending here follow pose i.
+        const int open = i + 1 < n ? s.scale_segment[i + 1] : s.scale_segment[n - 1] + 1;
+        for (; next_segment < open; ++next_segment) o.of_var[p.ScaleVar(next_segment)] = o.size++;
+        for (; next_stretch < offset.last_pose.size() && offset.last_pose[next_stretch] == i;
+             ++next_stretch) {
+            o.of_var[offset.first_var + next_stretch] = o.size++;
+        }
+    }
+    return o;
+}
+
+// The lower triangle of the Gauss-Newton Hessian over the ordered unknowns, plus structural zeros
+// that keep each pose's own block in the factor's pattern.
+SparseMatrix AssembleLower(const std::vector<LinearisedTerm>& terms, const Ordering& o,
+                           const WindowProblem& p, const TrajectoryState& s) {
+    std::vector<Eigen::Triplet<double, int>> triplets;
+    triplets.reserve(terms.size() * 10 + s.poses.size() * 10);
+    for (const LinearisedTerm& t : terms) {
+        if (!(t.information > 0.0)) continue;
+        for (int a = 0; a < t.size; ++a) {
+            const int ra = o.of_var[t.var[a]];
+            if (ra < 0) continue;
+            for (int b = 0; b < t.size; ++b) {
+                const int rb = o.of_var[t.var[b]];
+                if (rb < 0 || rb > ra) continue;
+                triplets.emplace_back(ra, rb, t.information * t.jacobian[a] * t.jacobian[b]);
+            }
+        }
+    }
+    for (std::size_t i = 1; i < s.poses.size(); ++i) {
+        const int first = o.of_var[p.PoseVar(i, 0)], last = o.of_var[p.PoseVar(i, 3)];
+        for (int r = first; r <= last; ++r) {
+            for (int c = first; c <= r; ++c) triplets.emplace_back(r, c, 0.0);
+        }
+    }
+    SparseMatrix h(o.size, o.size);
+    h.setFromTriplets(triplets.begin(), triplets.end());
+    return h;
+}
+
+// Sigma = (L D L^T)^-1 on the pattern of L + L^T (method step 4). L: unit lower triangular,
+// strictly lower part stored column by column with ascending rows, as SimplicialLDLT keeps it.
+class SelectedInverse {
+public:
+    SelectedInverse(const SparseMatrix& l, const Eigen::VectorXd& d)
+        : lp_(l.outerIndexPtr(), l.outerIndexPtr() + l.cols() + 1),
+          li_(l.innerIndexPtr(), l.innerIndexPtr() + l.nonZeros()),
+          lower_(l.nonZeros()),
+          diag_(l.cols()) {
+        const double* lx = l.valuePtr();
+        for (int j = static_cast<int>(l.cols()) - 1; j >= 0; --j) {
+            const int b = lp_[j], e = lp_[j + 1];
+            for (int p = b; p < e; ++p) {
+                double sum = 0.0;
+                for (int q = b; q < e; ++q) sum += (*this)(li_[p], li_[q]) * lx[q];
+                lower_[p] = -sum;
+            }
+            double djj = 1.0 / d[j];
+            for (int p = b; p < e; ++p) djj -= lx[p] * lower_[p];
+            diag_[j] = djj;
+        }
+    }
+
+    /// Sigma(r, c). Precondition: (r, c) is on the diagonal or in the pattern of L + L^T.
+    double operator()(int r, int c) const {
+        if (r == c) return diag_[r];
+        if (r < c) std::swap(r, c);
+        const auto begin = li_.begin() + lp_[c], end = li_.begin() + lp_[c + 1];
+        const auto it = std::lower_bound(begin, end, r);
+        assert(it != end && *it == r && "entry outside the factor's pattern");
+        return lower_[it - li_.begin()];
+    }
+
+private:
+    std::vector<int> lp_;
+    std::vector<int> li_;
+    std::vector<double> lower_;
+    std::vector<double> diag_;
+};
+
+// The first D(j) that is not safely positive (relative to H(j, j)), or -1.
+int FirstNonPositivePivot(const Eigen::VectorXd& d, const SparseMatrix& h_lower) {
+    for (int j = 0; j < d.size(); ++j) {
+        const double hjj = h_lower.coeff(j, j);
+        if (!std::isfinite(d[j]) || !(d[j] > 1e-13 * std::abs(hjj)) || !(d[j] > 0.0)) return j;
+    }
+    return -1;
+}
+
+// Factors the Gauss-Newton Hessian of `terms` and inverts it on the factor's pattern; nothing
+// (and r.status, r.message set) when it is not positive definite. `h` receives the lower triangle.
+std::optional<SelectedInverse> Invert(const std::vector<LinearisedTerm>& terms,
+                                      const Ordering& order, const WindowProblem& problem,
+                                      const TrajectoryState& state, CovarianceResult& r,
+                                      SparseMatrix& h) {
+    h = AssembleLower(terms, order, problem, state);
+    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt(h);
+    assert(ldlt.permutationP().size() == 0 && "the chain order must be kept");
+    const int bad = ldlt.info() == Eigen::Success ? FirstNonPositivePivot(ldlt.vectorD(), h) : -2;
+    if (bad != -1) {
+        r.status = CovarianceStatus::kNotPositiveDefinite;
+        r.message = "Gauss-Newton Hessian not positive definite (" +
+                    (bad >= 0 ? "pivot of unknown " + std::to_string(bad) : "a zero pivot") +
+                    " of " + std::to_string(order.size) + "): a variable the terms do not observe";
+        return std::nullopt;
+    }
+    const SparseMatrix& l = ldlt.matrixL().nestedExpression();
+    r.factor_nonzeros = static_cast<std::size_t>(l.nonZeros());
+    return SelectedInverse(l, ldlt.vectorD());
+}
+
+PoseCovariance PoseBlock(const SelectedInverse& sigma, const Ordering& o, const WindowProblem& p,
+                         std::size_t pose, bool fix_height) {
+    const int x = o.of_var[p.PoseVar(pose, 0)], y = o.of_var[p.PoseVar(pose, 1)];
+    const int yaw = o.of_var[p.PoseVar(pose, 3)];
+    PoseCovariance c;
+    c.xy_m2 << sigma(x, x), sigma(x, y), sigma(x, y), sigma(y, y);
+    c.z_m2 = fix_height ? 0.0 : sigma(o.of_var[p.PoseVar(pose, 2)], o.of_var[p.PoseVar(pose, 2)]);
+    c.yaw_rad2 = sigma(yaw, yaw);
+    c.xy_yaw_m_rad = Eigen::Vector2d(sigma(x, yaw), sigma(y, yaw));
+    return c;
+}
+
+// Observations, redundancy numbers and chi2 per family; the variance factor (method step 5).
+void Statistics(const std::vector<LinearisedTerm>& terms, const Ordering& o,
+                const SelectedInverse& sigma, CovarianceResult& r) {
+    r.families = {};
+    r.observations = 0;
+    double chi2 = 0.0;
+    for (const LinearisedTerm& t : terms) {
+        if (!(t.information > 0.0)) continue;
+        double leverage = 0.0;  // information J^T Sigma J
+        for (int a = 0; a < t.size; ++a) {
+            const int ra = o.of_var[t.var[a]];
+            if (ra < 0) continue;
+            for (int b = 0; b < t.size; ++b) {
+                const int rb = o.of_var[t.var[b]];
+                if (rb >= 0) leverage += t.jacobian[a] * t.jacobian[b] * sigma(ra, rb);
+            }
+        }
+        FamilyStatistics& f = r.families[static_cast<int>(t.family)];
+        ++f.terms;
+        f.chi2 += t.chi2;
+        f.redundancy += 1.0 - t.information * leverage;
+        chi2 += t.chi2;
+        ++r.observations;
+    }
+    r.variance_factor =
+        r.observations > r.unknowns ? chi2 / double(r.observations - r.unknowns) : 1.0;
+}
+
+// Multiplies the variance of every observation family whose chi2 exceeds its redundancy by that
+// ratio (method step 6); false (and nothing changed) when every ratio is below 1.01.
+bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
+    std::array<double, kTermFamilies> factor;
+    bool changed = false;
+    for (int f = 0; f < kTermFamilies; ++f) {
+        const auto family = static_cast<TermFamily>(f);
+        const bool prior =
+            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset;
+        const bool estimable = r.families[f].redundancy >= kMinRedundancy;
+        factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
+        changed = changed || factor[f] > 1.01;
+    }
+    if (!changed) return false;
+    r.family_factors = factor;
+    for (LinearisedTerm& t : terms) {
+        const double k = factor[static_cast<int>(t.family)];
+        t.information /= k, t.chi2 /= k;
+    }
+    return changed;
+}
+
+// Both triangles of the information matrix and each pose's unknowns.
+CovarianceSystem System(const SparseMatrix& h_lower, const Ordering& o, const WindowProblem& p,
+                        const TrajectoryState& s) {
+    CovarianceSystem system;
+    system.information = h_lower.selfadjointView<Eigen::Lower>();
+    system.pose_unknowns.assign(s.poses.size(), {-1, -1, -1, -1});
+    for (std::size_t i = 1; i < s.poses.size(); ++i) {
+        for (int c = 0; c < 4; ++c) system.pose_unknowns[i][c] = o.of_var[p.PoseVar(i, c)];
+    }
+    return system;
+}
+
+}  // namespace
+
+std::string CovarianceConfig::Validate() const {
+    if (!(map_offset_share >= 0.0 && map_offset_share < 1.0)) {
+        return "covariance.map_offset_share: must be in [0, 1)";
+    }
+    if (!(map_offset_correlation_m > 0.0))
+        return "covariance.map_offset_correlation_m: must be > 0";
+    return "";
+}
+
+const char* ToString(CovarianceStatus status) {
+    switch (status) {
+        case CovarianceStatus::kNotComputed:
+            return "not computed";
+        case CovarianceStatus::kOk:
+            return "ok";
+        case CovarianceStatus::kNotPositiveDefinite:
+            return "not positive definite";
+        case CovarianceStatus::kBadInput:
+            return "bad input";
+    }
+    return "?";
+}
+
+Eigen::MatrixXd DenseGaussNewtonHessian(const WindowProblem& problem, const double* x) {
+    std::vector<LinearisedTerm> terms;
+    problem.LineariseTerms(x, terms);
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(problem.NumVariables(), problem.NumVariables());
+    for (const LinearisedTerm& t : terms) {
+        for (int a = 0; a < t.size; ++a) {
+            for (int b = 0; b < t.size; ++b) {
+                h(t.var[a], t.var[b]) += t.information * t.jacobian[a] * t.jacobian[b];
+            }
+        }
+    }
+    return h;
+}
+
+CovarianceResult ComputeCovariance(const TrajectoryState& state, const TraversableField* field,
+                                   const ModelConfig& model, const CovarianceConfig& config,
+                                   CovarianceSystem* system) {
+    assert(config.Validate().empty() && "invalid CovarianceConfig");
+    CovarianceResult r;
+    const std::size_t n = state.poses.size();
+    if (n < 2 || state.obs.size() != n || state.scale_segment.size() != n ||
+        !std::is_sorted(state.scale_segment.begin() + 1, state.scale_segment.end()) ||
+        std::size_t(state.scale_segment.back()) >= state.scales.size()) {
+        r.status = CovarianceStatus::kBadInput;
+        r.message = "need >= 2 poses with one observation and scale segment each";
+        return r;
+    }
+    TrajectoryState copy = state;  // WindowProblem writes solutions back; this one never does
+    const WindowProblem problem(copy, field, model, 1, n - 1, std::vector<std::uint8_t>(n - 1, 0),
+                                WindowUse::kLinearise);
+    std::vector<double> x(problem.NumVariables());
+    problem.InitialPoint(x.data());
+    std::vector<LinearisedTerm> terms;
+    terms.reserve(6 * n);
+    problem.LineariseTerms(x.data(), terms);
+    const MapOffset offset = AddMapOffset(state, problem, model, config, terms);
+    const Ordering order = ChainOrdering(problem, state, offset);
+    r.unknowns = order.size;
+
+    SparseMatrix h;
+    std::optional<SelectedInverse> sigma = Invert(terms, order, problem, state, r, h);
+    if (!sigma) return r;
+    Statistics(terms, order, *sigma, r);
+    if (config.family_variance_components && ScaleFamilies(r, terms)) {
+        sigma = Invert(terms, order, problem, state, r, h);
+        if (!sigma) return r;
+        Statistics(terms, order, *sigma, r);
+    }
+    if (system) *system = System(h, order, problem, state);
+
+    r.variance_factor_applied = config.apply_variance_factor;
+    const double factor = config.apply_variance_factor ? r.variance_factor : 1.0;
+    r.poses.assign(n, PoseCovariance{});
+    for (std::size_t i = 1; i < n; ++i) {
+        PoseCovariance c = PoseBlock(*sigma, order, problem, i, state.fix_height);
+        c.xy_m2 *= factor, c.z_m2 *= factor, c.yaw_rad2 *= factor, c.xy_yaw_m_rad *= factor;
+        r.poses[i] = c;
+    }
+    r.status = CovarianceStatus::kOk;
+    r.message = std::to_string(order.size) + " unknowns, " + std::to_string(r.observations) +
+                " observations, variance factor " + std::to_string(r.variance_factor) +
+                (r.variance_factor_applied ? " (applied)" : " (not applied)");
+    return r;
+}
+
+}  // namespace driftcorr
