@@ -87,7 +87,7 @@ Loaded Load(const fs::path& dir) {
     l.scenario = io::LoadScenario(dir.string());
     l.estimate = io::LoadTrajectory(l.scenario.estimate);
     l.ground_truth = io::LoadTrajectory(*l.scenario.ground_truth);
-    l.anchor.yaw_rad = DegToRad(l.scenario.anchor.yaw_deg);
+    l.anchor.yaw_rad = DegToRad(l.scenario.anchor.yaw_deg.value());
     return l;
 }
 
@@ -193,7 +193,7 @@ TEST_F(StressVariantsTest, YawOffsetKeepsTheGroundTruthInItsPlaceInTheWorld) {
         const std::string name = "yaw_off_" + std::to_string(static_cast<int>(offset_deg));
         SCOPED_TRACE(name);
         const Loaded v = Load(Variant(name));
-        EXPECT_NEAR(v.scenario.anchor.yaw_deg, input.scenario.anchor.yaw_deg + offset_deg, 1e-9);
+        EXPECT_NEAR(v.scenario.anchor.yaw_deg.value(), input.scenario.anchor.yaw_deg.value() + offset_deg, 1e-9);
         EXPECT_EQ(*v.scenario.anchor.lat_deg, *input.scenario.anchor.lat_deg);
         EXPECT_EQ(*v.scenario.anchor.lon_deg, *input.scenario.anchor.lon_deg);
         EXPECT_TRUE(ReadBytes(kInput / "estimate.txt") ==

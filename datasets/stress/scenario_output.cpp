@@ -58,6 +58,10 @@ std::vector<std::string> NamedFiles(const io::Scenario& sc) {
 InputScenario LoadInputScenario(const std::string& path) {
     InputScenario in;
     in.scenario = io::LoadScenario(path);
+    if (!in.scenario.anchor.yaw_deg) {
+        throw InputError(in.scenario.yaml_path, 0, "anchor.yaw_deg",
+                         "the variants need the scenario's true anchor heading, not auto");
+    }
     in.header_comment = LeadingComments(ReadBytes(in.scenario.yaml_path));
     in.estimate = io::LoadTrajectory(in.scenario.estimate);
     if (in.scenario.ground_truth) in.ground_truth = io::LoadTrajectory(*in.scenario.ground_truth);
@@ -166,7 +170,10 @@ std::string AnchorYaml(const io::AnchorSpec& a, bool with_z) {
         y += "  easting_m: " + ExactNumber(*a.easting_m) + "\n";
         y += "  northing_m: " + ExactNumber(*a.northing_m) + "\n";
     }
-    y += "  yaw_deg: " + ExactNumber(a.yaw_deg) + "\n";
+    y += "  yaw_deg: " + (a.yaw_deg ? ExactNumber(*a.yaw_deg) : std::string("auto")) + "\n";
+    if (a.position_search_m > 0.0) {
+        y += "  position_search_m: " + ExactNumber(a.position_search_m) + "\n";
+    }
     if (with_z) y += "  z_m: " + ExactNumber(a.z_m) + "\n";
     return y;
 }

@@ -110,16 +110,16 @@ VariantOutcome YawOffset(const InputScenario& input, double offset_deg) {
         return Skipped(name, "the input has no ground truth to keep in its place in the world");
     }
     VariantSpec spec = BaseSpec(input, name);
-    const double old_yaw_deg = input.scenario.anchor.yaw_deg;
+    const double old_yaw_deg = *input.scenario.anchor.yaw_deg;
     spec.anchor.yaw_deg = WrapDeg(old_yaw_deg + offset_deg);
     // R(new) uv' = R(old) uv  =>  uv' = R(old - new) uv, with the radians ToPlanar will use.
-    const double turn_rad = DegToRad(old_yaw_deg) - DegToRad(spec.anchor.yaw_deg);
+    const double turn_rad = DegToRad(old_yaw_deg) - DegToRad(*spec.anchor.yaw_deg);
     spec.ground_truth = RotateAboutUp(*input.ground_truth, input.scenario.frame, turn_rad);
     spec.description = {
         Format("variant %s: a wrong anchor heading: anchor yaw_deg %s -> %s (%+g deg); the "
                "estimate file is unchanged.",
                name.c_str(), ExactNumber(old_yaw_deg).c_str(),
-               ExactNumber(spec.anchor.yaw_deg).c_str(), offset_deg),
+               ExactNumber(*spec.anchor.yaw_deg).c_str(), offset_deg),
         Format("The ground truth is turned by %+g deg about the frame's Up axis at its origin, so "
                "that placed with this",
                -offset_deg),
@@ -165,7 +165,7 @@ VariantOutcome AnchorOffset(const InputScenario& input, const StressConfig& conf
     const double direction_rad = random.Range(0.0, 2.0 * kPi);
     const Eigen::Vector2d shift_en =
         config.anchor_offset_m * Eigen::Vector2d(std::cos(direction_rad), std::sin(direction_rad));
-    const double yaw_rad = DegToRad(sc.anchor.yaw_deg);
+    const double yaw_rad = DegToRad(*sc.anchor.yaw_deg);
     const Eigen::Vector2d shift_uv = Eigen::Rotation2Dd(-yaw_rad) * shift_en;
     VariantSpec spec = BaseSpec(input, name);
     std::string moved_how;
@@ -225,7 +225,7 @@ std::optional<LongestWay> FindLongestWay(const InputScenario& input, double radi
     const io::Scenario& sc = input.scenario;
     const AnchorPlane plane = MakePlane(sc);
     PlanarAnchor anchor;
-    anchor.yaw_rad = DegToRad(sc.anchor.yaw_deg);
+    anchor.yaw_rad = DegToRad(*sc.anchor.yaw_deg);
     const std::vector<Eigen::Vector2d> gt_en = ToPlanar(*input.ground_truth, sc.frame, anchor).p_en;
     std::optional<LongestWay> best;
     for (std::size_t layer = 0; layer < sc.map.size(); ++layer) {
