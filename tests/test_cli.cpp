@@ -1068,4 +1068,81 @@ INSTANTIATE_TEST_SUITE_P(Cases, CliValidInput, ::testing::ValuesIn(ValidCases())
                              return std::string(p.param.name);
                          });
 
+TEST(CliHelp, ListsTheCommandsAndExitsZero) {
+    for (const char* flag : {"--help", "-h", "help"}) {
+        const RunResult r = RunProgram(kCli, {flag}, fs::path(DRIFTCORR_TEST_TMPDIR));
+        EXPECT_EQ(r.exit_code, kExitOk) << flag;
+        for (const char* cmd : {"correct", "stream", "eval", "--on-failure", "--covariance"}) {
+            EXPECT_NE(r.out.find(cmd), std::string::npos) << flag << " does not mention " << cmd;
+        }
+    }
+}
+
+// The valid scenario with its anchor turned by 30 deg: the start does not fit the map, the verdict
+// is failed, and what is written depends on --on-failure; the exit code is 3 in every case.
+class CliOnFailure : public CliTest {
+protected:
+    CaseDirs WrongAnchor(const std::string& name) {
+        const CaseDirs c = MakeCase(name);
+        RegexReplace(c.scenario / "scenario.yaml", "\n  yaw_deg: [^\n]*", "\n  yaw_deg: 30.0");
+        return c;
+    }
+};
+
+TEST_F(CliOnFailure, RefuseWritesNothing) {
+    const CaseDirs c = WrongAnchor("OnFailureRefuse");
+    const RunResult r = RunProgram(kCli, Correct(c), c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitSolver);
+    EXPECT_NE(r.out.find("verdict    failed"), std::string::npos);
+    EXPECT_NE(r.out.find("the anchor does not fit the map"), std::string::npos);
+    EXPECT_TRUE(FolderEntries(c.out_dir).empty());
+}
+
+TEST_F(CliOnFailure, EstimateWritesTheInputUnchanged) {
+    const CaseDirs c = WrongAnchor("OnFailureEstimate");
+    const RunResult r =
+        RunProgram(kCli, Correct(c, {"--on-failure", "estimate"}), c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitSolver);
+    const driftcorr::Trajectory est = driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
+    const driftcorr::Trajectory out = driftcorr::io::ReadTum(c.output.string());
+    ASSERT_EQ(out.size(), est.size());
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        ASSERT_LT((out.p_frame[i] - est.p_frame[i]).norm(), 1e-5) << "pose " << i;
+    }
+}
+
+TEST_F(CliOnFailure, WriteWritesTheResultAndPerPoseCovariance) {
+    const CaseDirs c = WrongAnchor("OnFailureWrite");
+    const fs::path cov = c.out_dir / "poses.txt";
+    const RunResult r = RunProgram(
+        kCli, Correct(c, {"--on-failure", "write", "--covariance", cov.string()}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitSolver);
+    const driftcorr::Trajectory est = driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
+    const driftcorr::Trajectory out = driftcorr::io::ReadTum(c.output.string());
+    ASSERT_EQ(out.size(), est.size());
+    double moved_m = 0.0;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        moved_m = std::max(moved_m, (out.p_frame[i] - est.p_frame[i]).norm());
+    }
+    EXPECT_GT(moved_m, 1.0) << "the corrected result, not the estimate";
+    // One row per pose after the header: t and five (co)variances, the flags.
+    std::istringstream rows(ReadFile(cov));
+    std::size_t n = 0;
+    for (std::string line; std::getline(rows, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream fields(line);
+        double t, ve, cen, vn, vu, vyaw;
+        unsigned flags;
+        ASSERT_TRUE(fields >> t >> ve >> cen >> vn >> vu >> vyaw >> flags) << line;
+        if (n > 0) EXPECT_GT(ve, 0.0) << line;
+        EXPECT_LE(cen * cen, ve * vn * (1 + 1e-9)) << line;
+        ++n;
+    }
+    EXPECT_EQ(n, est.size());
+}
+
 }  // namespace

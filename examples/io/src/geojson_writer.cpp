@@ -7,9 +7,8 @@
 #include "driftcorr/io/atomic_file.h"
 
 namespace driftcorr::io {
-namespace {
 
-/// `text` as a JSON string literal (quotes, backslashes and control characters escaped).
+/// Quotes, backslashes and control characters escaped.
 std::string JsonString(const std::string& text) {
     std::string out = "\"";
     for (const char c : text) {
@@ -26,6 +25,8 @@ std::string JsonString(const std::string& text) {
     }
     return out + "\"";
 }
+
+namespace {
 
 /// JSON has no NaN or infinity: reject them before anything is written.
 void CheckFinite(const std::string& path, const std::vector<GeoTrack>& tracks) {
@@ -63,8 +64,11 @@ void WriteGeoJsonTracks(const std::string& path, const std::vector<GeoTrack>& tr
     std::ofstream& out = file.stream();
     out << "{\"type\":\"FeatureCollection\",\"features\":[\n";
     for (std::size_t i = 0; i < tracks.size(); ++i) {
-        out << "{\"type\":\"Feature\",\"properties\":{\"name\":" << JsonString(tracks[i].name)
-            << "},\"geometry\":" << Geometry(tracks[i].points) << "}"
+        out << "{\"type\":\"Feature\",\"properties\":{\"name\":" << JsonString(tracks[i].name);
+        for (const auto& [key, json] : tracks[i].json_properties) {
+            out << "," << JsonString(key) << ":" << json;
+        }
+        out << "},\"geometry\":" << Geometry(tracks[i].points) << "}"
             << (i + 1 < tracks.size() ? ",\n" : "\n");
     }
     out << "]}\n";

@@ -310,6 +310,15 @@ CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& confi
     return CorrectTrajectory(ps.estimate, &ps.field, CorrectorFor(ps.scenario, config), progress);
 }
 
+Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
+                    const CorrectionResult& result) {
+    const io::AnchorSpec& a = ps.scenario.anchor;
+    const bool start_estimated = !a.yaw_deg || a.position_search_m > 0.0;
+    return JudgeCorrection(ps.estimate, &ps.field, CorrectorFor(ps.scenario, config).model, result,
+                           ps.anchor_fit ? &*ps.anchor_fit : nullptr, start_estimated,
+                           config.solver == Solver::kDriftcorr, config.verdict);
+}
+
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress) {
     PreparedScenario ps = PrepareScenario(scenario_path, config);
@@ -320,6 +329,7 @@ CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConf
     const auto t0 = std::chrono::steady_clock::now();
     run.result = Correct(ps, config, progress);
     run.timings.solve_s = Since(t0);
+    run.verdict = JudgeResult(ps, config, run.result);
     const io::Scenario& sc = ps.scenario;
     if (Usable(run.result.status)) {
         run.corrected_frame = FromPlanar(run.result.corrected, ps.estimate, ps.estimate_frame,

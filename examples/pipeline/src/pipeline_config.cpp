@@ -330,6 +330,7 @@ std::string PipelineConfig::Validate() const {
     if (std::string m = surface_field.Validate(); !m.empty()) return "surface_field." + m;
     if (std::string m = online.Validate(); !m.empty()) return m;  // "online.<key>: ..."
     if (std::string m = anchor_fit.Validate(); !m.empty()) return m;  // "anchor_fit.<key>: ..."
+    if (std::string m = verdict.Validate(); !m.empty()) return m;  // "verdict.<key>: ..."
     return "";
 }
 

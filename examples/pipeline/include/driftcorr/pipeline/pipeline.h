@@ -16,6 +16,7 @@
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/online_corrector.h"
 #include "driftcorr/optim/paper_solver.h"
+#include "driftcorr/optim/verdict.h"
 
 namespace driftcorr::pipeline {
 
@@ -47,6 +48,8 @@ struct PipelineConfig {
     /// The anchor check and `yaw_deg: auto` (section `anchor_fit`; reach_m is the mode's
     /// map_giveup_m and is not read from the file).
     AnchorFitConfig anchor_fit;
+    /// The verdict's thresholds (optim/verdict.h).
+    VerdictConfig verdict;
 
     std::string Validate() const;
 };
@@ -87,6 +90,9 @@ struct CorrectionRun {
     std::optional<AnchorFitResult> anchor_fit;  ///< see PreparedScenario
     std::size_t map_grid_cells = 0;
     CorrectionResult result;
+    /// Can the result be vouched for (no ground truth used): ok, degraded or failed, reasons and
+    /// per-pose flags.
+    Verdict verdict;
     Trajectory corrected_frame;         ///< valid only when Usable(result.status)
     std::optional<ErrorMetrics> before, after;
     Timings timings;
@@ -125,6 +131,10 @@ const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig
 /// Runs config.solver on a prepared scenario. Solver outcomes are in the result, never thrown.
 CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig& config,
                          const ProgressCallback& progress = {});
+
+/// The verdict on `result`, a correction of `prepared` by config.solver (optim/verdict.h).
+Verdict JudgeResult(const PreparedScenario& prepared, const PipelineConfig& config,
+                    const CorrectionResult& result);
 
 /// Runs the whole correction (PrepareScenario, then Correct, then metrics). Throws InputError for
 /// bad input. Solver outcomes are reported in run.result, never thrown.

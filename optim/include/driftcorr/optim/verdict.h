@@ -1,0 +1,93 @@
+#pragma once
+// The verdict on a correction, from signals that need no ground truth: can the result be vouched
+// for? A user has no ground truth, so every run ends with
+//   ok        nothing speaks against the result;
+//   degraded  the result is written, but parts of it are not supported (the reasons say which);
+//   failed    the result cannot be vouched for (the caller writes nothing by default).
+// and per pose a set of flags where the correction is not supported.
+//
+// The signals (each a small named predicate that writes its reason):
+//  - the solver's outcome: no usable solution, or a final solve that could not keep the corridor
+//    constraints and was re-solved without them (the map and the odometry could not be reconciled);
+//  - the step-length scale: the correction explains the drive with a scale no odometry of this
+//    kind has (visual / lidar odometry is a few percent off, not 25 %; pedestrian step models tens
+//    of percent): outside the plausible range the drive was squeezed or stretched onto the map;
+//  - the start: the given anchor puts the leading path far from the map while another heading or
+//    position fits it well (AnchorFitResult), or an estimated start that another start fits as
+//    well;
+//  - input jumps: the estimate's speed changes faster than any platform can accelerate (frame-to-
+//    frame odometry dropping or doubling motion), which a smooth scale cannot follow;
+//  - off the map: corrected poses farther from every traversable place than the map term reaches.
+// No I/O.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/types.h"
+#include "driftcorr/mapping/traversable_field.h"
+#include "driftcorr/optim/anchor_fit.h"
+#include "driftcorr/optim/corrector.h"
+
+namespace driftcorr {
+
+enum class VerdictLevel { kOk, kDegraded, kFailed };
+std::string ToString(VerdictLevel level);
+
+/// Per-pose flags (bits).
+enum PoseFlag : std::uint8_t {
+    kPoseOffMap = 1,            ///< farther from every traversable place than the map term reaches
+    kPoseInputJump = 2,         ///< in a stretch where the estimate's speed changes abruptly
+    kPoseScaleImplausible = 4,  ///< in a scale segment outside the plausible range
+};
+
+struct VerdictConfig {
+    /// Plausible step-length scale: outside it the result is degraded...
+    double scale_plausible_min = 0.8;   ///< [-]
+    double scale_plausible_max = 1.25;  ///< [-]
+    /// ...and outside this wider range it is failed.
+    double scale_failed_min = 0.6;  ///< [-]
+    double scale_failed_max = 1.6;  ///< [-]
+    /// Input jumps: the estimate's mean speed over jump_window_s changes against the window
+    /// before it faster than max_accel_mps2. About 1 g: no road vehicle brakes harder and no
+    /// walker stops faster, while frame-to-frame odometry that drops motion does so in one frame.
+    double jump_window_s = 0.3;    ///< [s]
+    double max_accel_mps2 = 10.0;  ///< [m/s^2]
+    /// Off the map: share of corrected poses beyond the map's reach for degraded / failed.
+    double off_map_degraded_share = 0.1;  ///< [-]
+    double off_map_failed_share = 0.3;    ///< [-]
+    /// The start does not fit: another placement of the leading path at least this far from the
+    /// given one (heading or position)...
+    double anchor_other_yaw_deg = 5.0;     ///< [deg]
+    double anchor_other_position_m = 5.0;  ///< [m]
+    /// ...brings its RMS distance to the map below this share of the given placement's.
+    double anchor_rms_ratio = 0.5;  ///< [-]
+    /// An estimated start is ambiguous when the next distinct start's RMS is within this factor
+    /// of the best one's.
+    double anchor_ambiguous_ratio = 1.5;  ///< [-]
+
+    /// Empty if valid, else a message naming the bad field.
+    std::string Validate() const;
+};
+
+struct Verdict {
+    VerdictLevel level = VerdictLevel::kOk;
+    /// One sentence per finding, each starting with its level ("failed: ...", "degraded: ...").
+    std::vector<std::string> reasons;
+    std::vector<std::uint8_t> pose_flags;  ///< one per pose, PoseFlag bits
+    /// The signals, for reports: scale range, jumps, share of poses off the map.
+    double scale_min = 1.0, scale_max = 1.0;
+    std::size_t input_jumps = 0;
+    double off_map_share = 0.0;
+};
+
+/// Judges `result` of correcting `estimate` (world plane) against `field` (may be null) with
+/// `model`. `anchor_fit`: how the start fits the map, with `start_estimated` when the start was
+/// estimated from the map rather than given. `scale_estimated`: the solver estimates a step
+/// scale (driftcorr's corrector; the paper's method does not).
+Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
+                        const ModelConfig& model, const CorrectionResult& result,
+                        const AnchorFitResult* anchor_fit, bool start_estimated,
+                        bool scale_estimated, const VerdictConfig& config);
+
+}  // namespace driftcorr

@@ -1,0 +1,227 @@
+#include "driftcorr/optim/verdict.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "driftcorr/core/angles.h"
+#include "driftcorr/core/format.h"
+
+namespace driftcorr {
+namespace {
+
+std::string Fixed(double value, int decimals) { return FormatFixed(value, decimals); }
+std::string Percent(double share) { return std::to_string(int(std::lround(100.0 * share))) + " %"; }
+
+// Collects findings: the level is the worst one.
+class Findings {
+public:
+    explicit Findings(Verdict& v) : v_(v) {}
+    void Degraded(const std::string& why) { Add(VerdictLevel::kDegraded, "degraded: " + why); }
+    void Failed(const std::string& why) { Add(VerdictLevel::kFailed, "failed: " + why); }
+
+private:
+    void Add(VerdictLevel level, const std::string& reason) {
+        v_.level = std::max(v_.level, level);
+        // The worst findings first.
+        auto at = level == VerdictLevel::kFailed ? v_.reasons.begin() : v_.reasons.end();
+        v_.reasons.insert(at, reason);
+    }
+    Verdict& v_;
+};
+
+void JudgeSolver(const CorrectionResult& r, Findings& f) {
+    if (!Usable(r.status)) {
+        f.Failed("the solver produced no usable correction (" + ToString(r.status) + ": " +
+                 r.message + ")");
+    } else if (r.refine_report.message.find("without hard constraints") != std::string::npos ||
+               r.message.find("without hard constraints") != std::string::npos) {
+        f.Failed(
+            "the final solve could not keep the drive inside the mapped corridors and was "
+            "re-solved without them (" +
+            r.message + "): map and odometry disagree");
+    }
+}
+
+// The step-length scale each stretch of `segment_m` of estimated path implies: corrected path
+// length over estimated path length. Flags the poses of implausible stretches.
+void JudgeScale(const PlanarTrajectory& est, const PlanarTrajectory& cor, double segment_m,
+                const VerdictConfig& c, Verdict& v, Findings& f) {
+    std::size_t start = 0;
+    double est_m = 0.0, cor_m = 0.0;
+    v.scale_min = 1e9, v.scale_max = -1e9;
+    std::size_t implausible = 0;
+    for (std::size_t i = 1; i < est.size(); ++i) {
+        est_m += (est.p_en[i] - est.p_en[i - 1]).norm();
+        cor_m += (cor.p_en[i] - cor.p_en[i - 1]).norm();
+        const bool last = i + 1 == est.size();
+        if (est_m < segment_m && !(last && est_m > 0.25 * segment_m)) continue;
+        if (est_m >= 0.25 * segment_m) {
+            const double ratio = cor_m / est_m;
+            v.scale_min = std::min(v.scale_min, ratio);
+            v.scale_max = std::max(v.scale_max, ratio);
+            if (ratio < c.scale_plausible_min || ratio > c.scale_plausible_max) {
+                for (std::size_t k = start; k <= i; ++k) v.pose_flags[k] |= kPoseScaleImplausible;
+                implausible += i - start + 1;
+            }
+        }
+        start = i, est_m = 0.0, cor_m = 0.0;
+    }
+    if (v.scale_min > v.scale_max) {
+        v.scale_min = v.scale_max = 1.0;
+        return;
+    }
+    const std::string range = Fixed(v.scale_min, 2) + ".." + Fixed(v.scale_max, 2);
+    if (v.scale_min < c.scale_failed_min || v.scale_max > c.scale_failed_max) {
+        f.Failed("the correction stretches or squeezes the drive by " + range +
+                 " (corrected / estimated path per " + Fixed(segment_m, 0) + " m; plausible " +
+                 Fixed(c.scale_plausible_min, 2) + ".." + Fixed(c.scale_plausible_max, 2) +
+                 "): it was forced onto the map");
+    } else if (implausible > 0) {
+        f.Degraded("the correction stretches or squeezes " +
+                   Percent(double(implausible) / est.size()) +
+                   " of the drive beyond the plausible scale (" + range + ")");
+    }
+}
+
+// Mean speed over poses (a, b] [m/s]: path over time.
+double Speed(const PlanarTrajectory& t, std::size_t a, std::size_t b) {
+    double path = 0.0;
+    for (std::size_t i = a + 1; i <= b; ++i) path += (t.p_en[i] - t.p_en[i - 1]).norm();
+    const double dt = t.t_s[b] - t.t_s[a];
+    return dt > 0.0 ? path / dt : 0.0;
+}
+
+// A jump: the estimate's speed over jump_window_s changes faster than max_accel_mps2 against the
+// window before it. Consecutive jumping poses are one episode.
+void JudgeInputJumps(const PlanarTrajectory& est, const VerdictConfig& c, Verdict& v, Findings& f) {
+    if (est.size() < 3) return;
+    const double span_s = est.t_s.back() - est.t_s.front();
+    const double dt = span_s / double(est.size() - 1);
+    const std::size_t w =
+        std::max<std::size_t>(1, std::lround(c.jump_window_s / std::max(dt, 1e-9)));
+    bool in_episode = false;
+    for (std::size_t i = w; i + w < est.size(); ++i) {
+        const double dv = Speed(est, i, i + w) - Speed(est, i - w, i);
+        const double gap_s = 0.5 * (est.t_s[i + w] - est.t_s[i - w]);
+        const bool jump = gap_s > 0.0 && std::abs(dv) / gap_s > c.max_accel_mps2;
+        if (jump && !in_episode) ++v.input_jumps;
+        in_episode = jump;
+        if (jump) {
+            for (std::size_t k = i - w; k <= i + w; ++k) v.pose_flags[k] |= kPoseInputJump;
+        }
+    }
+    if (v.input_jumps > 0) {
+        f.Degraded("the estimate's speed changes faster than " + Fixed(c.max_accel_mps2, 1) +
+                   " m/s^2 " + std::to_string(v.input_jumps) +
+                   " time(s) (dropped or doubled odometry steps); the correction there is not "
+                   "supported");
+    }
+}
+
+void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, double reach_m,
+                 const VerdictConfig& c, Verdict& v, Findings& f) {
+    std::size_t off = 0;
+    for (std::size_t i = 0; i < cor.size(); ++i) {
+        const auto q = field.Query(Eigen::Vector3d(cor.p_en[i].x(), cor.p_en[i].y(), cor.up_m[i]));
+        if (q && q->centre.value <= reach_m) continue;
+        v.pose_flags[i] |= kPoseOffMap;
+        ++off;
+    }
+    v.off_map_share = double(off) / double(std::max<std::size_t>(1, cor.size()));
+    const std::string what = Percent(v.off_map_share) +
+                             " of the corrected poses lie farther than " + Fixed(reach_m, 1) +
+                             " m from every traversable place";
+    if (v.off_map_share > c.off_map_failed_share) {
+        f.Failed(what);
+    } else if (v.off_map_share > c.off_map_degraded_share) {
+        f.Degraded(what + ": the map does not support them");
+    }
+}
+
+std::string Placement(const AnchorPlacement& p) {
+    return Fixed(RadToDeg(p.dyaw_rad), 1) + " deg, (" + Fixed(p.offset_en.x(), 1) + ", " +
+           Fixed(p.offset_en.y(), 1) + ") m: RMS " + Fixed(p.rms_m, 2) + " m";
+}
+
+void JudgeStart(const AnchorFitResult& fit, bool estimated, const VerdictConfig& c, Findings& f) {
+    const std::string lead = "the first " + Fixed(fit.lead_path_m, 0) + " m";
+    if (estimated) {
+        if (fit.runner_up && fit.runner_up->rms_m < c.anchor_ambiguous_ratio * fit.best.rms_m) {
+            f.Degraded("the start estimated from the map is ambiguous: " + lead + " fit turned " +
+                       Placement(fit.best) + ", and turned " + Placement(*fit.runner_up));
+        }
+        return;
+    }
+    const AnchorPlacement& b = fit.best;
+    const bool elsewhere = std::abs(RadToDeg(b.dyaw_rad)) >= c.anchor_other_yaw_deg ||
+                           b.offset_en.norm() >= c.anchor_other_position_m;
+    if (elsewhere && b.rms_m < c.anchor_rms_ratio * fit.given.rms_m) {
+        f.Failed("the anchor does not fit the map: with it " + lead + " lie RMS " +
+                 Fixed(fit.given.rms_m, 2) + " m from the map, turned and moved by " +
+                 Placement(b) +
+                 "; check anchor.yaw_deg and the position, or give "
+                 "yaw_deg: auto");
+    }
+}
+
+}  // namespace
+
+std::string ToString(VerdictLevel level) {
+    switch (level) {
+        case VerdictLevel::kOk:
+            return "ok";
+        case VerdictLevel::kDegraded:
+            return "degraded";
+        case VerdictLevel::kFailed:
+            return "failed";
+    }
+    return "?";
+}
+
+std::string VerdictConfig::Validate() const {
+    if (!(scale_plausible_min > 0.0 && scale_plausible_min <= 1.0)) {
+        return "verdict.scale_plausible_min: must be in (0, 1]";
+    }
+    if (!(scale_plausible_max >= 1.0)) return "verdict.scale_plausible_max: must be >= 1";
+    if (!(scale_failed_min > 0.0 && scale_failed_min <= scale_plausible_min)) {
+        return "verdict.scale_failed_min: must be in (0, scale_plausible_min]";
+    }
+    if (!(scale_failed_max >= scale_plausible_max)) {
+        return "verdict.scale_failed_max: must be >= scale_plausible_max";
+    }
+    if (!(jump_window_s > 0.0)) return "verdict.jump_window_s: must be > 0";
+    if (!(max_accel_mps2 > 0.0)) return "verdict.max_accel_mps2: must be > 0";
+    if (!(off_map_degraded_share >= 0.0 && off_map_degraded_share <= off_map_failed_share &&
+          off_map_failed_share <= 1.0)) {
+        return "verdict.off_map_degraded_share: must be in [0, off_map_failed_share <= 1]";
+    }
+    if (!(anchor_other_yaw_deg > 0.0)) return "verdict.anchor_other_yaw_deg: must be > 0";
+    if (!(anchor_other_position_m > 0.0)) return "verdict.anchor_other_position_m: must be > 0";
+    if (!(anchor_rms_ratio > 0.0 && anchor_rms_ratio < 1.0)) {
+        return "verdict.anchor_rms_ratio: must be in (0, 1)";
+    }
+    if (!(anchor_ambiguous_ratio >= 1.0)) return "verdict.anchor_ambiguous_ratio: must be >= 1";
+    return "";
+}
+
+Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
+                        const ModelConfig& model, const CorrectionResult& result,
+                        const AnchorFitResult* anchor_fit, bool start_estimated,
+                        bool scale_estimated, const VerdictConfig& config) {
+    Verdict v;
+    v.pose_flags.assign(estimate.size(), 0);
+    Findings f(v);
+    JudgeSolver(result, f);
+    if (anchor_fit) JudgeStart(*anchor_fit, start_estimated, config, f);
+    JudgeInputJumps(estimate, config, v, f);
+    if (!Usable(result.status) || result.corrected.size() != estimate.size()) return v;
+    if (scale_estimated) {
+        JudgeScale(estimate, result.corrected, model.scale_segment_m, config, v, f);
+    }
+    if (field && !field->empty()) {
+        JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
+    }
+    return v;
+}
+
+}  // namespace driftcorr
