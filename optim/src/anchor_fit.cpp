@@ -96,6 +96,7 @@ std::string AnchorFitConfig::Validate() const {
     if (!(reach_m > 0.0)) return "anchor_fit.reach_m: must be > 0";
     if (!(distinct_yaw_deg > 0.0)) return "anchor_fit.distinct_yaw_deg: must be > 0";
     if (!(distinct_position_m > 0.0)) return "anchor_fit.distinct_position_m: must be > 0";
+    if (!(check_position_radius_m >= 0.0)) return "anchor_fit.check_position_radius_m: must be >= 0";
     return "";
 }
 

@@ -275,9 +275,15 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network);
     if (!ps.anchor_fit) {
-        // The anchor check: the given start, scored against every other heading.
+        // The anchor check: the given start, scored against every other heading and against
+        // nearby positions at the given heading; the better of the two searches is kept.
         const AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
         ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, true, 0.0, fit_cfg);
+        if (fit_cfg.check_position_radius_m > 0.0) {
+            const AnchorFitResult moved = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field,
+                                                    false, fit_cfg.check_position_radius_m, fit_cfg);
+            if (moved.best.rms_m < ps.anchor_fit->best.rms_m) ps.anchor_fit->best = moved.best;
+        }
     }
     ps.timings.map_s = Since(t0);
     return ps;

@@ -29,6 +29,9 @@ struct AnchorFitConfig {
     double distinct_yaw_deg = 15.0;
     /// ...or their positions by more than this [m].
     double distinct_position_m = 10.0;
+    /// The anchor check of a given start also searches positions within this radius at the given
+    /// heading (a position a few tens of metres off, e.g. a fix of the wrong end of a car park) [m].
+    double check_position_radius_m = 25.0;
 
     /// Empty if valid, else a message naming the bad field.
     std::string Validate() const;

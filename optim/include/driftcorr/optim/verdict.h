@@ -59,7 +59,7 @@ struct VerdictConfig {
     /// The start does not fit: another placement of the leading path at least this far from the
     /// given one (heading or position)...
     double anchor_other_yaw_deg = 5.0;     ///< [deg]
-    double anchor_other_position_m = 5.0;  ///< [m]
+    double anchor_other_position_m = 10.0;  ///< [m] (a GNSS start fix is good to a few metres)
     /// ...brings its RMS distance to the map below this share of the given placement's.
     double anchor_rms_ratio = 0.5;  ///< [-]
     /// An estimated start is ambiguous when the next distinct start's RMS is within this factor
