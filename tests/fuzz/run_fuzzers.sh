@@ -6,7 +6,7 @@
 #
 # The seed is fixed by default (FUZZ_SEED=1), but that does not make two machines explore the
 # same inputs: libFuzzer's order of equal-sized seed files follows the directory listing, and a
-# time budget ends after however many runs the machine managed (session 3: CI found a PLY crash
+# time budget ends after however many runs the machine managed (once CI found a PLY crash
 # at seed 1 that a local seed-1 run of the same length had not). So a CI run is a short
 # exploration, and longer ones belong here before a change is submitted:
 #   FUZZ_SEED=random tests/fuzz/run_fuzzers.sh 600
