@@ -96,8 +96,25 @@ MethodResult RunMethod(Method method, const pipeline::PreparedScenario& ps,
     r.message = ToString(cr.status) + ": " + cr.message;
     for (const std::string& warning : cr.warnings) r.message += "; warning: " + warning;
     r.warnings = cr.warnings;
+    r.verdict = pipeline::JudgeResult(ps, cfg, cr);
+    if (cr.covariance.status == CovarianceStatus::kOk) r.covariance = cr.covariance.poses;
     if (r.ok) r.trajectory = std::move(cr.corrected);
     return r;
+}
+
+// Share of poses whose horizontal error e satisfies e^T Sigma^-1 e <= 5.991 (chi-square, 2 degrees
+// of freedom, 95 %); pose 0, the known start, is left out.
+double ShareInside95(const PlanarTrajectory& t, const PlanarTrajectory& gt,
+                     const std::vector<PoseCovariance>& cov) {
+    std::size_t inside = 0, n = 0;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+        const Eigen::Vector2d e = t.p_en[i] - gt.p_en[i];
+        const Eigen::Matrix2d& c = cov[i].xy_m2;
+        if (!(c.determinant() > 0.0)) continue;
+        ++n;
+        if (e.dot(c.inverse() * e) <= 5.991) ++inside;
+    }
+    return n ? double(inside) / double(n) : 0.0;
 }
 
 void Measure(MethodResult& r, const pipeline::PreparedScenario& ps) {
@@ -106,6 +123,9 @@ void Measure(MethodResult& r, const pipeline::PreparedScenario& ps) {
     if (ps.ground_truth) {
         r.metrics = ComputeMetrics(r.trajectory, *ps.ground_truth);
         r.errors_m = HorizontalErrors(r.trajectory, *ps.ground_truth);
+        if (r.covariance.size() == r.trajectory.size()) {
+            r.covariance_in_95 = ShareInside95(r.trajectory, *ps.ground_truth, r.covariance);
+        }
     }
 }
 

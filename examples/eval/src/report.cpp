@@ -180,6 +180,17 @@ std::string FormatTable(const std::vector<ScenarioEvaluation>& evals) {
         if (!ev.has_ground_truth) notes.push_back(ev.label + ": no ground truth; mean map distance [m] shown");
         out << "\n";
     }
+    for (const ScenarioEvaluation& ev : evals) {
+        const MethodResult* d = ev.Find(Method::kDriftcorr);
+        if (!d || !d->verdict) continue;
+        out << "  verdict " << ev.label << ": " << ToString(d->verdict->level);
+        if (d->covariance_in_95) {
+            out << " (true error inside the 95 % region: " << Num(100.0 * *d->covariance_in_95, 1)
+                << " % of poses)";
+        }
+        out << "\n";
+        for (const std::string& reason : d->verdict->reasons) out << "    " << reason << "\n";
+    }
     for (const std::string& n : notes) out << "  note: " << n << "\n";
     if (const double ratio = SpeedRatioPaperOverDriftcorr(evals); ratio > 0.0) {
         out << "speed: paper / driftcorr solver time = " << Num(ratio, 2) << " (summed over "
@@ -212,7 +223,9 @@ std::vector<std::string> MdMethodHeaders(Method m) {
     if (m != Method::kEstimate) {
         h.push_back("time [s]");
         h.push_back("poses/s");
+        h.push_back("verdict");
     }
+    if (m == Method::kDriftcorr) h.push_back("in 95 % [%]");
     return h;
 }
 
@@ -238,6 +251,10 @@ std::vector<std::string> MdMethodCells(const ScenarioEvaluation& ev, Method m) {
     if (m != Method::kEstimate) {
         c.push_back(Num(r->wall_s, 2));
         c.push_back(Num(r->poses_per_s, 0));
+        c.push_back(r->verdict ? ToString(r->verdict->level) : "-");
+    }
+    if (m == Method::kDriftcorr) {
+        c.push_back(r->covariance_in_95 ? Num(100.0 * *r->covariance_in_95, 1) : "-");
     }
     return c;
 }
@@ -341,6 +358,15 @@ std::string ResultsJson(const std::vector<ScenarioEvaluation>& evals) {
               << ", \"wall_s\": " << JsonNum(r.wall_s) << ", \"poses_per_s\": " << JsonNum(r.poses_per_s)
               << ", \"mean_map_distance_m\": "
               << (r.mean_map_distance_m ? JsonNum(*r.mean_map_distance_m) : "null");
+            if (r.verdict) {
+                o << ", \"verdict\": " << JsonString(ToString(r.verdict->level))
+                  << ", \"verdict_reasons\": [";
+                for (std::size_t q = 0; q < r.verdict->reasons.size(); ++q) {
+                    o << (q ? ", " : "") << JsonString(r.verdict->reasons[q]);
+                }
+                o << "]";
+            }
+            if (r.covariance_in_95) o << ", \"covariance_in_95\": " << JsonNum(*r.covariance_in_95);
             if (r.metrics) {
                 const ErrorMetrics& m = *r.metrics;
                 o << ", \"ate_m\": " << JsonNum(m.ate_m) << ", \"final_m\": " << JsonNum(m.final_m)

@@ -40,6 +40,12 @@ struct MethodResult {
     double poses_per_s = 0.0;           ///< poses / wall_s (0 for the estimate)
     /// Degenerate input or outcome reported by the corrector (CorrectionResult::warnings).
     std::vector<std::string> warnings;
+    /// The verdict judged without ground truth (paper and driftcorr; optim/verdict.h).
+    std::optional<Verdict> verdict;
+    /// Per-pose covariance of the correction (driftcorr), and with ground truth the share of
+    /// poses whose true horizontal error lies inside their 95 % region.
+    std::vector<PoseCovariance> covariance;
+    std::optional<double> covariance_in_95;
 };
 
 /// One scenario: either it failed as a whole (`error`, bad input), or it holds one MethodResult
