@@ -536,6 +536,23 @@ std::string ErrorSvg(const ScenarioEvaluation& ev) {
       << "distance travelled along the ground truth [m]</text>\n"
       << "<text transform=\"translate(18," << mt + ph / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
       << "horizontal error [m]</text>\n";
+    // The uncertainty band of a method with per-pose covariance: from 0 to the radius of the
+    // circle around the larger axis of each pose's 95 % ellipse, sqrt(5.991 * lambda_max).
+    for (const MethodResult& r : ev.methods) {
+        if (!r.ok || r.covariance.size() != ev.distance_m.size()) continue;
+        std::vector<Eigen::Vector2d> band;
+        for (std::size_t i = 0; i < r.covariance.size(); ++i) {
+            const Eigen::Matrix2d& c = r.covariance[i].xy_m2;
+            const double half_trace = 0.5 * c.trace();
+            const double lambda_max =
+                half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - c.determinant()));
+            band.emplace_back(ev.distance_m[i], std::min(y_top, std::sqrt(5.991 * lambda_max)));
+        }
+        band.emplace_back(ev.distance_m.back(), 0.0);
+        band.emplace_back(ev.distance_m.front(), 0.0);
+        s << "<polygon fill=\"" << MethodColour(r.method) << "\" fill-opacity=\"0.15\" "
+          << "stroke=\"none\" points=\"" << PolylinePoints(band, to_px, 0.5) << "\"/>\n";
+    }
     // One line per method.
     for (const MethodResult& r : ev.methods) {
         if (!r.ok || r.errors_m.size() != ev.distance_m.size()) continue;
@@ -548,13 +565,14 @@ std::string ErrorSvg(const ScenarioEvaluation& ev) {
     }
     // Legend, top left inside the plot.
     double ly = mt + 8;
-    s << "<rect x=\"" << ml + 8 << "\" y=\"" << ly << "\" width=\"210\" height=\"" << 20 * ev.methods.size() + 8
+    s << "<rect x=\"" << ml + 8 << "\" y=\"" << ly << "\" width=\"290\" height=\"" << 20 * ev.methods.size() + 8
       << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#888\"/>\n";
     for (const MethodResult& r : ev.methods) {
         ly += 20;
         std::string text = ToString(r.method);
         if (!r.ok) text += ": failed";
         else if (r.metrics) text += ", final " + Num(r.metrics->final_m, 1) + " m";
+        if (r.ok && !r.covariance.empty()) text += " (band: 95 %)";
         s << "<line x1=\"" << ml + 16 << "\" y1=\"" << ly - 4 << "\" x2=\"" << ml + 42 << "\" y2=\"" << ly - 4
           << "\" stroke=\"" << MethodColour(r.method) << "\" stroke-width=\"3\"/><text x=\"" << ml + 50
           << "\" y=\"" << ly << "\">" << XmlEscape(text) << "</text>\n";
