@@ -20,6 +20,8 @@
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/window_problem.h"
 
+#include "test_state.h"
+
 namespace driftcorr {
 namespace {
 
@@ -94,19 +96,7 @@ TraversableField LinearField(const PlanarTrajectory& truth, bool planar) {
                             20.0);
 }
 
-TrajectoryState StateFrom(const PlanarTrajectory& est, const ModelConfig& m, bool fix_height) {
-    TrajectoryState s;
-    s.obs = ComputeObservations(est);
-    s.scale_segment = ScaleSegments(s.obs, m.scale_segment_m);
-    s.scales.assign(s.scale_segment.back() + 1, 1.0);
-    const std::vector<double> yaw = UnwrappedHeadings(est);
-    for (std::size_t i = 0; i < est.size(); ++i) {
-        s.poses.push_back(
-            PoseState{Eigen::Vector3d(est.p_en[i].x(), est.p_en[i].y(), est.up_m[i]), yaw[i]});
-    }
-    s.fix_height = fix_height;
-    return s;
-}
+using test::StateFrom;
 
 /// Moves poses 1.. by ~0.3 m, ~0.02 rad (and heights ~0.1 m) and scales by ~0.02: residuals
 /// that are not zero, so the Gauss-Newton Hessian differs from the exact one.

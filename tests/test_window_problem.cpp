@@ -16,6 +16,8 @@
 #include "driftcorr/optim/ipopt_solver.h"
 #include "driftcorr/optim/window_problem.h"
 
+#include "test_state.h"
+
 namespace driftcorr {
 namespace {
 
@@ -69,19 +71,7 @@ TraversableField Field(double half_width_m) {
     return RasteriseRoads(Roads(half_width_m), box, cfg);
 }
 
-TrajectoryState StateFrom(const PlanarTrajectory& est, const ModelConfig& m, bool fix_height) {
-    TrajectoryState s;
-    s.obs = ComputeObservations(est);
-    s.scale_segment = ScaleSegments(s.obs, m.scale_segment_m);
-    s.scales.assign(s.scale_segment.back() + 1, 1.0);
-    const std::vector<double> yaw = UnwrappedHeadings(est);
-    for (std::size_t i = 0; i < est.size(); ++i) {
-        s.poses.push_back(
-            PoseState{Eigen::Vector3d(est.p_en[i].x(), est.p_en[i].y(), est.up_m[i]), yaw[i]});
-    }
-    s.fix_height = fix_height;
-    return s;
-}
+using test::StateFrom;
 
 ModelConfig Model() {
     ModelConfig m;

@@ -15,17 +15,14 @@ std::string CorrectorConfig::Validate() const {
     if (!(chunk_m > 0.0)) return "corrector.chunk_m: must be > 0";
     if (!(window_m >= chunk_m)) return "corrector.window_m: must be >= chunk_m";
     if (max_chunk_poses < 1) return "corrector.max_chunk_poses: must be >= 1";
-    if (max_window_poses < max_chunk_poses) return "corrector.max_window_poses: must be >= max_chunk_poses";
+    if (max_window_poses < max_chunk_poses)
+        return "corrector.max_window_poses: must be >= max_chunk_poses";
     if (!(stationary_m >= 0.0)) return "corrector.stationary_m: must be >= 0";
     if (std::string m = covariance.Validate(); !m.empty()) return m;
     return "";
 }
 
 namespace {
-
-std::string Percent(double share) { return std::to_string(int(std::lround(100.0 * share))) + " %"; }
-
-std::string Fixed(double value, int decimals) { return FormatFixed(value, decimals); }
 
 // Share of poses within reach of the map: inside the field and closer than 3 giveup distances to
 // a traversable place (where the map term still pulls).
@@ -50,28 +47,29 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
         if (step > cfg.model.max_speed_mps * (estimate.t_s[i] - estimate.t_s[i - 1])) ++jumps;
     }
     if (path_m <= cfg.stationary_m * estimate.size()) {
-        r.warnings.push_back("the estimate does not move (" + Fixed(path_m, 2) +
+        r.warnings.push_back("the estimate does not move (" + FormatFixed(path_m, 2) +
                              " m in all): nothing to correct");
     }
     if (jumps > 0) {
         r.warnings.push_back(std::to_string(jumps) + " step(s) faster than model.max_speed_mps (" +
-                             Fixed(cfg.model.max_speed_mps, 1) +
+                             FormatFixed(cfg.model.max_speed_mps, 1) +
                              " m/s) treated as discontinuities of the estimate (not scaled)");
     }
     if (field) {
         const PlanarTrajectory& t = Usable(r.status) ? r.corrected : estimate;
         const double coverage = MapCoverage(t, *field, 3.0 * cfg.model.map_giveup_m);
         if (coverage == 0.0) {
-            r.warnings.push_back("the map covers none of the drive (no pose within reach of a "
-                                 "traversable place): the output is the odometry alone");
+            r.warnings.push_back(
+                "the map covers none of the drive (no pose within reach of a "
+                "traversable place): the output is the odometry alone");
         } else if (coverage < 0.5) {
-            r.warnings.push_back("the map covers only " + Percent(coverage) +
+            r.warnings.push_back("the map covers only " + FormatPercent(coverage) +
                                  " of the drive: the rest is the odometry alone");
         }
     }
     if (r.scale_min <= kScaleMin * 1.01 || r.scale_max >= kScaleMax * 0.99) {
         r.warnings.push_back("the step-length scale reached its bound (" +
-                             Fixed(r.scale_min, 2) + ".." + Fixed(r.scale_max, 2) +
+                             FormatFixed(r.scale_min, 2) + ".." + FormatFixed(r.scale_max, 2) +
                              "): map and odometry disagree; check the anchor and the map");
     }
 }

@@ -9,9 +9,6 @@
 namespace driftcorr {
 namespace {
 
-std::string Fixed(double value, int decimals) { return FormatFixed(value, decimals); }
-std::string Percent(double share) { return std::to_string(int(std::lround(100.0 * share))) + " %"; }
-
 // Collects findings: the level is the worst one.
 class Findings {
 public:
@@ -70,15 +67,15 @@ void JudgeScale(const PlanarTrajectory& est, const PlanarTrajectory& cor, double
         v.scale_min = v.scale_max = 1.0;
         return;
     }
-    const std::string range = Fixed(v.scale_min, 2) + ".." + Fixed(v.scale_max, 2);
+    const std::string range = FormatFixed(v.scale_min, 2) + ".." + FormatFixed(v.scale_max, 2);
     if (v.scale_min < c.scale_failed_min || v.scale_max > c.scale_failed_max) {
         f.Failed("the correction stretches or squeezes the drive by " + range +
-                 " (corrected / estimated path per " + Fixed(segment_m, 0) + " m; plausible " +
-                 Fixed(c.scale_plausible_min, 2) + ".." + Fixed(c.scale_plausible_max, 2) +
-                 "): it was forced onto the map");
+                 " (corrected / estimated path per " + FormatFixed(segment_m, 0) +
+                 " m; plausible " + FormatFixed(c.scale_plausible_min, 2) + ".." +
+                 FormatFixed(c.scale_plausible_max, 2) + "): it was forced onto the map");
     } else if (implausible > 0) {
         f.Degraded("the correction stretches or squeezes " +
-                   Percent(double(implausible) / est.size()) +
+                   FormatPercent(double(implausible) / est.size()) +
                    " of the drive beyond the plausible scale (" + range + ")");
     }
 }
@@ -111,7 +108,7 @@ void JudgeInputJumps(const PlanarTrajectory& est, const VerdictConfig& c, Verdic
         }
     }
     if (v.input_jumps > 0) {
-        f.Degraded("the estimate's speed changes faster than " + Fixed(c.max_accel_mps2, 1) +
+        f.Degraded("the estimate's speed changes faster than " + FormatFixed(c.max_accel_mps2, 1) +
                    " m/s^2 " + std::to_string(v.input_jumps) +
                    " time(s) (dropped or doubled odometry steps); the correction there is not "
                    "supported");
@@ -128,8 +125,8 @@ void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, dou
         ++off;
     }
     v.off_map_share = double(off) / double(std::max<std::size_t>(1, cor.size()));
-    const std::string what = Percent(v.off_map_share) +
-                             " of the corrected poses lie farther than " + Fixed(reach_m, 1) +
+    const std::string what = FormatPercent(v.off_map_share) +
+                             " of the corrected poses lie farther than " + FormatFixed(reach_m, 1) +
                              " m from every traversable place";
     if (v.off_map_share > c.off_map_failed_share) {
         f.Failed(what);
@@ -139,12 +136,12 @@ void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, dou
 }
 
 std::string Placement(const AnchorPlacement& p) {
-    return Fixed(RadToDeg(p.dyaw_rad), 1) + " deg, (" + Fixed(p.offset_en.x(), 1) + ", " +
-           Fixed(p.offset_en.y(), 1) + ") m: RMS " + Fixed(p.rms_m, 2) + " m";
+    return FormatFixed(RadToDeg(p.dyaw_rad), 1) + " deg, (" + FormatFixed(p.offset_en.x(), 1) +
+           ", " + FormatFixed(p.offset_en.y(), 1) + ") m: RMS " + FormatFixed(p.rms_m, 2) + " m";
 }
 
 void JudgeStart(const AnchorFitResult& fit, bool estimated, const VerdictConfig& c, Findings& f) {
-    const std::string lead = "the first " + Fixed(fit.lead_path_m, 0) + " m";
+    const std::string lead = "the first " + FormatFixed(fit.lead_path_m, 0) + " m";
     if (estimated) {
         if (fit.runner_up && fit.runner_up->rms_m < c.anchor_ambiguous_ratio * fit.best.rms_m) {
             f.Degraded("the start estimated from the map is ambiguous: " + lead + " fit turned " +
@@ -157,7 +154,7 @@ void JudgeStart(const AnchorFitResult& fit, bool estimated, const VerdictConfig&
                            b.offset_en.norm() >= c.anchor_other_position_m;
     if (elsewhere && b.rms_m < c.anchor_rms_ratio * fit.given.rms_m) {
         f.Failed("the anchor does not fit the map: with it " + lead + " lie RMS " +
-                 Fixed(fit.given.rms_m, 2) + " m from the map, turned and moved by " +
+                 FormatFixed(fit.given.rms_m, 2) + " m from the map, turned and moved by " +
                  Placement(b) +
                  "; check anchor.yaw_deg and the position, or give "
                  "yaw_deg: auto");
