@@ -123,8 +123,9 @@ void PrintAnchorFit(const driftcorr::pipeline::CorrectionRun& run) {
                 RadToDeg(run.anchor.yaw_rad), run.anchor.origin_en.x(), run.anchor.origin_en.y(),
                 f.lead_path_m, estimated ? f.best.rms_m : f.given.rms_m,
                 100.0 * (estimated ? f.best.off_share : f.given.off_share));
-    if (!estimated && f.best.dyaw_rad != 0.0) {
-        std::printf("; best other heading %+.1f deg: RMS %.2f m", RadToDeg(f.best.dyaw_rad),
+    if (!estimated && (f.best.dyaw_rad != 0.0 || f.best.offset_en.norm() > 0.0)) {
+        std::printf("; best other start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
+                    RadToDeg(f.best.dyaw_rad), f.best.offset_en.x(), f.best.offset_en.y(),
                     f.best.rms_m);
     }
     if (f.runner_up) {
