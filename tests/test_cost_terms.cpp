@@ -300,8 +300,8 @@ TEST(StepDirectionTerm, SidewaysMotionIsPenalisedWithSign) {
 
 // ---- Scale terms -------------------------------------------------------------------------
 
-TEST(ScaleRandomWalkTerm, ZeroAtTruthAndDerivativesMatch) {
-    const ScaleRandomWalkTerm t{0.02, 0.7};
+TEST(RandomWalkTerm, ZeroAtTruthAndDerivativesMatch) {
+    const RandomWalkTerm t{0.02, 0.7};
     Eigen::Vector2d g;
     Eigen::Matrix2d h;
     EXPECT_NEAR(t.Evaluate(Eigen::Vector2d(1.1, 1.1), &g, &h), 0.0, 1e-20);
@@ -495,8 +495,8 @@ namespace {
 
 // The heavy-tailed scale walk: quadratic near zero, logarithmic far out, exact derivatives.
 TEST(ScaleRandomWalkRobust, MatchesGaussianNearZeroAndCentralDifferences) {
-    const driftcorr::ScaleRandomWalkTerm robust{0.01, 0.7, 3.0};
-    const driftcorr::ScaleRandomWalkTerm gauss{0.01, 0.7, 0.0};
+    const driftcorr::RandomWalkTerm robust{0.01, 0.7, 3.0};
+    const driftcorr::RandomWalkTerm gauss{0.01, 0.7, 0.0};
     const Eigen::Vector2d small(1.0, 1.0005);
     EXPECT_NEAR(robust.Evaluate(small, nullptr, nullptr), gauss.Evaluate(small, nullptr, nullptr),
                 1e-3 * gauss.Evaluate(small, nullptr, nullptr));
@@ -594,7 +594,7 @@ TEST(Linearisation, RobustSpeedAndScaleTerms) {
     std::uniform_real_distribution<double> u(-2.0, 2.0);
     const driftcorr::StepLengthTerm robust{1.2, 0.1, 0.03, 0.8, 3.0};
     const driftcorr::SpeedChangeTerm speed{0.05, 0.1, -0.03, 0.12, 0.5, 0.9};
-    const driftcorr::ScaleRandomWalkTerm walk{0.02, 0.7, 0.0}, robust_walk{0.02, 0.7, 3.0};
+    const driftcorr::RandomWalkTerm walk{0.02, 0.7, 0.0}, robust_walk{0.02, 0.7, 3.0};
     for (int n = 0; n < 20; ++n) {
         driftcorr::StepVector xs;
         for (int k = 0; k < xs.size(); ++k) xs[k] = u(rng);
@@ -606,9 +606,9 @@ TEST(Linearisation, RobustSpeedAndScaleTerms) {
         ExpectLinearisationMatches<driftcorr::SpeedChangeTerm, driftcorr::SpeedVector,
                                    driftcorr::SpeedMatrix>(speed, xv, 1e-5);
         const Eigen::Vector2d x2(1.0 + 0.05 * u(rng), 1.0 + 0.05 * u(rng));
-        ExpectLinearisationMatches<driftcorr::ScaleRandomWalkTerm, Eigen::Vector2d,
+        ExpectLinearisationMatches<driftcorr::RandomWalkTerm, Eigen::Vector2d,
                                    Eigen::Matrix2d>(walk, x2, 1e-5);
-        ExpectLinearisationMatches<driftcorr::ScaleRandomWalkTerm, Eigen::Vector2d,
+        ExpectLinearisationMatches<driftcorr::RandomWalkTerm, Eigen::Vector2d,
                                    Eigen::Matrix2d>(robust_walk, x2, 1e-5);
     }
     // At r = 0 the Cauchy weight is the Gaussian's: information * J J^T is the exact Hessian.

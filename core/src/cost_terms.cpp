@@ -233,7 +233,7 @@ Linearisation<9> HeightChangeTerm::Linearise(const StepVector& x) const {
     return LinearDifference(x, kZa, kZb, dup_m, sigma_m, weight);
 }
 
-double ScaleRandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
+double RandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
                                      Eigen::Matrix2d* hess) const {
     const Eigen::Vector2d j(-1.0, 1.0);
     if (robust_k <= 0.0) return Gaussian<2>(x[1] - x[0], j, nullptr, sigma, weight, grad, hess);
@@ -246,7 +246,7 @@ double ScaleRandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* 
     return 0.5 * weight * k2 * std::log(q);
 }
 
-Linearisation<2> ScaleRandomWalkTerm::Linearise(const Eigen::Vector2d& x) const {
+Linearisation<2> RandomWalkTerm::Linearise(const Eigen::Vector2d& x) const {
     const Eigen::Vector2d j(-1.0, 1.0);
     if (robust_k <= 0.0) return LinearGaussian<2>(x[1] - x[0], j, sigma, weight);
     return LinearCauchy<2>(x[1] - x[0], j, sigma, robust_k, weight);

@@ -93,14 +93,14 @@ struct HeightChangeTerm {
     Linearisation<9> Linearise(const StepVector& x) const;
 };
 
-/// Scale random walk between consecutive scale segments, variables [s_prev, s_next]:
-/// r = (s_next - s_prev) / sigma. With robust_k > 0 the walk is heavy-tailed (Cauchy),
+/// Random walk between consecutive segments of a slowly varying quantity (the step-length scale,
+/// the heading-rate bias), variables [v_prev, v_next]: r = (v_next - v_prev) / sigma. With robust_k > 0 the walk is heavy-tailed (Cauchy),
 ///   rho(r) = w * k^2 / 2 * log(1 + r^2 / k^2),
 /// quadratic for |r| << k, so the scale of a steady odometry stays steady, but a jump that the map
 /// supports (frame-to-frame ICP shortening its steps along a straight street) costs only
-/// logarithmically. robust_k = 0: Gaussian, 0.5 * w * r^2. And the prior on the first segment's
-/// scale, r = s - 1.
-struct ScaleRandomWalkTerm {
+/// logarithmically. robust_k = 0: Gaussian, 0.5 * w * r^2. With v_prev held fixed at the prior's
+/// mean it is the prior on the first segment.
+struct RandomWalkTerm {
     double sigma, weight;
     double robust_k = 0.0;
     double Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad, Eigen::Matrix2d* hess) const;

@@ -97,6 +97,12 @@ struct FamilyStatistics {
     double VarianceFactor() const { return redundancy > 1e-9 ? chi2 / redundancy : 1.0; }
 };
 
+inline std::array<double, kTermFamilies> UnitFactors() {
+    std::array<double, kTermFamilies> f;
+    f.fill(1.0);
+    return f;
+}
+
 struct CovarianceResult {
     CovarianceStatus status = CovarianceStatus::kNotComputed;
     std::string message;
@@ -110,7 +116,7 @@ struct CovarianceResult {
     std::array<FamilyStatistics, kTermFamilies> families{};  ///< indexed by TermFamily
     /// The variance component applied to each family (method step 6; 1: as modelled); families
     /// holds the statistics after it.
-    std::array<double, kTermFamilies> family_factors{1, 1, 1, 1, 1, 1, 1, 1, 1};
+    std::array<double, kTermFamilies> family_factors = UnitFactors();
     std::size_t factor_nonzeros = 0;  ///< entries of L below the diagonal (fill diagnostic)
 };
 
