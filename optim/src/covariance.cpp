@@ -13,31 +13,19 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-// The map's lateral error as a Gauss-Markov process along the path (method step 2): one unknown
-// offset b_k per stretch of 1 / kStretchesPerCorrelation of the correlation length that holds map
-// terms, numbered after the window's variables.
+// The map's position error as a Gauss-Markov process along the path (method step 2): one unknown
+// offset b_k = (East, North) per stretch of 1 / kStretchesPerCorrelation of the correlation
+// length that holds map terms, numbered after the window's variables (b_k's East at first_var +
+// 2 k, North after it).
 constexpr double kStretchesPerCorrelation = 4.0;
 
 // A family's variance component is estimated only from at least one redundant observation.
 constexpr double kMinRedundancy = 1.0;
 
 struct MapOffset {
-    int first_var = 0;                   // variable of b_0
+    int first_var = 0;                   // variable of b_0's East component
     std::vector<std::size_t> last_pose;  // per stretch: its last pose with a map term
 };
-
-// The signed lateral residual: +-d, positive on the left of the pose's heading, so that one
-// offset b shifts the poses to one side of their roads.
-void MakeLateral(LinearisedTerm& t, double yaw, int x_var) {
-    double left = 0.0;  // J . (-sin yaw, cos yaw)
-    for (int a = 0; a < t.size; ++a) {
-        if (t.var[a] == x_var) left -= std::sin(yaw) * t.jacobian[a];
-        if (t.var[a] == x_var + 1) left += std::cos(yaw) * t.jacobian[a];
-    }
-    if (left >= 0.0) return;
-    t.residual = -t.residual;
-    for (int a = 0; a < t.size; ++a) t.jacobian[a] = -t.jacobian[a];
-}
 
 LinearisedTerm OffsetPrior(int var_a, double rho, int var_b, double information) {
     LinearisedTerm t;
@@ -48,9 +36,13 @@ LinearisedTerm OffsetPrior(int var_a, double rho, int var_b, double information)
     return t;
 }
 
-// Makes each map term's residual s - b_k (variance (1 - share) map_sigma^2) and adds the
-// process b_0 ~ N(0, share map_sigma^2), b_k+1 - rho b_k ~ N(0, (1 - rho^2) share map_sigma^2)
-// with rho = exp(-path between the stretches / correlation length).
+// Makes each map term's residual d(p - b_k) ~ d - grad d . b_k (variance (1 - share)
+// map_sigma^2) and adds, per component, the process b_0 ~ N(0, share map_sigma^2),
+// b_k+1 - rho b_k ~ N(0, (1 - rho^2) share map_sigma^2) with rho = exp(-path between the
+// stretches / correlation length). The offset is two-dimensional: a misplaced junction or a
+// map drawn off the true positions moves its streets along as well as across, so along a
+// straight street the map term sees only the offset's cross component, and the along-track
+// position that a turn fixed keeps the along component's uncertainty.
 MapOffset AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const ModelConfig& model,
                        const CovarianceConfig& config, std::vector<LinearisedTerm>& terms) {
     MapOffset offset;
@@ -73,22 +65,30 @@ MapOffset AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const M
         centre_m.back() += path_m[t.pose], ++count.back();
         t.information /= 1.0 - config.map_offset_share;
         t.chi2 /= 1.0 - config.map_offset_share;
-        MakeLateral(t, s.poses[t.pose].yaw_rad, p.PoseVar(static_cast<std::size_t>(t.pose), 0));
-        t.var[t.size] = offset.first_var + static_cast<int>(offset.last_pose.size()) - 1;
-        t.jacobian[t.size++] = -1.0;
+        const int x_var = p.PoseVar(static_cast<std::size_t>(t.pose), 0);
+        double j[2] = {0.0, 0.0};
+        for (int a = 0; a < t.size; ++a) {
+            if (t.var[a] == x_var) j[0] = t.jacobian[a];
+            if (t.var[a] == x_var + 1) j[1] = t.jacobian[a];
+        }
+        const int b = offset.first_var + 2 * (static_cast<int>(offset.last_pose.size()) - 1);
+        for (int c = 0; c < 2; ++c) t.var[t.size] = b + c, t.jacobian[t.size++] = -j[c];
     }
     const double info =
         model.map_weight / (config.map_offset_share * model.map_sigma_m * model.map_sigma_m);
     for (std::size_t k = 0; k < offset.last_pose.size(); ++k) {
         centre_m[k] /= count[k];
-        const int var = offset.first_var + static_cast<int>(k);
-        if (k == 0) {
-            terms.push_back(OffsetPrior(-1, 0.0, var, info));
-            continue;
+        const int var = offset.first_var + 2 * static_cast<int>(k);
+        for (int c = 0; c < 2; ++c) {
+            if (k == 0) {
+                terms.push_back(OffsetPrior(-1, 0.0, var + c, info));
+                continue;
+            }
+            const double rho =
+                std::exp(-(centre_m[k] - centre_m[k - 1]) / config.map_offset_correlation_m);
+            terms.push_back(
+                OffsetPrior(var - 2 + c, rho, var + c, info / std::max(1.0 - rho * rho, 1e-9)));
         }
-        const double rho =
-            std::exp(-(centre_m[k] - centre_m[k - 1]) / config.map_offset_correlation_m);
-        terms.push_back(OffsetPrior(var - 1, rho, var, info / std::max(1.0 - rho * rho, 1e-9)));
     }
     return offset;
 }
@@ -102,7 +102,7 @@ struct Ordering {
 
 Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s, const MapOffset& offset) {
     Ordering o;
-    o.of_var.assign(p.NumVariables() + offset.last_pose.size(), -1);
+    o.of_var.assign(p.NumVariables() + 2 * offset.last_pose.size(), -1);
     const std::size_t n = s.poses.size();
     int next_segment = s.scale_segment[1];
     std::size_t next_stretch = 0;
@@ -115,7 +115,7 @@ Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s, const M
         for (; next_segment < open; ++next_segment) o.of_var[p.ScaleVar(next_segment)] = o.size++;
         for (; next_stretch < offset.last_pose.size() && offset.last_pose[next_stretch] == i;
              ++next_stretch) {
-            o.of_var[offset.first_var + next_stretch] = o.size++;
+            for (int c = 0; c < 2; ++c) o.of_var[offset.first_var + 2 * next_stretch + c] = o.size++;
         }
     }
     return o;

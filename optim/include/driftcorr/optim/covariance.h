@@ -12,9 +12,11 @@
 //  2. The map's error is not independent from pose to pose: the lane the platform keeps and the
 //     map's own offset stay the same along a street, so more poses on it do not average it away
 //     (independent terms would make the covariance shrink with the pose rate). A share of the map
-//     variance becomes a lateral offset b(path), a Gauss-Markov process along the path with
-//     correlation length map_offset_correlation_m, sampled by one unknown per quarter of it; each
-//     map term's residual becomes the signed lateral distance minus the local b (CovarianceConfig).
+//     variance becomes an offset b(path) of the map (East, North), a Gauss-Markov process along
+//     the path with correlation length map_offset_correlation_m, sampled by one unknown pair per
+//     quarter of it; each map term's residual becomes d(p - b) ~ d - grad d . b with the local b (CovarianceConfig).
+//     Two-dimensional because a misplaced junction moves its streets along as well as across: the
+//     along-track position a turn fixes keeps that uncertainty down the next straight.
 //  3. Unknowns in the chain's order, each scale segment's and offset stretch's unknown right after
 //     the last pose that uses it: eliminating a pose fills only towards the next pose and the open
 //     segments, so the factor H = L D L^T (Eigen::SimplicialLDLT, natural order) has O(n) entries.
@@ -60,8 +62,8 @@ struct PoseCovariance {
 };
 
 struct CovarianceConfig {
-    /// Share of the map term's variance (map_sigma_m^2) that is a lateral offset common to the
-    /// poses along a street (method step 2), in [0, 1). 0: every map term independent, the
+    /// Share of the map term's variance (map_sigma_m^2) that is an offset (East, North) common to
+    /// the poses along a street (method step 2), in [0, 1). 0: every map term independent, the
     /// solver's own model. The total variance per pose stays the model's map_sigma_m^2.
     double map_offset_share = 0.5;
     /// Correlation length of that offset along the path [m]: a street between junctions.

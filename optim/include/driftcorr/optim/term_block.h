@@ -28,7 +28,7 @@ enum class TermFamily : int {
     kScaleWalk,  ///< the random walk between scale segments and the prior on the first
     kScaleRange,  ///< the plausible range of the step-length scale (a prior, not a bound)
     kHeadingBiasWalk,  ///< the heading-rate bias's random walk and the prior on the first
-    /// The map's lateral offset process of the covariance's model (optim/covariance.h); not a
+    /// The map's offset process of the covariance's model (optim/covariance.h); not a
     /// term of the objective.
     kMapOffset,
 };
