@@ -147,6 +147,60 @@ TEST(Observables, WithoutYawUnwrapsWestboundZigZag) {
 
 // ---- Metrics ---------------------------------------------------------------------------------
 
+/// Steps of a straight drive at 10 Hz whose speed [m/s] per step is speed(i).
+template <typename F>
+std::vector<StepObservation> Steps(std::size_t n, F speed) {
+    std::vector<StepObservation> obs(n);
+    for (std::size_t i = 1; i < n; ++i) {
+        obs[i].dt_s = 0.1;
+        obs[i].length_m = 0.1 * speed(i);
+    }
+    return obs;
+}
+
+TEST(RepairSpeedEpisodes, DroppedEpisodeIsObservedAtTheSpeedAroundIt) {
+    // 10 m/s; steps 100..119 (2 s) report 40 % of their motion.
+    auto obs = Steps(300, [](std::size_t i) { return i >= 100 && i < 120 ? 4.0 : 10.0; });
+    EXPECT_EQ(RepairSpeedEpisodes(obs, 10.0, 0.3, 10.0, 0.25), 1u);
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        const bool dropped = i >= 100 && i < 120;
+        EXPECT_EQ(obs[i].repaired, dropped) << "step " << i;
+        EXPECT_NEAR(obs[i].length_m, 1.0, 1e-9) << "step " << i;
+        if (dropped) EXPECT_NEAR(obs[i].observed_length_m, 0.4, 1e-12);
+    }
+}
+
+TEST(RepairSpeedEpisodes, PhysicalSpeedChangesAreKept) {
+    // Braking at 8 m/s^2 from 20 m/s to a stop, waiting, accelerating at 3 m/s^2.
+    auto speed = [](std::size_t i) {
+        const double t = 0.1 * double(i);
+        if (t < 5.0) return 20.0;
+        if (t < 7.5) return 20.0 - 8.0 * (t - 5.0);
+        if (t < 12.0) return 0.0;
+        return std::min(15.0, 3.0 * (t - 12.0));
+    };
+    auto obs = Steps(300, speed);
+    const auto before = obs;
+    EXPECT_EQ(RepairSpeedEpisodes(obs, 10.0, 0.3, 10.0, 0.25), 0u);
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        EXPECT_FALSE(obs[i].repaired) << "step " << i;
+        EXPECT_EQ(obs[i].length_m, before[i].length_m);
+    }
+}
+
+TEST(RepairSpeedEpisodes, LoneEdgesAndDoubledEpisodesAreNotRepaired) {
+    // A speed that drops and stays (nothing tells which side is wrong), and a rise that comes
+    // back down (doubled steps are left to the step terms).
+    auto lone = Steps(300, [](std::size_t i) { return i < 150 ? 10.0 : 4.0; });
+    EXPECT_EQ(RepairSpeedEpisodes(lone, 10.0, 0.3, 10.0, 0.25), 0u);
+    auto doubled = Steps(300, [](std::size_t i) { return i >= 100 && i < 120 ? 20.0 : 10.0; });
+    EXPECT_EQ(RepairSpeedEpisodes(doubled, 10.0, 0.3, 10.0, 0.25), 0u);
+    // A drop that recovers only after max_episode_s is not an episode either.
+    auto long_drop = Steps(400, [](std::size_t i) { return i >= 100 && i < 250 ? 4.0 : 10.0; });
+    EXPECT_EQ(RepairSpeedEpisodes(long_drop, 10.0, 0.3, 10.0, 0.25), 0u);
+    for (const auto& o : long_drop) EXPECT_FALSE(o.repaired);
+}
+
 TEST(Metrics, TenPoseExampleWithKnownErrors) {
     // Ground truth along East every 10 m; the estimate is off by e_i metres in the direction
     // (0.6, 0.8), and its height is off by 2 m on poses 2, 5 and 7 (1.5 m on pose 9: on floor).

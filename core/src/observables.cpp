@@ -1,5 +1,6 @@
 #include "driftcorr/core/observables.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 
@@ -60,6 +61,69 @@ std::vector<StepObservation> ComputeObservations(const PlanarTrajectory& traj,
         if (o.stationary) o.length_m = 0.0;
     }
     return obs;
+}
+
+namespace {
+
+// A boundary after step k where the mean speed changes by dv [m/s] (RepairSpeedEpisodes).
+struct SpeedEdge {
+    std::size_t k;
+    double dv;
+};
+
+}  // namespace
+
+std::size_t RepairSpeedEpisodes(std::vector<StepObservation>& obs, double max_accel_mps2,
+                                double window_s, double max_episode_s, double deviation) {
+    const std::size_t n = obs.size();
+    if (n < 4 || !(max_accel_mps2 > 0.0)) return 0;
+    std::vector<double> len(n, 0.0), time(n, 0.0);  // prefix sums over steps 1..i
+    for (std::size_t i = 1; i < n; ++i) {
+        len[i] = len[i - 1] + obs[i].length_m;
+        time[i] = time[i - 1] + std::max(obs[i].dt_s, 0.0);
+    }
+    if (!(time[n - 1] > 0.0)) return 0;
+    const auto w = static_cast<std::size_t>(
+        std::max(1L, std::lround(window_s * double(n - 1) / time[n - 1])));
+    // Mean speed of steps a+1..b.
+    auto speed = [&](std::size_t a, std::size_t b) {
+        const double dt = time[b] - time[a];
+        return dt > 0.0 ? (len[b] - len[a]) / dt : 0.0;
+    };
+    std::vector<SpeedEdge> edges;  // one per run of same-signed boundaries: the largest change
+    for (std::size_t k = w; k + w < n; ++k) {
+        const double dv = speed(k, k + w) - speed(k - w, k);
+        const double gap_s = 0.5 * (time[k + w] - time[k - w]);
+        if (!(gap_s > 0.0) || std::abs(dv) / gap_s <= max_accel_mps2) continue;
+        if (!edges.empty() && k - edges.back().k <= w && (dv < 0.0) == (edges.back().dv < 0.0)) {
+            if (std::abs(dv) > std::abs(edges.back().dv)) edges.back() = {k, dv};
+            continue;
+        }
+        edges.push_back({k, dv});
+    }
+    std::size_t episodes = 0;
+    for (std::size_t e = 0; e + 1 < edges.size(); ++e) {
+        const SpeedEdge a = edges[e], b = edges[e + 1];
+        if (!(a.dv < 0.0) || !(b.dv > 0.0) || time[b.k] - time[a.k] > max_episode_s) continue;
+        const double v0 = speed(a.k - w, a.k), v1 = speed(b.k, std::min(b.k + w, n - 1));
+        const double t0 = time[a.k], t1 = time[b.k];
+        bool any = false;
+        for (std::size_t i = a.k - w + 1; i <= std::min(b.k + w, n - 1); ++i) {
+            StepObservation& o = obs[i];
+            if (o.repaired || !(o.dt_s > 0.0)) continue;
+            const double u = t1 > t0 ? std::clamp((time[i] - t0) / (t1 - t0), 0.0, 1.0) : 0.0;
+            const double v_ref = (1.0 - u) * v0 + u * v1;
+            if (!(v_ref > 0.0) || std::abs(o.length_m / o.dt_s - v_ref) <= deviation * v_ref) continue;
+            o.observed_length_m = o.length_m;
+            o.length_m = v_ref * o.dt_s;
+            o.repaired = true;
+            o.stationary = false;
+            any = true;
+        }
+        if (any) ++episodes;
+        ++e;  // b closes this episode
+    }
+    return episodes;
 }
 
 }  // namespace driftcorr

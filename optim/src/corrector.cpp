@@ -67,6 +67,12 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
                                  " of the drive: the rest is the odometry alone");
         }
     }
+    if (r.repaired_steps > 0) {
+        r.warnings.push_back(std::to_string(r.repaired_steps) +
+                             " odometry step(s) inside dropped-step episodes (speed falling and "
+                             "recovering faster than model.outlier_accel_mps2) observed at the "
+                             "speed around them");
+    }
     if (r.scale_min <= kScaleMin * 1.01 || r.scale_max >= kScaleMax * 0.99) {
         r.warnings.push_back("the step-length scale reached its bound (" +
                              FormatFixed(r.scale_min, 2) + ".." + FormatFixed(r.scale_max, 2) +

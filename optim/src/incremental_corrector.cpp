@@ -10,6 +10,10 @@
 namespace driftcorr {
 namespace {
 
+// RepairSpeedEpisodes: speeds compared over 0.3 s (three KITTI frames, the verdict's window),
+// episodes up to 10 s, steps more than 25 % off the speed around them.
+constexpr double kOutlierWindowS = 0.3, kOutlierEpisodeS = 10.0, kOutlierDeviation = 0.25;
+
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -143,6 +147,8 @@ TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig&
                              bool fix_height) {
     TrajectoryState s;
     s.obs = ComputeObservations(est, cfg.stationary_m);
+    RepairSpeedEpisodes(s.obs, cfg.model.outlier_accel_mps2, kOutlierWindowS, kOutlierEpisodeS,
+                        kOutlierDeviation);
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
     s.poses.resize(est.size());
@@ -287,6 +293,11 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
     result.refine_s = SecondsSince(t0);
     result.scale_min = *std::min_element(state_.scales.begin(), state_.scales.end());
     result.scale_max = *std::max_element(state_.scales.begin(), state_.scales.end());
+    result.step_length_m.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        result.step_length_m[i] = i > 0 ? state_.obs[i].length_m : 0.0;
+        result.repaired_steps += state_.obs[i].repaired ? 1 : 0;
+    }
     if (Usable(result.status)) result.corrected = ToTrajectory(t_s, state_);
     if (Usable(result.status) && cfg_.compute_covariance) {
         const auto t1 = std::chrono::steady_clock::now();

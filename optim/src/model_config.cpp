@@ -21,6 +21,8 @@ std::string ModelConfig::Validate() const {
         {"model.accel_sigma_mps2", accel_sigma_mps2, NonNegative, ">= 0"},
         {"model.speed_weight", speed_weight, Weight, "in (0, 1]"},
         {"model.max_speed_mps", max_speed_mps, Positive, "> 0"},
+        {"model.outlier_accel_mps2", outlier_accel_mps2, NonNegative, ">= 0"},
+        {"model.outlier_sigma_rel", outlier_sigma_rel, NonNegative, ">= 0"},
         {"model.lateral_sigma_rel", lateral_sigma_rel, NonNegative, ">= 0"},
         {"model.heading_rw_rad_per_sqrt_s", heading_rw_rad_per_sqrt_s, NonNegative, ">= 0"},
         {"model.heading_sigma_rel", heading_sigma_rel, NonNegative, ">= 0"},

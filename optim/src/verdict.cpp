@@ -41,14 +41,18 @@ void JudgeSolver(const CorrectionResult& r, Findings& f) {
 
 // The step-length scale each stretch of `segment_m` of estimated path implies: corrected path
 // length over estimated path length. Flags the poses of implausible stretches.
-void JudgeScale(const PlanarTrajectory& est, const PlanarTrajectory& cor, double segment_m,
-                const VerdictConfig& c, Verdict& v, Findings& f) {
+// step_m: the odometry's step lengths as the model observed them (dropped steps repaired); the
+// estimate's own when empty.
+void JudgeScale(const PlanarTrajectory& est, const std::vector<double>& step_m,
+                const PlanarTrajectory& cor, double segment_m, const VerdictConfig& c, Verdict& v,
+                Findings& f) {
+    const bool model_steps = step_m.size() == est.size();
     std::size_t start = 0;
     double est_m = 0.0, cor_m = 0.0;
     v.scale_min = 1e9, v.scale_max = -1e9;
     std::size_t implausible = 0;
     for (std::size_t i = 1; i < est.size(); ++i) {
-        est_m += (est.p_en[i] - est.p_en[i - 1]).norm();
+        est_m += model_steps ? step_m[i] : (est.p_en[i] - est.p_en[i - 1]).norm();
         cor_m += (cor.p_en[i] - cor.p_en[i - 1]).norm();
         const bool last = i + 1 == est.size();
         if (est_m < segment_m && !(last && est_m > 0.25 * segment_m)) continue;
@@ -213,7 +217,8 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     JudgeInputJumps(estimate, config, v, f);
     if (!Usable(result.status) || result.corrected.size() != estimate.size()) return v;
     if (scale_estimated) {
-        JudgeScale(estimate, result.corrected, model.scale_segment_m, config, v, f);
+        JudgeScale(estimate, result.step_length_m, result.corrected, model.scale_segment_m, config,
+                   v, f);
     }
     if (field && !field->empty()) {
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);

@@ -81,7 +81,10 @@ void WindowProblem::BindPose(TermBlock& block, int k0, std::size_t pose) const {
 // i-2..i.
 void WindowProblem::AddStepBlocks(std::size_t i) {
     const StepObservation& o = state_.obs[i];
-    const double len_sigma = cfg_.step_sigma_m + cfg_.step_sigma_rel * o.length_m;
+    const double len_sigma =
+        cfg_.step_sigma_m +
+        (o.repaired ? std::max(cfg_.step_sigma_rel, cfg_.outlier_sigma_rel) : cfg_.step_sigma_rel) *
+            o.length_m;
     const double lat_sigma = cfg_.lateral_sigma_m + cfg_.lateral_sigma_rel * o.length_m;
     const double rw = cfg_.heading_rw_rad_per_sqrt_s, rel = cfg_.heading_sigma_rel * o.dheading_rad;
     const double head_sigma = std::max(cfg_.heading_sigma_min_rad,

@@ -76,6 +76,8 @@ std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
     num("accel_sigma_mps2", &m.accel_sigma_mps2);
     num("speed_weight", &m.speed_weight);
     num("max_speed_mps", &m.max_speed_mps);
+    num("outlier_accel_mps2", &m.outlier_accel_mps2);
+    num("outlier_sigma_rel", &m.outlier_sigma_rel);
     num("lateral_sigma_m", &m.lateral_sigma_m);
     num("lateral_sigma_rel", &m.lateral_sigma_rel);
     num("heading_rw_rad_per_sqrt_s", &m.heading_rw_rad_per_sqrt_s);

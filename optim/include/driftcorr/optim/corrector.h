@@ -61,6 +61,10 @@ struct CorrectionResult {
     int iterations = 0;                ///< Ipopt iterations, all solves
     std::size_t constrained_poses = 0; ///< poses with the hard corridor constraint (refine)
     double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range
+    /// The odometry's step lengths as the model observed them [m], one per pose (step into pose
+    /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
+    std::vector<double> step_length_m;
+    std::size_t repaired_steps = 0;  ///< steps whose length was replaced
     SolveReport refine_report;
     double incremental_s = 0.0;        ///< wall time of the incremental pass [s]
     double refine_s = 0.0;             ///< wall time of the refinement [s]

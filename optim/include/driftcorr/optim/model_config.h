@@ -23,6 +23,13 @@ struct ModelConfig {
     double step_robust_k = 0.0;
     double accel_sigma_mps2 = 0.0;
     double speed_weight = 1.0;
+    /// Explicit outlier handling of dropped or doubled odometry steps (core RepairSpeedEpisodes,
+    /// batch correction): an episode the odometry enters and leaves with a speed change faster
+    /// than outlier_accel_mps2 (about 1 g: no road vehicle brakes harder, no pedestrian
+    /// changes pace so fast) has its off-speed steps replaced by the speed around it, observed
+    /// with sigma step_sigma_m + outlier_sigma_rel * L instead of the odometry's own. 0: off.
+    double outlier_accel_mps2 = 10.0;  ///< [m/s^2]
+    double outlier_sigma_rel = 0.2;    ///< [-]
     /// Steps faster than this are discontinuities of the estimate (not scaled, no speed term).
     double max_speed_mps = 70.0;
     // Heading change: sigma^2 = heading_rw^2 * dt + (heading_sigma_rel * |dheading|)^2.

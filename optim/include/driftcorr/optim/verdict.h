@@ -11,7 +11,9 @@
 //    constraints and was re-solved without them (the map and the odometry could not be reconciled);
 //  - the step-length scale: the correction explains the drive with a scale no odometry of this
 //    kind has (visual / lidar odometry is a few percent off, not 25 %; pedestrian step models tens
-//    of percent): outside the plausible range the drive was squeezed or stretched onto the map;
+//    of percent): outside the plausible range the drive was squeezed or stretched onto the map.
+//    Measured against the odometry as the model observed it (CorrectionResult::step_length_m:
+//    dropped-step episodes repaired), so a repaired episode is not counted as a stretch;
 //  - the start: the given anchor puts the leading path far from the map while another heading or
 //    position fits it well (AnchorFitResult), or an estimated start that another start fits as
 //    well;
