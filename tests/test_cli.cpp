@@ -17,6 +17,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -496,10 +497,10 @@ std::vector<BadInputCase> BadInputCases() {
         {"ScenarioUnknownFormat",
          Edit([](const fs::path& s) {
              Replace(s / "scenario.yaml", "path: estimate.tum\n  format: tum",
-                     "path: estimate.tum\n  format: csv");
+                     "path: estimate.tum\n  format: gpx");
          }),
          kExitBadInput,
-         {R"(scenario\.yaml:\d+: estimate\.format: unknown value 'csv')"},
+         {R"(scenario\.yaml:\d+: estimate\.format: unknown value 'gpx')"},
          kSentinelKept},
         {"ScenarioUnknownFrame",
          Edit([](const fs::path& s) {
@@ -1143,6 +1144,196 @@ TEST_F(CliOnFailure, WriteWritesTheResultAndPerPoseCovariance) {
         ++n;
     }
     EXPECT_EQ(n, est.size());
+}
+
+}  // namespace
+
+namespace {
+
+// ---- a trajectory file with --osm and --anchor; many scenarios with -j and --manifest --------
+
+class CliFormats : public CliTest {
+protected:
+    /// `driftcorr correct <scenario>/estimate.tum --osm <scenario>/map.osm --anchor ...`.
+    static std::vector<std::string> CorrectFile(const CaseDirs& c, const std::string& trajectory,
+                                                const std::vector<std::string>& extra) {
+        std::vector<std::string> args = {"correct", trajectory, "--osm",
+                                         (c.scenario / "map.osm").string(), "-o", c.output.string()};
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    }
+};
+
+// The scenario's own anchor (48.98, 8.39, yaw 0, enu) given on the command line gives the same
+// corrected trajectory as the scenario file.
+TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
+    const CaseDirs c = MakeCase("FileAndAnchor");
+    const fs::path via_scenario = c.out_dir.parent_path() / "via_scenario.tum";
+    ASSERT_EQ(RunProgram(kCli, {"correct", c.scenario.string(), "-o", via_scenario.string()},
+                         c.out_dir.parent_path()).exit_code, kExitOk);
+    const RunResult r = RunProgram(
+        kCli, CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                          {"--anchor", "48.98,8.39,0", "--frame", "enu"}), c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    EXPECT_EQ(ReadFile(c.output), ReadFile(via_scenario));
+}
+
+TEST_F(CliFormats, PositionsOnlyTumSaysTheHeadingCameFromTheMotion) {
+    const CaseDirs c = MakeCase("PositionsOnly");
+    std::istringstream full(ReadFile(c.scenario / "estimate.tum"));
+    std::string positions;
+    for (std::string line; std::getline(full, line);) {
+        std::istringstream f(line);
+        std::string t, x, y, z;
+        f >> t >> x >> y >> z;
+        positions += t + " " + x + " " + y + " " + z + "\n";
+    }
+    const fs::path traj = c.out_dir.parent_path() / "positions.tum";
+    WriteFile(traj, positions);
+    const fs::path geojson = c.out_dir / "tracks.geojson";
+    const RunResult r = RunProgram(
+        kCli, CorrectFile(c, traj.string(), {"--anchor", "48.98,8.39,0", "--frame", "enu",
+                                             "--geojson", geojson.string()}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    EXPECT_NE(r.out.find("heading    from the direction of motion (the estimate has no "
+                         "orientation"), std::string::npos);
+    // evo's TUM reader: 8 space-separated numbers a line, no header, no trailing space.
+    const std::string tum = ReadFile(c.output);
+    const std::regex line_re(R"(-?\d+\.\d+( -?\d+\.\d+){7})");
+    std::istringstream lines(tum);
+    std::size_t n = 0;
+    for (std::string line; std::getline(lines, line); ++n) {
+        ASSERT_TRUE(std::regex_match(line, line_re)) << "line " << n + 1 << ": '" << line << "'";
+    }
+    EXPECT_EQ(n, driftcorr::io::ReadTum(traj.string()).size());
+    // Per-vertex timestamps in the GeoJSON, as many as coordinates.
+    const std::string json = ReadFile(geojson);
+    EXPECT_NE(json.find("\"coordinateProperties\":{\"times\":[1000.000000,1000.100000,"),
+              std::string::npos);
+}
+
+TEST_F(CliFormats, EurocCsvNeedsNoFrameAndAnchorMayBeAuto) {
+    const CaseDirs c = MakeCase("Euroc");
+    const driftcorr::Trajectory est =
+        driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
+    std::string csv = "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m]\n";
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        char line[128];
+        std::snprintf(line, sizeof(line), "%lld,%.6f,%.6f,%.6f\n",
+                      static_cast<long long>(std::llround(est.t_s[i] * 1e9)), est.p_frame[i].x(),
+                      est.p_frame[i].y(), est.p_frame[i].z());
+        csv += line;
+    }
+    const fs::path traj = c.out_dir.parent_path() / "leica0.csv";
+    WriteFile(traj, csv);
+    const RunResult r = RunProgram(kCli, CorrectFile(c, traj.string(), {"--anchor", "48.98,8.39,auto"}),
+                                   c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    EXPECT_NE(r.out.find("anchor     estimated yaw"), std::string::npos);
+    EXPECT_EQ(driftcorr::io::ReadTum(c.output.string()).size(), est.size());
+}
+
+TEST_F(CliFormats, MissingOrBadOptionsAreNamed) {
+    const CaseDirs c = MakeCase("BadOptions");
+    const std::string traj = (c.scenario / "estimate.tum").string();
+    struct Bad {
+        std::vector<std::string> extra;
+        int code;
+        std::string message;
+    };
+    const std::vector<Bad> cases = {
+        {{"--anchor", "48.98,8.39,0"}, kExitBadInput, "estimate.tum: --frame: missing"},
+        {{"--anchor", "48.98,8.39", "--frame", "enu"}, kExitBadInput, "--anchor: expected LAT,LON,YAW"},
+        {{"--anchor", "48.98,east,0", "--frame", "enu"}, kExitBadInput,
+         "--anchor: longitude 'east' is not a number"},
+        {{"--frame", "enu"}, kExitUsage, "missing --anchor"},
+        {{"--anchor", "1,2,0", "--crs", "EPSG:banana", "--frame", "enu"}, kExitBadInput,
+         "--crs: unknown CRS spelling"},
+        {{"--anchor", "48.98,8.39,0", "--frame", "enu", "--format", "gpx"}, kExitBadInput,
+         "--format: unknown format 'gpx'"},
+    };
+    for (const Bad& b : cases) {
+        const RunResult r = RunProgram(kCli, CorrectFile(c, traj, b.extra), c.out_dir.parent_path());
+        EXPECT_EQ(r.exit_code, b.code) << r.err;
+        EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
+        EXPECT_TRUE(FolderEntries(c.out_dir).empty());
+    }
+}
+
+TEST_F(CliFormats, PbfThatIsTruncatedOrNotPbfIsBadInputNamingTheFile) {
+    const CaseDirs c = MakeCase("BadPbf");
+    const fs::path pbf = c.out_dir.parent_path() / "map.osm.pbf";
+    // A PBF's first blob header, cut off: the length prefix and the start of "OSMHeader".
+    WriteFile(pbf, std::string("\x00\x00\x00\x0d\x0a\x09OSMHe", 11));
+    const std::string traj = (c.scenario / "estimate.tum").string();
+    for (const std::string content : {std::string("\x00\x00\x00\x0d\x0a\x09OSMHe", 11),
+                                      std::string("PK\x03\x04 a zip file")}) {
+        WriteFile(pbf, content);
+        const RunResult r = RunProgram(
+            kCli, {"correct", traj, "--osm", pbf.string(), "--anchor", "48.98,8.39,0", "--frame",
+                   "enu", "-o", c.output.string()},
+            c.out_dir.parent_path());
+        EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+        EXPECT_NE(r.err.find(pbf.string() + ": is neither OSM XML"), std::string::npos) << r.err;
+        EXPECT_TRUE(FolderEntries(c.out_dir).empty());
+    }
+}
+
+// Three scenarios and a manifest line that names no scenario: the bad line is reported with its
+// line, the others are written, the exit code is 2 (bad input before failed).
+TEST_F(CliFormats, ManyScenariosOnThreadsOneBadLineDoesNotStopTheOthers) {
+    const CaseDirs c = MakeCase("Batch");
+    const fs::path root = c.out_dir.parent_path();
+    fs::copy(c.scenario, root / "second", fs::copy_options::recursive);
+    const fs::path manifest = root / "manifest.txt";
+    WriteFile(manifest, "# drives\nsecond\n\nno_such_scenario\n");
+    const fs::path out = root / "batch_out";
+    const RunResult r = RunProgram(
+        kCli, {"correct", c.scenario.string(), "--manifest", manifest.string(), "-o", out.string(),
+               "-j", "2", "--geojson", out.string()},
+        root);
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitBadInput);
+    EXPECT_NE(r.out.find("no_such_scenario                 bad input (" + manifest.string() + ":4)"),
+              std::string::npos);
+    EXPECT_NE(r.out.find("2 of 3 scenarios corrected and written"), std::string::npos);
+    const std::vector<std::string> expected = {"scenario.geojson", "scenario.tum", "second.geojson",
+                                               "second.tum"};
+    std::vector<std::string> entries = FolderEntries(out);
+    std::sort(entries.begin(), entries.end());
+    EXPECT_EQ(entries, expected);
+    EXPECT_EQ(ReadFile(out / "scenario.tum"), ReadFile(out / "second.tum"));
+
+    // The same two good scenarios one at a time give the same files.
+    const fs::path out1 = root / "batch_out_j1";
+    const RunResult r1 = RunProgram(kCli, {"correct", c.scenario.string(), (root / "second").string(),
+                                           "-o", out1.string(), "-j", "1"}, root);
+    EXPECT_EQ(r1.exit_code, kExitOk) << r1.out << r1.err;
+    EXPECT_EQ(ReadFile(out1 / "second.tum"), ReadFile(out / "second.tum"));
+}
+
+TEST_F(CliFormats, BatchUsageErrors) {
+    const CaseDirs c = MakeCase("BatchUsage");
+    const std::string s = c.scenario.string();
+    const fs::path root = c.out_dir.parent_path();
+    EXPECT_EQ(RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string(), "-j", "0"}, root)
+                  .exit_code, kExitUsage);
+    EXPECT_EQ(RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string(), "--osm", "m.osm"},
+                         root).exit_code, kExitUsage);
+    // Two scenarios whose outputs would collide: bad input before any work.
+    const RunResult r = RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string()}, root);
+    EXPECT_EQ(r.exit_code, kExitBadInput);
+    EXPECT_NE(r.err.find("its output would be scenario.tum, as for argument 1"), std::string::npos)
+        << r.err;
+    const RunResult m = RunProgram(
+        kCli, {"correct", "--manifest", (root / "none.txt").string(), "-o", (root / "o").string()},
+        root);
+    EXPECT_EQ(m.exit_code, kExitBadInput);
+    EXPECT_NE(m.err.find("none.txt: --manifest: cannot open file"), std::string::npos) << m.err;
 }
 
 }  // namespace

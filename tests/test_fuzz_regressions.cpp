@@ -112,6 +112,7 @@ TEST(FuzzCorpusSeeds, ValidSeedsParse) {
         driftcorr::io::LoadScenario(write(corpus / "scenario_yaml/indoor_grid.yaml", "b.yaml")));
     const driftcorr::OsmRoads roads = driftcorr::ReadOsmRoads((corpus / "osm/valid.osm").string());
     EXPECT_EQ(roads.ways.size(), 1u);  // way 11 has one resolvable node, way 12 is no highway
+    EXPECT_EQ(driftcorr::ReadOsmRoads((corpus / "osm/extract.pbf").string()).ways.size(), 2u);
     EXPECT_NO_THROW(
         driftcorr::pipeline::LoadPipelineConfig((corpus / "params_yaml/full.yaml").string()));
     EXPECT_NO_THROW(

@@ -703,3 +703,115 @@ TEST(ScenarioWarnings, UnknownKeysAreReportedWithLine) {
 }
 
 }  // namespace
+
+namespace driftcorr::io {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Positions-only TUM, CSV and EuRoC / ASL
+
+TEST(TrajectoryFormats, TumWithPositionsOnlyHasNoOrientation) {
+    const fs::path dir = TestDir();
+    const std::string path = WriteText(dir / "p.tum", "# t x y z\n0 0 0 0\n0.1 1 0 0\n0.2 2 0.5 0\n");
+    const Trajectory traj = ReadTum(path);
+    ASSERT_EQ(traj.size(), 3u);
+    EXPECT_FALSE(traj.HasOrientation());
+    EXPECT_EQ(traj.p_frame[2], Eigen::Vector3d(2, 0.5, 0));
+    // The first data line decides: a later 8-field line is an error naming its line.
+    const std::string mixed = WriteText(dir / "m.tum", "0 0 0 0\n0.1 1 0 0 0 0 0 1\n0.2 2 0 0\n");
+    ExpectInputError([&] { ReadTum(mixed); }, {mixed + ":2: expected 4 numbers, found 8"});
+}
+
+TEST(TrajectoryFormats, EurocStateGroundtruthLayout) {
+    const fs::path dir = TestDir();
+    // The layout of EuRoC's state_groundtruth_estimate0/data.csv (velocities and biases ignored).
+    const std::string path = WriteText(
+        dir / "data.csv",
+        "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], "
+        "q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1]\n"
+        "1403636579763555584,4.688319,-1.786938,0.783338,0.534108,-0.153029,-0.827383,-0.082152,"
+        "-0.027876,0.033207,0.800006,-0.003172\n"
+        "1403636579768555520,4.688177,-1.786770,0.787350,0.534640,-0.152990,-0.826976,-0.082863,"
+        "-0.029272,0.033992,0.804771,-0.003172\n"
+        "1403636579773555456,4.688028,-1.786598,0.791382,0.535178,-0.152945,-0.826562,-0.083605,"
+        "-0.030043,0.035215,0.808962,-0.003172\n");
+    EXPECT_EQ(DetectTrajectoryFormat(path), TrajectoryFormat::kEuroc);
+    const Trajectory traj = ReadCsv(path, true);
+    ASSERT_EQ(traj.size(), 3u);
+    ASSERT_TRUE(traj.HasOrientation());
+    // Nanoseconds to seconds without losing the sub-microsecond digits to a 19-digit double.
+    EXPECT_DOUBLE_EQ(traj.t_s[0], 1403636579.0 + 0.763555584);
+    EXPECT_NEAR(traj.t_s[1] - traj.t_s[0], 0.004999936, 1e-6);  // a double of ~1.4e9 s
+    EXPECT_EQ(traj.p_frame[0], Eigen::Vector3d(4.688319, -1.786938, 0.783338));
+    const Eigen::Quaterniond q0 = traj.q_frame_body[0];  // file order w x y z
+    EXPECT_NEAR(q0.w(), 0.534108, 1e-5);
+    EXPECT_NEAR(q0.x(), -0.153029, 1e-5);
+    EXPECT_NEAR(q0.z(), -0.082152, 1e-5);
+}
+
+TEST(TrajectoryFormats, EurocPositionsOnlyAndPlainCsv) {
+    const fs::path dir = TestDir();
+    const std::string leica = WriteText(
+        dir / "leica.csv", "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m]\n"
+                           "1000000000,0,0,0\n1100000000,1,0,0\n1200000000,2,0,0\n");
+    const Trajectory l = ReadCsv(leica, false);
+    EXPECT_FALSE(l.HasOrientation());
+    EXPECT_DOUBLE_EQ(l.t_s[2], 1.2);
+    // Plain CSV: any column order, units in brackets, extra columns ignored.
+    const std::string plain = WriteText(
+        dir / "plain.csv", "x [m], y [m], z [m], speed, t [s], qx, qy, qz, qw\n"
+                           "0,0,0,1,0.0,0,0,0,2\n1,0,0,1,0.5,0,0,0,1\n2,1,0,1,1.0,0,0,1,1\n");
+    EXPECT_EQ(DetectTrajectoryFormat(plain), TrajectoryFormat::kCsv);
+    const Trajectory p = ReadCsv(plain, false);
+    ASSERT_EQ(p.size(), 3u);
+    EXPECT_DOUBLE_EQ(p.t_s[1], 0.5);
+    EXPECT_EQ(p.p_frame[2], Eigen::Vector3d(2, 1, 0));
+    EXPECT_NEAR(p.q_frame_body[0].w(), 1.0, 1e-12);  // normalised
+    const std::string ns = WriteText(dir / "ns.csv", "timestamp_ns,tx,ty,tz\n5,0,0,0\n10,1,0,0\n15,2,0,0\n");
+    EXPECT_DOUBLE_EQ(ReadCsv(ns, false).t_s[2], 15e-9);
+}
+
+TEST(TrajectoryFormats, BadCsvNamesFileLineAndColumn) {
+    const fs::path dir = TestDir();
+    const auto bad = [&](const std::string& name, const std::string& text, bool euroc,
+                         const std::string& fragment) {
+        const std::string path = WriteText(dir / name, text);
+        ExpectInputError([&] { ReadCsv(path, euroc); }, {path + fragment});
+    };
+    bad("no_time.csv", "x,y,z\n1,2,3\n", false, ":1: header has no time column");
+    bad("no_z.csv", "t,x,y\n1,2,3\n", false, ":1: header has no position column 'z'");
+    bad("half_q.csv", "t,x,y,z,qw\n0,0,0,0,1\n", false, ":1: header names some quaternion");
+    bad("not_euroc.csv", "t,x,y,z\n0,0,0,0\n", true, ":1: is not an EuRoC / ASL file");
+    bad("short_line.csv", "t,x,y,z\n0,0,0,0\n1,1,0\n2,2,0,0\n", false,
+        ":3: expected 4 comma-separated fields");
+    bad("not_number.csv", "t,x,y,z\n0,0,0,0\n1,1,abc,0\n2,2,0,0\n", false, ":3: field 3 'abc'");
+    bad("decreasing.csv", "t,x,y,z\n0,0,0,0\n2,1,0,0\n1,2,0,0\n", false, ":4: timestamp 1");
+    bad("bad_unit.csv", "t [ms],x,y,z\n0,0,0,0\n", false, ":1: t: time unit 'ms'");
+    bad("empty.csv", "\n\n", false, ": empty file");
+    bad("header_only.csv", "t,x,y,z\n", false, ": has 0 poses");
+}
+
+TEST(TrajectoryFormats, ScenarioKeysForFormatsAndHeading) {
+    const fs::path dir = TestDir();
+    const std::string yaml = WriteText(dir / "scenario.yaml", R"(mode: road2d
+estimate: {path: traj.csv, format: euroc, heading: motion}
+frame: enu
+anchor: {lat_deg: 48.98, lon_deg: 8.39, yaw_deg: 0}
+map: [{path: map.osm.pbf}]
+)");
+    const Scenario s = LoadScenario(yaml);
+    EXPECT_EQ(s.estimate.format, TrajectoryFormat::kEuroc);
+    EXPECT_TRUE(s.estimate.heading_from_motion);
+    EXPECT_EQ(s.map.front().format, MapFormat::kOsm);  // .pbf: OSM, read by content
+    WriteText(dir / "scenario.yaml", R"(mode: road2d
+estimate: {path: traj.csv, format: csv, heading: sideways}
+frame: enu
+anchor: {lat_deg: 48.98, lon_deg: 8.39, yaw_deg: 0}
+map: [{path: map.osm}]
+)");
+    ExpectInputError([&] { LoadScenario(yaml); },
+                     {yaml + ":2: estimate.heading: unknown value 'sideways'"});
+}
+
+}  // namespace
+}  // namespace driftcorr::io

@@ -347,6 +347,27 @@ TEST_P(FrameRoundTrip, WithoutOrientationRoundTripsPositions) {
     }
 }
 
+// Positions only: the corrected heading becomes a rotation about Up alone whose forward axis has
+// that heading (ToPlanar of the result gives it back), with no roll or pitch.
+TEST_P(FrameRoundTrip, WithoutOrientationTheCorrectedHeadingBecomesTheOrientation) {
+    PlanarAnchor anchor;
+    anchor.yaw_rad = -1.2;
+    Trajectory traj = RandomTrajectory(7u, 10, GetParam());
+    traj.q_frame_body.clear();
+    PlanarTrajectory corrected = ToPlanar(traj, GetParam(), anchor);
+    for (std::size_t i = 0; i < corrected.size(); ++i) corrected.yaw_rad.push_back(0.4 * i - 2.0);
+    const Trajectory back = FromPlanar(corrected, corrected, traj, GetParam(), anchor);
+    ASSERT_TRUE(back.HasOrientation());
+    const PlanarTrajectory again = ToPlanar(back, GetParam(), anchor);
+    ASSERT_TRUE(again.HasYaw());
+    for (std::size_t i = 0; i < traj.size(); ++i) {
+        EXPECT_NEAR(std::remainder(again.yaw_rad[i] - corrected.yaw_rad[i], 2 * M_PI), 0.0, 1e-9)
+            << "pose " << i;
+        const Eigen::Vector3d up = FrameUpAxis(GetParam());
+        EXPECT_NEAR((back.q_frame_body[i] * up - up).norm(), 0.0, 1e-12) << "pose " << i;
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(BothAxes, FrameRoundTrip,
                          ::testing::Values(FrameAxes::kKittiCamera, FrameAxes::kEnu),
                          [](const ::testing::TestParamInfo<FrameAxes>& param_info) {

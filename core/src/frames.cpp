@@ -79,7 +79,17 @@ Trajectory FromPlanar(const PlanarTrajectory& corrected, const PlanarTrajectory&
         uvh.z() = corrected.up_m[i] - anchor.origin_up_m;
         out.p_frame[i] = UvhToFrame(axes, uvh);
     }
-    if (original.HasOrientation()) {
+    if (!original.HasOrientation() && corrected.HasYaw()) {
+        // No orientation to turn: a rotation about Up alone, the forward axis along the heading.
+        out.q_frame_body.resize(n);
+        const Eigen::Vector3d rest = FrameToUvh(axes, BodyForwardAxis(axes));
+        const double rest_yaw_rad = std::atan2(rest.y(), rest.x());
+        for (std::size_t i = 0; i < n; ++i) {
+            const double yaw_frame_rad = corrected.yaw_rad[i] - anchor.yaw_rad;
+            out.q_frame_body[i] = Eigen::Quaterniond(
+                Eigen::AngleAxisd(yaw_frame_rad - rest_yaw_rad, FrameUpAxis(axes)));
+        }
+    } else if (original.HasOrientation()) {
         out.q_frame_body.resize(n);
         const Eigen::Vector3d up = FrameUpAxis(axes);
         const bool turn = corrected.HasYaw() && reference.HasYaw();

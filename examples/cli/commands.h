@@ -2,9 +2,11 @@
 // The subcommands of the driftcorr CLI, one source file each; main.cpp only dispatches.
 // Each returns the process exit code (0 ok, 1 usage, 2 bad input, 3 solver failure, 4 internal)
 // and receives argv with argv[0] = the subcommand name.
+#include <cstdio>
 #include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace driftcorr::cli {
 
@@ -28,7 +30,26 @@ bool ParseOptions(int argc, char** argv, int first, const OptionTable& table,
 /// an existing writable folder. Checked before any work is done, so nothing is lost to a typo.
 void CheckOutputPath(const std::string& path, const std::string& option);
 
+/// One scenario path of a manifest, with where it was named (for messages).
+struct ManifestEntry {
+    std::string path;   ///< resolved against the manifest's folder when relative
+    std::string where;  ///< "manifest.txt:3"
+};
+
+/// Reads a manifest: one scenario path a line (a folder or a .yaml), relative paths resolved
+/// against the manifest's folder; blank lines and lines starting with '#' are skipped. Throws
+/// InputError naming the manifest when it cannot be read or names no scenario. Whether each path
+/// is a scenario is found out when it runs (a bad line fails alone).
+std::vector<ManifestEntry> ReadManifest(const std::string& path);
+
+/// Runs work(i) for i in [0, count) on `jobs` std::threads (at most count), each taking the next
+/// index when done; returns when all are done. `work` must not throw.
+void RunOnThreadPool(std::size_t count, int jobs, const std::function<void(std::size_t)>& work);
+
+int RunCorrectCommand(int argc, char** argv);
 int RunStreamCommand(int argc, char** argv);
 int RunEvalCommand(int argc, char** argv);
+/// The usage text of `correct` (driftcorr --help prints it).
+void PrintCorrectUsage(std::FILE* out);
 
 }  // namespace driftcorr::cli

@@ -1,4 +1,5 @@
-// OpenStreetMap XML reader on expat (linked PRIVATE; no expat type leaves this file).
+// OpenStreetMap XML reader on expat (linked PRIVATE; no expat type leaves this file), and the
+// entry point that hands PBF files to osm_pbf_reader.cpp.
 //
 // One streaming pass collects every top-level <node> (id -> lat, lon) and every top-level <way>
 // that carries a `highway` tag (its <nd ref> list and the tags we use). Node refs are resolved
@@ -25,66 +26,18 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
+#include "osm_ways.h"
 
 namespace driftcorr {
 namespace {
 
 constexpr std::size_t kReadBlockBytes = 64 * 1024;
 
-/// A way as written in the file, before its node refs are resolved.
-struct RawWay {
-    std::int64_t id = 0;
-    std::vector<std::int64_t> refs;
-    std::string highway;
-    bool has_highway = false;
-    double width_m = 0.0;
-    int lanes = 0;
-    bool is_area = false;
-};
-
-struct LatLon {
-    double lat_deg = 0.0;
-    double lon_deg = 0.0;
-};
+using osm_internal::LatLon;
+using osm_internal::ParseWhole;
+using osm_internal::RawWay;
 
 bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
-
-/// [begin, end) of `s` without leading and trailing whitespace.
-std::pair<const char*, const char*> Trim(const char* s) {
-    const char* begin = s;
-    const char* end = s + std::strlen(s);
-    while (begin < end && IsSpace(*begin)) ++begin;
-    while (end > begin && IsSpace(end[-1])) --end;
-    return {begin, end};
-}
-
-/// Locale-independent parse of the whole (trimmed) string as T; false on any trailing junk.
-template <typename T>
-bool ParseWhole(const char* s, T* out) {
-    const auto [begin, end] = Trim(s);
-    if (begin == end) return false;
-    const auto result = std::from_chars(begin, end, *out);
-    return result.ec == std::errc() && result.ptr == end;
-}
-
-/// `width`: a number, optionally followed by the unit " m" (or "m"). Anything else -> 0.
-double ParseWidthM(const char* s) {
-    const auto [begin, end] = Trim(s);
-    double width_m = 0.0;
-    const auto result = std::from_chars(begin, end, width_m);
-    if (result.ec != std::errc()) return 0.0;
-    const char* rest = result.ptr;
-    while (rest < end && IsSpace(*rest)) ++rest;
-    if (rest < end && *rest == 'm') ++rest;
-    if (rest != end || !std::isfinite(width_m) || width_m < 0.0) return 0.0;
-    return width_m;
-}
-
-/// `lanes`: a non-negative integer. Anything else ("2;3", "two") -> 0.
-int ParseLanes(const char* s) {
-    int lanes = 0;
-    return ParseWhole(s, &lanes) && lanes >= 0 ? lanes : 0;
-}
 
 /// The value of attribute `name` in expat's null-terminated (name, value) array, or nullptr.
 const char* FindAttribute(const XML_Char** atts, const char* name) {
@@ -134,7 +87,7 @@ private:
     int depth_ = 0;             ///< number of currently open elements
     bool in_way_ = false;       ///< inside a top-level <way>
     RawWay way_;                ///< the way being read while in_way_
-    std::unordered_map<std::int64_t, LatLon> nodes_;
+    osm_internal::NodeIndex nodes_;
     std::vector<RawWay> highway_ways_;
     OsmReadReport report_;
 };
@@ -244,16 +197,7 @@ void OsmParser::StartWayChild(const char* name, const XML_Char** atts) {
     const char* key = FindAttribute(atts, "k");
     const char* value = FindAttribute(atts, "v");
     if (key == nullptr || value == nullptr) return;
-    if (std::strcmp(key, "highway") == 0) {
-        way_.has_highway = true;
-        way_.highway = value;
-    } else if (std::strcmp(key, "width") == 0) {
-        way_.width_m = ParseWidthM(value);
-    } else if (std::strcmp(key, "lanes") == 0) {
-        way_.lanes = ParseLanes(value);
-    } else if (std::strcmp(key, "area") == 0) {
-        way_.is_area = std::strcmp(value, "yes") == 0;
-    }
+    osm_internal::ApplyWayTag(key, value, way_);
 }
 
 double OsmParser::ParseCoordinate(const XML_Char** atts, const char* key, double limit_deg,
@@ -287,38 +231,27 @@ void OsmParser::Fail(const std::string& key, const std::string& message) const {
 }
 
 OsmRoads OsmParser::TakeResult() {
-    OsmRoads roads;
-    roads.report = report_;
-    roads.ways.reserve(highway_ways_.size());
-    for (RawWay& raw : highway_ways_) {
-        OsmWay way;
-        way.id = raw.id;
-        way.highway = std::move(raw.highway);
-        way.width_m = raw.width_m;
-        way.lanes = raw.lanes;
-        way.is_area = raw.is_area;
-        way.nodes.reserve(raw.refs.size());
-        for (const std::int64_t ref : raw.refs) {
-            const auto it = nodes_.find(ref);
-            if (it == nodes_.end()) {
-                ++roads.report.missing_node_refs;
-                continue;
-            }
-            way.nodes.push_back(GeoPoint{it->second.lat_deg, it->second.lon_deg, 0.0});
-        }
-        if (way.nodes.size() < 2) {
-            ++roads.report.ways_too_short;
-            continue;
-        }
-        roads.ways.push_back(std::move(way));
-    }
-    roads.report.ways_highway = roads.ways.size();
-    return roads;
+    return osm_internal::ResolveWays(highway_ways_, nodes_, report_);
+}
+
+/// An OSM XML file starts with '<' (after any whitespace or a UTF-8 byte order mark); anything
+/// else that is not empty is taken for PBF (whose reader says so when it is not). A file that
+/// cannot be opened goes to the XML reader, which names the error.
+bool LooksLikePbf(const std::string& path) {
+    FilePtr file(std::fopen(path.c_str(), "rb"));
+    if (!file) return false;
+    char head[64];
+    const std::size_t size = std::fread(head, 1, sizeof(head), file.get());
+    std::size_t i = 0;
+    if (size >= 3 && std::memcmp(head, "\xEF\xBB\xBF", 3) == 0) i = 3;
+    while (i < size && IsSpace(head[i])) ++i;
+    return i < size && head[i] != '<';
 }
 
 }  // namespace
 
 OsmRoads ReadOsmRoads(const std::string& path) {
+    if (LooksLikePbf(path)) return osm_internal::ReadOsmPbf(path);
     OsmParser parser(path);
     parser.Run();
     return parser.TakeResult();

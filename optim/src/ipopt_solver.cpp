@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <vector>
 
 namespace driftcorr {
@@ -133,6 +134,11 @@ std::string ToString(SolveStatus status) {
 }
 
 SolveReport SolveWithIpopt(WindowProblem& problem, const IpoptOptions& options) {
+    // MUMPS keeps state in Fortran module variables and is not thread-safe (Ipopt >= 3.14 locks
+    // around it itself; Debian's 3.11 does not): one solve at a time in the process, held for the
+    // application's whole life, which creates and destroys the MUMPS instance.
+    static std::mutex mumps_mutex;
+    const std::lock_guard<std::mutex> lock(mumps_mutex);
     Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
     app->Options()->SetIntegerValue("print_level", options.print_level);
     app->Options()->SetStringValue("sb", "yes");

@@ -189,13 +189,19 @@ TrajectorySource ParseSource(const Block& block, const fs::path& dir,
     TrajectorySource src;
     src.path = ResolvePath(dir, block.String("path"));
     src.format = ParseChoice<TrajectoryFormat>(
-        block, "format", {{"kitti", TrajectoryFormat::kKitti}, {"tum", TrajectoryFormat::kTum}});
-    block.WarnUnknownKeys({"path", "format", "rate_hz", "times"}, warnings);
+        block, "format",
+        {{"kitti", TrajectoryFormat::kKitti}, {"tum", TrajectoryFormat::kTum},
+         {"csv", TrajectoryFormat::kCsv}, {"euroc", TrajectoryFormat::kEuroc}});
+    block.WarnUnknownKeys({"path", "format", "rate_hz", "times", "heading"}, warnings);
+    if (block.Has("heading")) {
+        src.heading_from_motion = ParseChoice<bool>(block, "heading",
+                                                    {{"orientation", false}, {"motion", true}});
+    }
     src.rate_hz = block.OptDouble("rate_hz");
     const std::optional<std::string> times = block.OptString("times");
     if (times) src.times_path = ResolvePath(dir, *times);
     if (src.rate_hz && !(*src.rate_hz > 0.0)) block.Fail("rate_hz", "must be positive");
-    if (src.format == TrajectoryFormat::kTum) {
+    if (src.format != TrajectoryFormat::kKitti) {
         for (const char* key : {"rate_hz", "times"}) {
             if (block.Has(key)) block.Fail(key, "only valid with format: kitti");
         }
@@ -261,7 +267,8 @@ AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::s
 
 const Choices<MapFormat>& MapFormats() {
     static const Choices<MapFormat> formats = {
-        {"osm", MapFormat::kOsm},        {"geojson", MapFormat::kGeoJson},
+        {"osm", MapFormat::kOsm},        {"pbf", MapFormat::kOsm},
+        {"geojson", MapFormat::kGeoJson},
         {"pcd", MapFormat::kPcd},        {"ply", MapFormat::kPly},
         {"bt", MapFormat::kOctomap},     {"ot", MapFormat::kOctomap},
         {"octomap", MapFormat::kOctomap}};
@@ -345,6 +352,24 @@ Scenario LoadScenario(const std::string& path) {
 
 std::string ToString(ScenarioMode mode) {
     return mode == ScenarioMode::kRoad2d ? "road2d" : "indoor3d";
+}
+
+std::string ToString(TrajectoryFormat format) {
+    switch (format) {
+        case TrajectoryFormat::kKitti: return "kitti";
+        case TrajectoryFormat::kTum: return "tum";
+        case TrajectoryFormat::kCsv: return "csv";
+        case TrajectoryFormat::kEuroc: return "euroc";
+    }
+    return "unknown";
+}
+
+std::optional<TrajectoryFormat> ParseTrajectoryFormat(const std::string& name) {
+    for (const TrajectoryFormat f : {TrajectoryFormat::kKitti, TrajectoryFormat::kTum,
+                                     TrajectoryFormat::kCsv, TrajectoryFormat::kEuroc}) {
+        if (ToString(f) == name) return f;
+    }
+    return std::nullopt;
 }
 
 std::string ToString(MapFormat format) {

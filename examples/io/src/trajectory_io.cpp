@@ -1,6 +1,11 @@
 #include "driftcorr/io/trajectory_io.h"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
+#include <cstdint>
+#include <map>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -174,15 +179,21 @@ Trajectory ReadTum(const std::string& path, std::size_t min_poses) {
     DataLines lines(text);
     std::vector<std::string_view> fields;
     double v[8];
+    std::size_t columns = 0;  // 8, or 4 for positions only: the first data line decides
     while (lines.Next()) {
-        ParseNumbers(lines, 8, path, fields, v);
+        if (columns == 0) {
+            SplitFields(lines.line(), fields);
+            columns = fields.size() == 4 ? 4 : 8;
+        }
+        ParseNumbers(lines, columns, path, fields, v);
         CheckIncreasing(traj.t_s, v[0], path, lines.number());
+        traj.t_s.push_back(v[0]);
+        traj.p_frame.emplace_back(v[1], v[2], v[3]);
+        if (columns == 4) continue;
         const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order: qx qy qz qw
         // stableNorm: q.norm() overflows to inf for components near 1e200, and q / inf is zero.
         const double norm = q.coeffs().stableNorm();
         if (!(norm > 1e-12)) throw InputError(path, lines.number(), "", "quaternion has zero norm");
-        traj.t_s.push_back(v[0]);
-        traj.p_frame.emplace_back(v[1], v[2], v[3]);
         traj.q_frame_body.emplace_back(q.coeffs() / norm);
     }
     CheckMinPoses(traj.size(), min_poses, path);
@@ -216,11 +227,219 @@ Trajectory ReadKitti(const std::string& path, const std::optional<std::string>& 
     return traj;
 }
 
+namespace {
+
+/// The columns of a CSV trajectory, found by name in its header line.
+struct CsvColumns {
+    std::size_t count = 0;                     ///< fields a line must have
+    std::size_t t = 0;
+    double t_scale = 1.0;                      ///< to seconds: 1 or 1e-9
+    std::size_t p[3] = {0, 0, 0};              ///< x y z
+    std::optional<std::array<std::size_t, 4>> q;  ///< qx qy qz qw, when all four are there
+    bool euroc = false;
+};
+
+/// A header name as matched: without '#', spaces and a trailing unit "[...]", lower case; the
+/// unit (without brackets) goes to `unit`.
+std::string NormaliseColumn(std::string_view field, std::string& unit) {
+    field = internal::Trim(field);
+    if (!field.empty() && field.front() == '#') field.remove_prefix(1);
+    unit.clear();
+    if (const std::size_t open = field.find('['); open != std::string_view::npos) {
+        const std::size_t close = field.find(']', open);
+        unit = std::string(field.substr(open + 1, close == std::string_view::npos
+                                                      ? std::string_view::npos
+                                                      : close - open - 1));
+        field = field.substr(0, open);
+    }
+    std::string name(internal::Trim(field));
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return name;
+}
+
+std::vector<std::string_view> SplitCommas(std::string_view line) {
+    std::vector<std::string_view> fields;
+    std::size_t pos = 0;
+    for (;;) {
+        const std::size_t comma = line.find(',', pos);
+        fields.push_back(internal::Trim(line.substr(pos, comma == std::string_view::npos
+                                                             ? std::string_view::npos
+                                                             : comma - pos)));
+        if (comma == std::string_view::npos) return fields;
+        pos = comma + 1;
+    }
+}
+
+/// Finds the columns named in the header (see ReadCsv in trajectory_io.h).
+CsvColumns ParseCsvHeader(std::string_view header, const std::string& path, long line,
+                          bool require_euroc) {
+    CsvColumns cols;
+    const std::vector<std::string_view> fields = SplitCommas(header);
+    cols.count = fields.size();
+    std::map<std::string, std::size_t> index;
+    std::map<std::string, std::string> units;
+    std::string unit;
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+        const std::string name = NormaliseColumn(fields[i], unit);
+        if (index.count(name)) throw InputError(path, line, name, "column named twice");
+        index[name] = i;
+        units[name] = unit;
+    }
+    const auto find = [&](std::initializer_list<const char*> names) -> std::optional<std::string> {
+        for (const char* n : names) {
+            if (index.count(n)) return std::string(n);
+        }
+        return std::nullopt;
+    };
+    cols.euroc = index.count("p_rs_r_x") > 0;
+    if (require_euroc && !cols.euroc) {
+        throw InputError(path, line, "", "is not an EuRoC / ASL file: expected the header "
+                                         "'#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], ...'");
+    }
+    const char* const* pos_names;
+    static const char* const kEurocPos[] = {"p_rs_r_x", "p_rs_r_y", "p_rs_r_z"};
+    static const char* const kEurocQ[] = {"q_rs_x", "q_rs_y", "q_rs_z", "q_rs_w"};
+    static const char* const kPlainQ[] = {"qx", "qy", "qz", "qw"};
+    const std::optional<std::string> t =
+        find({"timestamp", "t", "time", "t_s", "timestamp_s", "t_ns", "timestamp_ns"});
+    if (!t) {
+        throw InputError(path, line, "", "header has no time column (t, time, timestamp, t_s, "
+                                         "timestamp_s, t_ns or timestamp_ns)");
+    }
+    cols.t = index[*t];
+    // EuRoC / ASL stamps are nanoseconds whether or not the header says "[ns]".
+    const bool ns_name = t->size() > 3 && t->substr(t->size() - 3) == "_ns";
+    const bool ns = cols.euroc || units[*t] == "ns" || ns_name;
+    if (!ns && !units[*t].empty() && units[*t] != "s") {
+        throw InputError(path, line, *t, "time unit '" + units[*t] + "' (expected s or ns)");
+    }
+    cols.t_scale = ns ? 1e-9 : 1.0;
+    static const char* const kPlainPos[] = {"x", "y", "z"};
+    static const char* const kTPos[] = {"tx", "ty", "tz"};
+    pos_names = cols.euroc ? kEurocPos : (index.count("x") ? kPlainPos : kTPos);
+    for (int k = 0; k < 3; ++k) {
+        if (!index.count(pos_names[k])) {
+            throw InputError(path, line, "", std::string("header has no position column '") +
+                                                 pos_names[k] + "' (x y z, or tx ty tz)");
+        }
+        cols.p[k] = index[pos_names[k]];
+    }
+    const char* const* q_names = cols.euroc ? kEurocQ : kPlainQ;
+    int q_found = 0;
+    std::array<std::size_t, 4> q{};
+    for (int k = 0; k < 4; ++k) {
+        if (index.count(q_names[k])) q[k] = index[q_names[k]], ++q_found;
+    }
+    if (q_found == 4) cols.q = q;
+    if (q_found != 0 && q_found != 4) {
+        throw InputError(path, line, "", "header names some quaternion columns but not all four");
+    }
+    return cols;
+}
+
+/// The time of one CSV line in seconds. Nanosecond stamps are read as integers first: a double
+/// holds EuRoC's 19-digit stamps only to ~256 ns, an integer exactly.
+std::optional<double> CsvTime(std::string_view field, double scale) {
+    if (scale != 1.0) {
+        std::int64_t ns = 0;
+        const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), ns);
+        if (ec == std::errc() && ptr == field.data() + field.size()) {
+            return static_cast<double>(ns / 1000000000) + static_cast<double>(ns % 1000000000) * 1e-9;
+        }
+    }
+    const std::optional<double> t = internal::ParseDouble(field);
+    return t ? std::optional<double>(*t * scale) : std::nullopt;
+}
+
+double CsvNumber(const std::vector<std::string_view>& fields, std::size_t i,
+                 const std::string& path, long line) {
+    const std::optional<double> v = internal::ParseDouble(fields[i]);
+    const std::string which = "field " + std::to_string(i + 1) + " '" + std::string(fields[i]) + "'";
+    if (!v) throw InputError(path, line, "", which + " is not a number");
+    if (!std::isfinite(*v)) throw InputError(path, line, "", which + " is not finite");
+    return *v;
+}
+
+}  // namespace
+
+Trajectory ReadCsv(const std::string& path, bool require_euroc, std::size_t min_poses) {
+    const std::string text = ReadWholeFile(path);
+    // The header is the first non-blank line, '#' or not (EuRoC's starts with "#timestamp").
+    std::string_view rest = text;
+    long header_number = 0;
+    std::string_view header;
+    while (!rest.empty()) {
+        const std::size_t end = std::min(rest.find('\n'), rest.size());
+        ++header_number;
+        header = internal::Trim(rest.substr(0, end));
+        rest.remove_prefix(std::min(end + 1, rest.size()));
+        if (!header.empty()) break;
+    }
+    if (header.empty()) throw InputError(path, 0, "", "empty file, expected a CSV header line");
+    const CsvColumns cols = ParseCsvHeader(header, path, header_number, require_euroc);
+    Trajectory traj;
+    DataLines lines(text);
+    bool have_line = lines.Next();
+    while (have_line && lines.number() <= header_number) have_line = lines.Next();
+    if (!have_line) {  // no data line after the header
+        CheckMinPoses(0, min_poses, path);
+        return traj;
+    }
+    do {
+        const std::vector<std::string_view> fields = SplitCommas(lines.line());
+        if (fields.size() != cols.count) {
+            throw InputError(path, lines.number(), "",
+                             "expected " + std::to_string(cols.count) + " comma-separated fields "
+                             "(as in the header), found " + std::to_string(fields.size()));
+        }
+        const std::optional<double> t = CsvTime(fields[cols.t], cols.t_scale);
+        if (!t || !std::isfinite(*t)) {
+            throw InputError(path, lines.number(), "", "field " + std::to_string(cols.t + 1) +
+                                                           " '" + std::string(fields[cols.t]) +
+                                                           "' is not a finite time");
+        }
+        CheckIncreasing(traj.t_s, *t, path, lines.number());
+        traj.t_s.push_back(*t);
+        Eigen::Vector3d p;
+        for (int k = 0; k < 3; ++k) p[k] = CsvNumber(fields, cols.p[k], path, lines.number());
+        traj.p_frame.push_back(p);
+        if (!cols.q) continue;
+        double q[4];
+        for (int k = 0; k < 4; ++k) q[k] = CsvNumber(fields, (*cols.q)[k], path, lines.number());
+        const Eigen::Quaterniond quat(q[3], q[0], q[1], q[2]);
+        const double norm = quat.coeffs().stableNorm();
+        if (!(norm > 1e-12)) throw InputError(path, lines.number(), "", "quaternion has zero norm");
+        traj.q_frame_body.emplace_back(quat.coeffs() / norm);
+    } while (lines.Next());
+    CheckMinPoses(traj.size(), min_poses, path);
+    return traj;
+}
+
 Trajectory LoadTrajectory(const TrajectorySource& source, std::size_t min_poses) {
-    if (source.format == TrajectoryFormat::kKitti) {
-        return ReadKitti(source.path, source.times_path, source.rate_hz, min_poses);
+    switch (source.format) {
+        case TrajectoryFormat::kKitti:
+            return ReadKitti(source.path, source.times_path, source.rate_hz, min_poses);
+        case TrajectoryFormat::kCsv: return ReadCsv(source.path, false, min_poses);
+        case TrajectoryFormat::kEuroc: return ReadCsv(source.path, true, min_poses);
+        case TrajectoryFormat::kTum: break;
     }
     return ReadTum(source.path, min_poses);
+}
+
+std::optional<TrajectoryFormat> DetectTrajectoryFormat(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".tum") return TrajectoryFormat::kTum;
+    if (ext != ".csv") return std::nullopt;
+    std::ifstream in(path);
+    std::string line;
+    while (std::getline(in, line) && internal::Trim(line).empty()) {
+    }
+    std::transform(line.begin(), line.end(), line.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return line.find("p_rs_r_x") != std::string::npos ? TrajectoryFormat::kEuroc
+                                                       : TrajectoryFormat::kCsv;
 }
 
 namespace {

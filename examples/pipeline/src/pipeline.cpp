@@ -7,6 +7,7 @@
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
+#include "driftcorr/core/observables.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/geodesy.h"
 #include "driftcorr/mapping/floor_plan.h"
@@ -235,9 +236,18 @@ std::string ToString(Solver solver) {
 }
 
 PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config) {
+    const auto t0 = std::chrono::steady_clock::now();
+    io::Scenario scenario = io::LoadScenario(scenario_path);
+    const double yaml_s = Since(t0);
+    PreparedScenario ps = PrepareScenario(std::move(scenario), config);
+    ps.timings.load_s += yaml_s;
+    return ps;
+}
+
+PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& config) {
     PreparedScenario ps;
     auto t0 = std::chrono::steady_clock::now();
-    ps.scenario = io::LoadScenario(scenario_path);
+    ps.scenario = std::move(scenario);
     const io::Scenario& sc = ps.scenario;
     ps.estimate_frame = io::LoadTrajectory(sc.estimate);
     WorldFrame world = [&] {
@@ -249,6 +259,9 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     }();
     ps.anchor = world.planar_anchor();
     ps.estimate = ToPlanar(ps.estimate_frame, sc.frame, ps.anchor);
+    // Without yaw the corrector takes the heading from the direction of motion (observables.h).
+    if (sc.estimate.heading_from_motion) ps.estimate.yaw_rad.clear();
+    ps.heading_from_motion = !ps.estimate.HasYaw();
     std::optional<Trajectory> gt;
     if (sc.ground_truth) {
         gt = io::LoadTrajectory(*sc.ground_truth);
@@ -327,7 +340,32 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    PreparedScenario ps = PrepareScenario(scenario_path, config);
+    return RunPrepared(PrepareScenario(scenario_path, config), config, progress);
+}
+
+CorrectionRun RunCorrection(io::Scenario scenario, const PipelineConfig& config,
+                            const ProgressCallback& progress) {
+    return RunPrepared(PrepareScenario(std::move(scenario), config), config, progress);
+}
+
+namespace {
+
+// The corrected trajectory in the estimate's frame. A heading taken from the motion is the
+// reference the solved heading is compared with (the orientations, if any, turn by the
+// difference); without orientations the poses get the solved heading (FromPlanar).
+Trajectory CorrectedInFrame(const PreparedScenario& ps, const PipelineConfig& config,
+                            PlanarTrajectory corrected) {
+    PlanarTrajectory reference = ps.estimate;
+    const double stationary_m = CorrectorFor(ps.scenario, config).stationary_m;
+    if (!reference.HasYaw()) reference.yaw_rad = UnwrappedHeadings(reference, stationary_m);
+    if (!corrected.HasYaw()) corrected.yaw_rad = UnwrappedHeadings(corrected, stationary_m);
+    return FromPlanar(corrected, reference, ps.estimate_frame, ps.scenario.frame, ps.anchor);
+}
+
+}  // namespace
+
+CorrectionRun RunPrepared(PreparedScenario ps, const PipelineConfig& config,
+                          const ProgressCallback& progress) {
     CorrectionRun run;
     run.timings = ps.timings;
     run.map_grid_cells = ps.field.spec().size();
@@ -336,10 +374,8 @@ CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConf
     run.result = Correct(ps, config, progress);
     run.timings.solve_s = Since(t0);
     run.verdict = JudgeResult(ps, config, run.result);
-    const io::Scenario& sc = ps.scenario;
     if (Usable(run.result.status)) {
-        run.corrected_frame = FromPlanar(run.result.corrected, ps.estimate, ps.estimate_frame,
-                                         sc.frame, ps.anchor);
+        run.corrected_frame = CorrectedInFrame(ps, config, run.result.corrected);
         if (ps.ground_truth) run.after = ComputeMetrics(run.result.corrected, *ps.ground_truth);
     }
     if (ps.ground_truth) run.before = ComputeMetrics(ps.estimate, *ps.ground_truth);
@@ -350,6 +386,7 @@ CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConf
     run.network = std::move(ps.network);
     run.anchor = ps.anchor;
     run.anchor_fit = ps.anchor_fit;
+    run.heading_from_motion = ps.heading_from_motion;
     return run;
 }
 

@@ -42,6 +42,9 @@ PlanarTrajectory ToPlanar(const Trajectory& traj, FrameAxes axes, const PlanarAn
 /// Inverse of ToPlanar for a corrected planar trajectory: positions come from `corrected` (height
 /// from `corrected.up_m`), orientations are the `original` ones turned about Up by the heading
 /// correction `corrected.yaw_rad[i] - reference.yaw_rad[i]` (or left unchanged without yaw).
+/// When `original` has no orientation and `corrected` has yaw, each pose gets a rotation about the
+/// frame's Up axis alone that points the body's forward axis (BodyForwardAxis) along that yaw: the
+/// heading the corrector solved for, no roll or pitch. Neither: no orientation.
 Trajectory FromPlanar(const PlanarTrajectory& corrected, const PlanarTrajectory& reference,
                       const Trajectory& original, FrameAxes axes, const PlanarAnchor& anchor);
 

@@ -1,6 +1,7 @@
 #pragma once
 // Solves a WindowProblem with Ipopt (exact first and second derivatives, MUMPS). Ipopt's types
-// stay inside ipopt_solver.cpp.
+// stay inside ipopt_solver.cpp. Safe to call from several threads: the calls take turns, because
+// MUMPS is not thread-safe (a process-wide lock around each solve).
 #include <string>
 
 #include "driftcorr/optim/window_problem.h"

@@ -10,7 +10,10 @@
 namespace driftcorr::io {
 
 enum class ScenarioMode { kRoad2d, kIndoor3d };
-enum class TrajectoryFormat { kKitti, kTum };
+/// kTum: "t x y z qx qy qz qw" or positions only "t x y z"; kCsv: comma-separated with a header
+/// naming the columns (trajectory_io.h), which also reads EuRoC / ASL files; kEuroc: the same reader,
+/// requiring the EuRoC / ASL header.
+enum class TrajectoryFormat { kKitti, kTum, kCsv, kEuroc };
 enum class MapFormat { kOsm, kGeoJson, kPcd, kPly, kOctomap };
 enum class LayerRole { kNone, kWalkways, kFloorplan };
 
@@ -20,6 +23,11 @@ struct TrajectorySource {
     TrajectoryFormat format = TrajectoryFormat::kTum;
     std::optional<double> rate_hz;    ///< kitti only
     std::optional<std::string> times_path;  ///< kitti only, resolved
+    /// `heading: motion`: the heading is taken from the direction of motion even when the file
+    /// has orientations (e.g. a body frame whose forward axis is not the frame's, such as the
+    /// EuRoC IMU frame with x up); `heading: orientation` (the default) uses them when present.
+    /// A file without orientations always gives the heading from the motion.
+    bool heading_from_motion = false;
 };
 
 /// `anchor:`. Exactly one of (lat_deg, lon_deg[, alt_m]) or (crs, easting_m, northing_m).
@@ -69,5 +77,8 @@ Scenario LoadScenario(const std::string& path);
 
 std::string ToString(ScenarioMode mode);
 std::string ToString(MapFormat format);
+std::string ToString(TrajectoryFormat format);
+/// "kitti", "tum", "csv", "euroc"; std::nullopt for anything else.
+std::optional<TrajectoryFormat> ParseTrajectoryFormat(const std::string& name);
 
 }  // namespace driftcorr::io

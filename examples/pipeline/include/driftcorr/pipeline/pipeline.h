@@ -96,6 +96,9 @@ struct CorrectionRun {
     Trajectory corrected_frame;         ///< valid only when Usable(result.status)
     std::optional<ErrorMetrics> before, after;
     Timings timings;
+    /// The heading came from the direction of motion: the estimate has no orientation, or the
+    /// scenario asked for it (`heading: motion`).
+    bool heading_from_motion = false;
 };
 
 /// A scenario read and placed in the world, with its map field: everything a solver needs.
@@ -112,11 +115,15 @@ struct PreparedScenario {
     RoadNetwork network;
     TraversableField field;
     Timings timings;                    ///< load_s and map_s
+    bool heading_from_motion = false;   ///< see CorrectionRun
 };
 
 /// Loads the scenario, its trajectories and its map field. Throws InputError for bad input
 /// (files, anchor, an unsupported mode, map with no usable roads, field too large).
 PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config);
+/// The same for a scenario built in memory (e.g. from command-line options); its paths are used
+/// as they are (absolute, or relative to the working directory).
+PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& config);
 
 /// The scenario's map as a field: OSM roads rasterised over `region_en` (road2d), or the indoor
 /// GeoJSON / point-cloud / OctoMap layers (indoor3d; `up_m` picks the floor whose walkways go into
@@ -140,5 +147,14 @@ Verdict JudgeResult(const PreparedScenario& prepared, const PipelineConfig& conf
 /// bad input. Solver outcomes are reported in run.result, never thrown.
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress = {});
+CorrectionRun RunCorrection(io::Scenario scenario, const PipelineConfig& config,
+                            const ProgressCallback& progress = {});
+/// Correct, verdict and metrics on a prepared scenario (the second half of RunCorrection).
+///
+/// Thread safety: independent runs may go on concurrently in several threads (one config each or
+/// a shared const one, no shared progress callback state); the solver serialises its calls into
+/// Ipopt's linear solver MUMPS, which is not thread-safe (optim/ipopt_solver.h).
+CorrectionRun RunPrepared(PreparedScenario prepared, const PipelineConfig& config,
+                          const ProgressCallback& progress = {});
 
 }  // namespace driftcorr::pipeline

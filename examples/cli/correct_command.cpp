@@ -1,0 +1,669 @@
+// `driftcorr correct`: one scenario, one trajectory file with its map given on the command line,
+// or many scenarios on a pool of threads. Parsing and printing live here; the work is in the
+// pipeline library.
+//
+// Exit codes: 0 written (verdict ok or degraded), 1 usage error, 2 bad input (file, line, key
+// named), 3 verdict failed (nothing written unless --on-failure says so), 4 internal error.
+// Several scenarios: 0 when every one was written; otherwise the code of the worst scenario, in
+// the order 4, 2, 3.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "driftcorr/core/angles.h"
+#include "driftcorr/core/errors.h"
+#include "driftcorr/io/atomic_file.h"
+#include "driftcorr/io/geojson_writer.h"
+#include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/geodesy.h"
+#include "driftcorr/pipeline/pipeline.h"
+
+namespace driftcorr::cli {
+namespace {
+
+const char* kCorrectUsage =
+    "usage: driftcorr correct <scenario dir | scenario.yaml> -o <corrected.tum>\n"
+    "                         [--config params.yaml] [--geojson tracks.geojson]\n"
+    "                         [--covariance poses.txt] [--on-failure refuse|estimate|write]\n"
+    "                         [--solver driftcorr|paper] [--quiet]\n"
+    "       driftcorr correct <trajectory> --osm <map.osm|map.osm.pbf> -o <corrected.tum>\n"
+    "                         --anchor LAT,LON,YAW | --crs EPSG:n --anchor EASTING,NORTHING,YAW\n"
+    "                         [--frame enu|kitti_camera] [--format tum|csv|euroc|kitti]\n"
+    "                         [--rate-hz R] [--heading orientation|motion] [options as above]\n"
+    "       driftcorr correct <scenario>... [--manifest FILE] -o <folder> [-j N]\n"
+    "                         [--geojson <folder>] [--covariance <folder>] [options as above]\n"
+    "\n"
+    "Corrects the scenario's drifting estimate against its map and writes the corrected\n"
+    "trajectory as TUM (t x y z qx qy qz qw: space-separated, no header, the format evo reads)\n"
+    "in the estimate's own frame and timestamps.\n"
+    "--geojson also writes estimate and corrected track (and ground truth) as WGS84 GeoJSON\n"
+    "LineStrings; properties.coordinateProperties.times holds each vertex's timestamp [s].\n"
+    "--solver paper runs the paper's epoch-wise gradient descent (a reference) instead.\n"
+    "--covariance writes per pose: t, the horizontal covariance (East, North) [m^2], the\n"
+    "height and heading variances, and the verdict's pose flags.\n"
+    "A trajectory without a scenario file: road2d on one OpenStreetMap file (XML or PBF).\n"
+    "  --anchor: where the trajectory frame's origin is (WGS84 degrees, or grid metres with\n"
+    "  --crs) and its yaw [deg, counter-clockwise from East], or `auto` to estimate the yaw\n"
+    "  from the map. --frame (required except for EuRoC) names the axes: enu (x, y horizontal,\n"
+    "  z up) or kitti_camera (x right, y down, z forward). --format is taken from the name\n"
+    "  (.tum, .csv; a .csv with the EuRoC header is EuRoC) unless given; kitti needs --rate-hz.\n"
+    "  TUM may hold positions only (t x y z); CSV has a header (README: Trajectory formats).\n"
+    "  Without orientations, or with --heading motion, the heading is the direction of motion.\n"
+    "Several scenarios (or --manifest, one scenario path a line): -o is a folder that gets\n"
+    "<name>.tum per scenario (<name>: the scenario's folder, or its .yaml without extension);\n"
+    "-j N corrects N at a time; one line per scenario; a failing one does not stop the others.\n"
+    "Every run ends with a verdict, judged without ground truth: ok, degraded (written, with the\n"
+    "reasons) or failed. --on-failure: refuse (default) writes nothing, estimate writes the input\n"
+    "unchanged, write writes the result anyway; a failed run exits 3 in every case.\n"
+    "Exit codes: 0 ok or degraded, 1 usage, 2 bad input, 3 failed, 4 internal; several\n"
+    "scenarios: 0 if all were written, else the worst of 4, 2, 3 (in that order).\n";
+
+struct Args {
+    std::vector<std::string> inputs;  ///< scenarios, or one trajectory file with --osm
+    std::string manifest, output, config, geojson, covariance;
+    std::string solver = "driftcorr";
+    std::string on_failure = "refuse";
+    std::string jobs = "1";
+    /// A trajectory file without a scenario file.
+    std::string osm, anchor, crs, frame, format, rate_hz, heading;
+    bool quiet = false;
+
+    bool Batch() const { return inputs.size() > 1 || !manifest.empty(); }
+};
+
+std::string CheckChoices(const Args& a) {
+    if (a.solver != "driftcorr" && a.solver != "paper") {
+        return "--solver must be driftcorr or paper, not '" + a.solver + "'";
+    }
+    if (a.on_failure != "refuse" && a.on_failure != "estimate" && a.on_failure != "write") {
+        return "--on-failure must be refuse, estimate or write, not '" + a.on_failure + "'";
+    }
+    const bool jobs_ok = !a.jobs.empty() && a.jobs.size() <= 3 &&
+                         a.jobs.find_first_not_of("0123456789") == std::string::npos &&
+                         std::stoi(a.jobs) >= 1;
+    if (!jobs_ok) return "-j must be a whole number from 1 to 999, not '" + a.jobs + "'";
+    if (!a.heading.empty() && a.heading != "orientation" && a.heading != "motion") {
+        return "--heading must be orientation or motion, not '" + a.heading + "'";
+    }
+    return "";
+}
+
+std::string CheckModes(const Args& a) {
+    const bool file_options = !a.anchor.empty() || !a.crs.empty() || !a.frame.empty() ||
+                              !a.format.empty() || !a.rate_hz.empty() || !a.heading.empty();
+    if (a.inputs.empty() && a.manifest.empty()) return "missing scenario";
+    if (a.output.empty()) {
+        return a.Batch() ? "missing -o <folder>" : "missing -o <corrected.tum>";
+    }
+    if (a.Batch() && !a.osm.empty()) {
+        return "--osm corrects one trajectory file; several scenarios need scenario files";
+    }
+    if (a.osm.empty() && file_options) {
+        return "--anchor, --crs, --frame, --format, --rate-hz and --heading go with --osm "
+               "(a trajectory without a scenario file)";
+    }
+    if (!a.osm.empty() && a.anchor.empty()) return "missing --anchor (with --osm)";
+    return "";
+}
+
+bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
+    const OptionTable table{
+        {{"--quiet", &a.quiet}, {"-q", &a.quiet}},
+        {{"-o", &a.output}, {"--output", &a.output}, {"--config", &a.config},
+         {"--geojson", &a.geojson}, {"--solver", &a.solver}, {"--covariance", &a.covariance},
+         {"--on-failure", &a.on_failure}, {"--manifest", &a.manifest}, {"-j", &a.jobs},
+         {"--jobs", &a.jobs}, {"--osm", &a.osm}, {"--anchor", &a.anchor}, {"--crs", &a.crs},
+         {"--frame", &a.frame}, {"--format", &a.format}, {"--rate-hz", &a.rate_hz},
+         {"--heading", &a.heading}}};
+    auto positional = [&a](const std::string& arg) -> std::string {
+        a.inputs.push_back(arg);
+        return "";
+    };
+    if (!ParseOptions(argc, argv, 1, table, positional, err)) return false;
+    err = CheckChoices(a);
+    if (err.empty()) err = CheckModes(a);
+    return err.empty();
+}
+
+// Progress on stderr: a rewritten line on a terminal, a line per 20 % otherwise.
+ProgressCallback MakeProgress(bool quiet) {
+    if (quiet) return {};
+    const bool tty = ::isatty(STDERR_FILENO);
+    return [tty, last = -1](const CorrectionProgress& p) mutable {
+        const int pct = int(100.0 * p.poses_done / std::max<std::size_t>(1, p.poses_total));
+        if (tty) {
+            std::fprintf(stderr, "\r[driftcorr] %-11s %6zu / %zu poses (%3d %%)", p.stage.c_str(),
+                         p.poses_done, p.poses_total, pct);
+            if (p.stage == "refine") std::fputc('\n', stderr);
+        } else if (pct / 20 != last / 20 || p.stage == "refine") {
+            std::fprintf(stderr, "[driftcorr] %s %zu / %zu poses\n", p.stage.c_str(), p.poses_done,
+                         p.poses_total);
+        }
+        last = pct;
+    };
+}
+
+void PrintMetricsRow(const char* label, const ErrorMetrics& m, bool floors) {
+    std::printf("  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
+                label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
+    if (floors) std::printf("   right floor %5.1f %%", 100.0 * m.floor_accuracy);
+    std::printf("\n");
+}
+
+// How the start fits the map: the estimated start, or the given one and the best other heading.
+void PrintAnchorFit(const pipeline::CorrectionRun& run) {
+    using driftcorr::RadToDeg;
+    const AnchorFitResult& f = *run.anchor_fit;
+    const auto& a = run.scenario.anchor;
+    const bool estimated = !a.yaw_deg || a.position_search_m > 0.0;
+    std::printf("anchor     %s yaw %.2f deg, start (%.1f, %.1f) m: the first %.0f m lie RMS %.2f m "
+                "from the map (%.0f %% beyond reach)", estimated ? "estimated" : "given",
+                RadToDeg(run.anchor.yaw_rad), run.anchor.origin_en.x(), run.anchor.origin_en.y(),
+                f.lead_path_m, estimated ? f.best.rms_m : f.given.rms_m,
+                100.0 * (estimated ? f.best.off_share : f.given.off_share));
+    if (!estimated && (f.best.dyaw_rad != 0.0 || f.best.offset_en.norm() > 0.0)) {
+        std::printf("; best other start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
+                    RadToDeg(f.best.dyaw_rad), f.best.offset_en.x(), f.best.offset_en.y(),
+                    f.best.rms_m);
+    }
+    if (f.runner_up) {
+        std::printf("; next distinct start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
+                    RadToDeg(f.runner_up->dyaw_rad), f.runner_up->offset_en.x(),
+                    f.runner_up->offset_en.y(), f.runner_up->rms_m);
+    }
+    std::printf("\n");
+}
+
+void PrintVerdict(const Verdict& v) {
+    std::printf("verdict    %s", ToString(v.level).c_str());
+    std::printf(" (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
+                v.scale_min, v.scale_max, v.input_jumps, 100.0 * v.off_map_share);
+    for (const std::string& r : v.reasons) std::printf("  %s\n", r.c_str());
+}
+
+void PrintHeading(const pipeline::CorrectionRun& run) {
+    if (!run.heading_from_motion) return;
+    std::printf("heading    from the direction of motion (%s)\n",
+                run.estimate_frame.HasOrientation()
+                    ? "heading: motion; the orientations are turned by the heading correction"
+                    : "the estimate has no orientation; each written orientation is the corrected "
+                      "heading alone, no roll or pitch");
+}
+
+void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
+                  pipeline::Solver solver) {
+    const auto& r = run.result;
+    const bool indoor = run.scenario.mode == io::ScenarioMode::kIndoor3d;
+    const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
+    std::printf("scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
+                io::ToString(run.scenario.mode).c_str(), run.estimate.size());
+    PrintHeading(run);
+    std::printf(indoor ? "map        %zu walkways on the walk's floor, %.1f km, field %zu cells\n"
+                       : "map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
+                run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
+    if (solver == pipeline::Solver::kPaper) {
+        std::printf("solver     paper: %s (%s)\n", ToString(r.status).c_str(),
+                    r.message.c_str());
+    } else {
+        std::printf("solver     %s (%s); %zu windows, %d Ipopt iterations, %zu poses on hard corridor,"
+                    " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
+                    r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
+    }
+    std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
+                " incremental %.3f, refine %.3f)\n", total, run.timings.load_s, run.timings.map_s,
+                run.timings.solve_s, run.estimate.size() / std::max(1e-9, run.timings.solve_s),
+                r.incremental_s, r.refine_s);
+    if (run.anchor_fit) PrintAnchorFit(run);
+    if (run.before) PrintMetricsRow("estimate", *run.before, indoor);
+    if (run.after) PrintMetricsRow("corrected", *run.after, indoor);
+    PrintVerdict(run.verdict);
+    if (!out.empty()) std::printf("wrote      %s\n", out.c_str());
+}
+
+std::vector<GeoPoint> ToGeo(const pipeline::WorldFrame& w,
+                                       const driftcorr::PlanarTrajectory& t) {
+    std::vector<GeoPoint> out;
+    for (const auto& p : t.p_en) out.push_back(w.ToGeo(p));
+    return out;
+}
+
+// Per pose: t, covariance East-North [m^2], height and heading variance, the verdict's flags.
+void WriteCovariance(const std::string& path, const pipeline::CorrectionRun& run) {
+    const auto& cov = run.result.covariance;
+    if (cov.status != CovarianceStatus::kOk) {
+        throw std::runtime_error(path + ": no covariance: " + cov.message);
+    }
+    io::AtomicFile file(path);
+    std::ofstream& out = file.stream();
+    out << "# t var_e_m2 cov_en_m2 var_n_m2 var_up_m2 var_yaw_rad2 flags"
+           " (flags: 1 off the map, 2 input jump, 4 implausible scale)\n";
+    char line[256];
+    for (std::size_t i = 0; i < cov.poses.size(); ++i) {
+        const auto& c = cov.poses[i];
+        std::snprintf(line, sizeof(line), "%.6f %.6g %.6g %.6g %.6g %.6g %u\n",
+                      run.result.corrected.t_s[i], c.xy_m2(0, 0), c.xy_m2(0, 1), c.xy_m2(1, 1),
+                      c.z_m2, c.yaw_rad2, unsigned(run.verdict.pose_flags[i]));
+        out << line;
+    }
+    file.Commit();
+}
+
+std::string JsonArray(const std::vector<std::string>& items) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < items.size(); ++i) s += (i ? "," : "") + items[i];
+    return s + "]";
+}
+
+// The corrected track's properties: verdict, reasons, per-vertex 1-sigma East/North and flags.
+std::vector<std::pair<std::string, std::string>> CorrectedProperties(
+    const pipeline::CorrectionRun& run) {
+    std::vector<std::string> reasons, sigma_e, sigma_n, flags;
+    for (const auto& r : run.verdict.reasons) reasons.push_back(io::JsonString(r));
+    char buf[32];
+    for (std::size_t i = 0; i < run.verdict.pose_flags.size(); ++i) {
+        flags.push_back(std::to_string(run.verdict.pose_flags[i]));
+    }
+    for (const auto& c : run.result.covariance.poses) {
+        std::snprintf(buf, sizeof(buf), "%.3f", std::sqrt(std::max(0.0, c.xy_m2(0, 0))));
+        sigma_e.push_back(buf);
+        std::snprintf(buf, sizeof(buf), "%.3f", std::sqrt(std::max(0.0, c.xy_m2(1, 1))));
+        sigma_n.push_back(buf);
+    }
+    std::vector<std::pair<std::string, std::string>> p = {
+        {"verdict", io::JsonString(ToString(run.verdict.level))},
+        {"verdict_reasons", JsonArray(reasons)},
+        {"pose_flags", JsonArray(flags)}};
+    if (!sigma_e.empty()) {
+        p.push_back({"sigma_east_m", JsonArray(sigma_e)});
+        p.push_back({"sigma_north_m", JsonArray(sigma_n)});
+    }
+    return p;
+}
+
+// ---- a trajectory file without a scenario file ----------------------------------------------
+
+double AnchorNumber(const std::string& text, const char* what) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+        value = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text.size() || !std::isfinite(value)) {
+        throw InputError("", 0, "--anchor", std::string(what) + " '" + text + "' is not a number");
+    }
+    return value;
+}
+
+/// --anchor A,B,YAW (A,B: lat,lon in degrees, or easting,northing in metres with --crs).
+io::AnchorSpec ParseAnchorOption(const Args& a) {
+    std::vector<std::string> parts;
+    std::size_t pos = 0;
+    for (std::size_t comma; (comma = a.anchor.find(',', pos)) != std::string::npos; pos = comma + 1) {
+        parts.push_back(a.anchor.substr(pos, comma - pos));
+    }
+    parts.push_back(a.anchor.substr(pos));
+    const bool grid = !a.crs.empty();
+    if (parts.size() != 3) {
+        throw InputError("", 0, "--anchor",
+                         grid ? "expected EASTING,NORTHING,YAW (metres, degrees or auto)"
+                              : "expected LAT,LON,YAW (degrees, the yaw may be auto)");
+    }
+    io::AnchorSpec anchor;
+    if (grid) {
+        if (NormaliseCrsName(a.crs).empty()) {
+            throw InputError("", 0, "--crs", "unknown CRS spelling '" + a.crs + "' (e.g. EPSG:32632)");
+        }
+        anchor.crs = a.crs;
+        anchor.easting_m = AnchorNumber(parts[0], "easting");
+        anchor.northing_m = AnchorNumber(parts[1], "northing");
+    } else {
+        anchor.lat_deg = AnchorNumber(parts[0], "latitude");
+        anchor.lon_deg = AnchorNumber(parts[1], "longitude");
+        if (std::abs(*anchor.lat_deg) > 90.0 || std::abs(*anchor.lon_deg) > 180.0) {
+            throw InputError("", 0, "--anchor", "latitude or longitude out of range");
+        }
+    }
+    if (parts[2] != "auto") anchor.yaw_deg = AnchorNumber(parts[2], "yaw");
+    return anchor;
+}
+
+/// The trajectory's format: --format, else what its name (and a CSV's header) says.
+io::TrajectorySource SourceFromOptions(const Args& a) {
+    io::TrajectorySource src;
+    src.path = a.inputs.front();
+    std::optional<io::TrajectoryFormat> format;
+    if (!a.format.empty()) {
+        format = io::ParseTrajectoryFormat(a.format);
+        if (!format) {
+            throw InputError("", 0, "--format",
+                             "unknown format '" + a.format + "' (expected tum | csv | euroc | kitti)");
+        }
+    } else {
+        format = io::DetectTrajectoryFormat(src.path);
+        if (!format) {
+            throw InputError(src.path, 0, "--format",
+                             "the name does not tell the format (.tum, .csv): give --format "
+                             "tum | csv | euroc | kitti");
+        }
+    }
+    src.format = *format;
+    if (!a.rate_hz.empty()) {
+        if (src.format != io::TrajectoryFormat::kKitti) {
+            throw InputError("", 0, "--rate-hz", "only with --format kitti");
+        }
+        src.rate_hz = AnchorNumber(a.rate_hz, "rate");
+    }
+    if (src.format == io::TrajectoryFormat::kKitti && !src.rate_hz) {
+        throw InputError(src.path, 0, "--rate-hz", "a kitti trajectory needs --rate-hz");
+    }
+    src.heading_from_motion = a.heading == "motion";
+    return src;
+}
+
+io::Scenario ScenarioFromOptions(const Args& a) {
+    io::Scenario s;
+    s.yaml_path = "<command line>";
+    s.dir = std::filesystem::current_path().string();
+    s.name = std::filesystem::path(a.inputs.front()).stem().string();
+    s.mode = io::ScenarioMode::kRoad2d;
+    s.estimate = SourceFromOptions(a);
+    if (!a.frame.empty()) {
+        const std::optional<FrameAxes> axes = ParseFrameAxes(a.frame);
+        if (!axes) {
+            throw InputError("", 0, "--frame",
+                             "unknown frame '" + a.frame + "' (expected enu | kitti_camera)");
+        }
+        s.frame = *axes;
+    } else if (s.estimate.format == io::TrajectoryFormat::kEuroc) {
+        s.frame = FrameAxes::kEnu;  // EuRoC / ASL: R is the gravity-aligned world frame, z up
+    } else {
+        throw InputError(s.estimate.path, 0, "--frame",
+                         "missing: the axes of the trajectory's frame (enu: x, y horizontal, z up; "
+                         "kitti_camera: x right, y down, z forward)");
+    }
+    s.anchor = ParseAnchorOption(a);
+    s.map.push_back({a.osm, io::MapFormat::kOsm, io::LayerRole::kNone, std::nullopt});
+    return s;
+}
+
+// ---- one correction -------------------------------------------------------------------------
+
+struct OutputPaths {
+    std::string tum, geojson, covariance;  ///< empty: not written
+};
+
+void CheckOutputs(const OutputPaths& out) {
+    CheckOutputPath(out.tum, "-o");
+    if (!out.covariance.empty()) CheckOutputPath(out.covariance, "--covariance");
+    if (out.geojson.empty()) return;
+    CheckOutputPath(out.geojson, "--geojson");
+    std::error_code ec;
+    if (out.geojson == out.tum || std::filesystem::equivalent(out.geojson, out.tum, ec)) {
+        throw InputError(out.geojson, 0, "--geojson", "is the same file as -o");
+    }
+}
+
+/// Per-vertex timestamps [s] as GeoJSON's coordinateProperties (the togeojson convention).
+std::pair<std::string, std::string> TimesProperty(const std::vector<double>& t_s) {
+    std::string json = "{\"times\":[";
+    char buf[32];
+    for (std::size_t i = 0; i < t_s.size(); ++i) {
+        std::snprintf(buf, sizeof(buf), "%s%.6f", i ? "," : "", t_s[i]);
+        json += buf;
+    }
+    return {"coordinateProperties", json + "]}"};
+}
+
+void WriteGeoJson(const std::string& path, const pipeline::CorrectionRun& run, bool with_result) {
+    pipeline::WorldFrame world(run.scenario.anchor);
+    std::vector<io::GeoTrack> tracks = {
+        {"estimate", ToGeo(world, run.estimate), {TimesProperty(run.estimate.t_s)}}};
+    if (with_result) {
+        tracks.push_back({"corrected", ToGeo(world, run.result.corrected),
+                          CorrectedProperties(run)});
+        tracks.back().json_properties.push_back(TimesProperty(run.result.corrected.t_s));
+    } else {
+        tracks.front().json_properties.push_back(
+            {"verdict", io::JsonString(ToString(run.verdict.level))});
+    }
+    if (run.ground_truth) {
+        tracks.push_back({"ground_truth", ToGeo(world, *run.ground_truth),
+                          {TimesProperty(run.ground_truth->t_s)}});
+    }
+    io::WriteGeoJsonTracks(path, tracks);
+}
+
+/// What a finished correction wrote.
+enum class Written { kNothing, kResult, kEstimate };
+
+/// Writes what the verdict and --on-failure allow: the side outputs first, so that if one fails
+/// the corrected trajectory (the main output) is not written (each file itself is written to a
+/// temporary and renamed when complete).
+Written WriteOutputs(const pipeline::CorrectionRun& run, const std::string& on_failure,
+                     const OutputPaths& out) {
+    const bool failed = run.verdict.level == VerdictLevel::kFailed;
+    const bool write_result = Usable(run.result.status) && (!failed || on_failure == "write");
+    const bool write_estimate = failed && !write_result && on_failure == "estimate";
+    if (!write_result && !write_estimate) return Written::kNothing;
+    if (!out.covariance.empty() && write_result) WriteCovariance(out.covariance, run);
+    if (!out.geojson.empty()) WriteGeoJson(out.geojson, run, write_result);
+    io::WriteTum(out.tum, write_result ? run.corrected_frame : run.estimate_frame);
+    return write_result ? Written::kResult : Written::kEstimate;
+}
+
+pipeline::PipelineConfig LoadConfig(const Args& a) {
+    pipeline::PipelineConfig cfg;
+    if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
+    cfg.solver = a.solver == "paper" ? pipeline::Solver::kPaper : pipeline::Solver::kDriftcorr;
+    return cfg;
+}
+
+int RunSingle(const Args& a) {
+    const OutputPaths out{a.output, a.geojson, a.covariance};
+    CheckOutputs(out);
+    const pipeline::PipelineConfig cfg = LoadConfig(a);
+    pipeline::CorrectionRun run =
+        a.osm.empty() ? pipeline::RunCorrection(a.inputs.front(), cfg, MakeProgress(a.quiet))
+                      : pipeline::RunCorrection(ScenarioFromOptions(a), cfg, MakeProgress(a.quiet));
+    for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
+    for (const std::string& w : run.result.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
+    const Written written = WriteOutputs(run, a.on_failure, out);
+    PrintSummary(run, written == Written::kNothing ? "" : a.output, cfg.solver);
+    const bool failed = run.verdict.level == VerdictLevel::kFailed;
+    if (written == Written::kNothing) {
+        std::fprintf(stderr, "driftcorr: the correction failed (%s); nothing written\n",
+                     run.verdict.reasons.empty() ? run.result.message.c_str()
+                                                 : run.verdict.reasons.front().c_str());
+        return kExitSolver;
+    }
+    if (written == Written::kEstimate) {
+        std::fprintf(stderr, "driftcorr: the correction failed; wrote the estimate unchanged\n");
+    }
+    return failed ? kExitSolver : kExitOk;
+}
+
+// ---- several scenarios ----------------------------------------------------------------------
+
+struct BatchItem {
+    std::string path;
+    std::string where;  ///< "manifest:line" or "argument 2"
+    std::string name;   ///< output file stem
+};
+
+/// The output stem of a scenario path: its folder's name, or the .yaml's stem (a .yaml named
+/// scenario.yaml: its folder's name).
+std::string OutputStem(const std::string& path) {
+    namespace fs = std::filesystem;
+    const fs::path p = fs::path(path).lexically_normal();
+    const fs::path leaf = p.filename().empty() ? p.parent_path() : p;
+    const std::string ext = leaf.extension().string();
+    const bool yaml = ext == ".yaml" || ext == ".yml";
+    if (yaml && leaf.stem() != "scenario") return leaf.stem().string();
+    const fs::path folder = yaml ? fs::absolute(leaf).parent_path() : fs::absolute(leaf);
+    return folder.lexically_normal().filename().string();
+}
+
+std::vector<BatchItem> BatchItems(const Args& a) {
+    std::vector<BatchItem> items;
+    for (std::size_t i = 0; i < a.inputs.size(); ++i) {
+        items.push_back({a.inputs[i], "argument " + std::to_string(i + 1), ""});
+    }
+    if (!a.manifest.empty()) {
+        for (const ManifestEntry& e : ReadManifest(a.manifest)) items.push_back({e.path, e.where, ""});
+    }
+    std::map<std::string, std::string> seen;
+    for (BatchItem& item : items) {
+        item.name = OutputStem(item.path);
+        const auto [it, fresh] = seen.emplace(item.name, item.where);
+        if (!fresh) {
+            throw InputError(item.path, 0, item.where,
+                             "its output would be " + item.name + ".tum, as for " + it->second +
+                                 ": give the scenarios distinct folder names");
+        }
+    }
+    return items;
+}
+
+void PrepareFolder(const std::string& dir, const char* option) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (!std::filesystem::is_directory(dir, ec)) {
+        throw InputError(dir, 0, option, "is not a folder and cannot be created");
+    }
+    if (::access(dir.c_str(), W_OK) != 0) throw InputError(dir, 0, option, "folder is not writable");
+}
+
+/// One scenario of a batch: its exit code and the lines to print for it.
+struct BatchOutcome {
+    int code = kExitOk;
+    std::string text;
+};
+
+std::string Format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+std::string Format(const char* fmt, ...) {
+    char buf[1024];
+    va_list args;
+    va_start(args, fmt);
+    std::vsnprintf(buf, sizeof(buf), fmt, args);
+    va_end(args);
+    return buf;
+}
+
+BatchOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg,
+                              const BatchItem& item) {
+    namespace fs = std::filesystem;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto join = [](const std::string& dir, const std::string& file) {
+        return dir.empty() ? std::string() : (fs::path(dir) / file).string();
+    };
+    const OutputPaths out{join(a.output, item.name + ".tum"), join(a.geojson, item.name + ".geojson"),
+                          join(a.covariance, item.name + ".cov.txt")};
+    BatchOutcome o;
+    try {
+        const pipeline::CorrectionRun run = pipeline::RunCorrection(item.path, cfg);
+        const Written written = WriteOutputs(run, a.on_failure, out);
+        const bool failed = run.verdict.level == VerdictLevel::kFailed;
+        o.code = failed || written == Written::kNothing ? kExitSolver : kExitOk;
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        o.text = Format("%-32s %-8s %6zu poses %7.1f s%s  %s\n", item.name.c_str(),
+                        ToString(run.verdict.level).c_str(), run.estimate.size(), s,
+                        run.heading_from_motion ? "  heading from motion" : "",
+                        written == Written::kNothing  ? "nothing written"
+                        : written == Written::kEstimate ? ("estimate unchanged -> " + out.tum).c_str()
+                                                        : ("-> " + out.tum).c_str());
+        for (const std::string& r : run.verdict.reasons) o.text += "    " + r + "\n";
+        for (const std::string& w : run.scenario.warnings) o.text += "    warning: " + w + "\n";
+        for (const std::string& w : run.result.warnings) o.text += "    warning: " + w + "\n";
+    } catch (const InputError& e) {
+        o.code = kExitBadInput;
+        o.text = Format("%-32s bad input (%s): %s\n", item.name.c_str(), item.where.c_str(), e.what());
+    } catch (const std::exception& e) {
+        o.code = kExitInternal;
+        o.text = Format("%-32s internal error (%s): %s\n", item.name.c_str(), item.where.c_str(),
+                        e.what());
+    }
+    return o;
+}
+
+/// 4 before 2 before 3 before 0.
+int WorstCode(int a, int b) {
+    const auto rank = [](int code) {
+        return code == kExitInternal ? 3 : code == kExitBadInput ? 2 : code == kExitSolver ? 1 : 0;
+    };
+    return rank(b) > rank(a) ? b : a;
+}
+
+int RunBatch(const Args& a) {
+    const std::vector<BatchItem> items = BatchItems(a);
+    PrepareFolder(a.output, "-o");
+    if (!a.geojson.empty()) PrepareFolder(a.geojson, "--geojson");
+    if (!a.covariance.empty()) PrepareFolder(a.covariance, "--covariance");
+    const pipeline::PipelineConfig cfg = LoadConfig(a);
+    const int jobs = std::stoi(a.jobs);
+    std::mutex print_mutex;
+    std::vector<int> codes(items.size(), kExitOk);
+    std::size_t done = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    RunOnThreadPool(items.size(), jobs, [&](std::size_t i) {
+        const BatchOutcome o = CorrectOneOfMany(a, cfg, items[i]);
+        const std::lock_guard<std::mutex> lock(print_mutex);
+        codes[i] = o.code;
+        std::printf("[%zu/%zu] %s", ++done, items.size(), o.text.c_str());
+        std::fflush(stdout);
+    });
+    int worst = kExitOk;
+    std::size_t written = 0;
+    for (const int c : codes) {
+        worst = WorstCode(worst, c);
+        written += c == kExitOk;
+    }
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("%zu of %zu scenarios corrected and written in %.1f s (-j %d)\n", written,
+                items.size(), s, jobs);
+    if (worst != kExitOk) {
+        std::fprintf(stderr, "driftcorr: %zu of %zu scenarios failed (see above)\n",
+                     items.size() - written, items.size());
+    }
+    return worst;
+}
+
+}  // namespace
+
+int RunCorrectCommand(int argc, char** argv) {
+    Args args;
+    std::string err;
+    if (!ParseArgs(argc, argv, args, err)) {
+        if (!err.empty()) std::fprintf(stderr, "driftcorr: %s\n\n", err.c_str());
+        std::fputs(kCorrectUsage, err.empty() ? stdout : stderr);
+        return err.empty() ? kExitOk : kExitUsage;
+    }
+    try {
+        return args.Batch() ? RunBatch(args) : RunSingle(args);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "driftcorr: %s\n", e.what());
+        return kExitBadInput;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "driftcorr: internal error: %s\n", e.what());
+        return kExitInternal;
+    }
+}
+
+void PrintCorrectUsage(std::FILE* out) { std::fputs(kCorrectUsage, out); }
+
+}  // namespace driftcorr::cli
