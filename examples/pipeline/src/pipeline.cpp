@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
@@ -235,11 +236,23 @@ std::string ToString(Solver solver) {
 }
 
 PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config) {
+    const auto t0 = std::chrono::steady_clock::now();
+    io::Scenario sc = io::LoadScenario(scenario_path);
+    Trajectory estimate = io::LoadTrajectory(sc.estimate);
+    std::optional<Trajectory> gt;
+    if (sc.ground_truth) gt = io::LoadTrajectory(*sc.ground_truth);
+    const double load_s = Since(t0);
+    PreparedScenario ps = PrepareScenario(std::move(sc), std::move(estimate), std::move(gt), config);
+    ps.timings.load_s = load_s;
+    return ps;
+}
+
+PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_frame,
+                                 std::optional<Trajectory> gt, const PipelineConfig& config) {
     PreparedScenario ps;
-    auto t0 = std::chrono::steady_clock::now();
-    ps.scenario = io::LoadScenario(scenario_path);
+    ps.scenario = std::move(scenario);
     const io::Scenario& sc = ps.scenario;
-    ps.estimate_frame = io::LoadTrajectory(sc.estimate);
+    ps.estimate_frame = std::move(estimate_frame);
     WorldFrame world = [&] {
         try {
             return WorldFrame(sc.anchor);
@@ -249,18 +262,14 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
     }();
     ps.anchor = world.planar_anchor();
     ps.estimate = ToPlanar(ps.estimate_frame, sc.frame, ps.anchor);
-    std::optional<Trajectory> gt;
-    if (sc.ground_truth) {
-        gt = io::LoadTrajectory(*sc.ground_truth);
-        if (gt->size() != ps.estimate_frame.size()) {
-            throw InputError(sc.ground_truth->path, 0, "",
-                             "ground truth has " + std::to_string(gt->size()) + " poses, the estimate " +
-                                 std::to_string(ps.estimate_frame.size()));
-        }
+    if (gt && gt->size() != ps.estimate_frame.size()) {
+        throw InputError(sc.ground_truth ? sc.ground_truth->path : "", 0,
+                         sc.ground_truth ? "" : "ground_truth",
+                         "ground truth has " + std::to_string(gt->size()) + " poses, the estimate " +
+                             std::to_string(ps.estimate_frame.size()));
     }
-    ps.timings.load_s = Since(t0);
 
-    t0 = std::chrono::steady_clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
         PlaceStart(world, config, ps);
         if (gt) {
@@ -327,7 +336,11 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    PreparedScenario ps = PrepareScenario(scenario_path, config);
+    return RunCorrection(PrepareScenario(scenario_path, config), config, progress);
+}
+
+CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
+                            const ProgressCallback& progress) {
     CorrectionRun run;
     run.timings = ps.timings;
     run.map_grid_cells = ps.field.spec().size();

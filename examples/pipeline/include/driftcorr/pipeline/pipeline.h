@@ -118,6 +118,15 @@ struct PreparedScenario {
 /// (files, anchor, an unsupported mode, map with no usable roads, field too large).
 PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config);
 
+/// The same from a scenario whose trajectories are already in memory (the Python bindings):
+/// `scenario` supplies mode, frame, anchor and map layers (its `estimate` and `ground_truth`
+/// sources are not read), `estimate_frame` and `ground_truth_frame` the poses in the
+/// trajectory's own frame (ground truth: same size as the estimate). Throws InputError as above.
+/// timings.load_s is left 0 (nothing is loaded).
+PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_frame,
+                                 std::optional<Trajectory> ground_truth_frame,
+                                 const PipelineConfig& config);
+
 /// The scenario's map as a field: OSM roads rasterised over `region_en` (road2d), or the indoor
 /// GeoJSON / point-cloud / OctoMap layers (indoor3d; `up_m` picks the floor whose walkways go into
 /// `network` for pictures). Throws InputError naming the file or setting.
@@ -139,6 +148,10 @@ Verdict JudgeResult(const PreparedScenario& prepared, const PipelineConfig& conf
 /// Runs the whole correction (PrepareScenario, then Correct, then metrics). Throws InputError for
 /// bad input. Solver outcomes are reported in run.result, never thrown.
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
+                            const ProgressCallback& progress = {});
+
+/// The same on a prepared scenario (RunCorrection(path) is PrepareScenario, then this).
+CorrectionRun RunCorrection(PreparedScenario prepared, const PipelineConfig& config,
                             const ProgressCallback& progress = {});
 
 }  // namespace driftcorr::pipeline
