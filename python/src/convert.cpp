@@ -97,15 +97,7 @@ std::string StringOf(const py::handle& value, const std::string& key) {
 
 // A path a layer names: str or os.PathLike, made absolute; the file must exist.
 std::string ExistingPath(const py::handle& value, const std::string& key) {
-    const py::object fspath = py::module_::import("os").attr("fspath");
-    std::string path;
-    try {
-        path = fspath(value).cast<std::string>();
-    } catch (const py::error_already_set&) {
-        throw py::type_error(key + ": expected a path (str or os.PathLike)");
-    } catch (const py::cast_error&) {
-        throw py::type_error(key + ": expected a path (str or os.PathLike)");
-    }
+    const std::string path = PathOf(value, key);
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) Fail(key, "no such file '" + path + "'");
     return fs::absolute(path).lexically_normal().string();
@@ -250,6 +242,16 @@ const char* const kFrameColumns[] = {"t", "x", "y", "z", "qx", "qy", "qz", "qw"}
 const char* const kPlanarColumns[] = {"t", "east", "north", "up", "yaw"};
 
 }  // namespace
+
+std::string PathOf(const py::handle& value, const std::string& name) {
+    if (value.is_none()) Fail(name, "missing (None)");
+    try {
+        return py::module_::import("os").attr("fspath")(value).cast<std::string>();
+    } catch (const py::error_already_set&) {
+    } catch (const py::cast_error&) {  // bytes
+    }
+    throw py::type_error(name + ": expected a path (str or os.PathLike)");
+}
 
 Trajectory TrajectoryFromArray(const py::handle& obj, const std::string& name,
                                std::size_t min_poses) {
@@ -437,13 +439,7 @@ py::list MapToList(const std::vector<io::MapLayerSpec>& layers) {
 pipeline::PipelineConfig ConfigFrom(const py::handle& config, const std::string& solver) {
     pipeline::PipelineConfig cfg;
     if (!config.is_none()) {
-        std::string path;
-        try {
-            path = py::module_::import("os").attr("fspath")(config).cast<std::string>();
-        } catch (const py::error_already_set&) {
-            throw py::type_error("config: expected None or the path of a params.yaml");
-        }
-        cfg = pipeline::LoadPipelineConfig(path);
+        cfg = pipeline::LoadPipelineConfig(PathOf(config, "config"));
     }
     if (solver == "paper") {
         cfg.solver = pipeline::Solver::kPaper;

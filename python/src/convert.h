@@ -30,6 +30,10 @@ namespace driftcorr::python {
 
 namespace py = pybind11;
 
+/// A str or os.PathLike argument as a string. Throws value_error for None, type_error otherwise,
+/// naming `name`.
+std::string PathOf(const py::handle& value, const std::string& name);
+
 /// A trajectory in its own frame from an (N, 8) or (N, 4) array (or anything numpy converts to
 /// one), at least `min_poses` rows. Throws value_error / type_error naming `name`.
 Trajectory TrajectoryFromArray(const py::handle& obj, const std::string& name,

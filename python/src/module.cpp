@@ -110,7 +110,7 @@ pipeline::CorrectionRun Solve(pipeline::PreparedScenario prepared,
 
 py::dict CorrectScenario(const py::object& path, const py::object& config,
                          const std::string& solver) {
-    const std::string scenario = py::module_::import("os").attr("fspath")(path).cast<std::string>();
+    const std::string scenario = PathOf(path, "path");
     const pipeline::PipelineConfig cfg = ConfigFrom(config, solver);
     pipeline::CorrectionRun run;
     {
@@ -145,7 +145,7 @@ py::dict CorrectParts(const py::object& trajectory, const py::object& map, const
 }
 
 py::dict LoadScenarioDict(const py::object& path) {
-    const std::string p = py::module_::import("os").attr("fspath")(path).cast<std::string>();
+    const std::string p = PathOf(path, "path");
     const io::Scenario sc = io::LoadScenario(p);
     const Trajectory estimate = io::LoadTrajectory(sc.estimate);
     std::optional<Trajectory> gt;
@@ -277,9 +277,9 @@ std::unique_ptr<Stream> MakeStream(pipeline::StreamSetup setup, const pipeline::
     return std::make_unique<Stream>(std::move(setup), online);
 }
 
-std::unique_ptr<Stream> StreamFromScenario(const py::object& path, const py::object& config,
+std::unique_ptr<Stream> StreamFromScenario(const py::object& scenario, const py::object& config,
                                            bool synchronous) {
-    const std::string p = py::module_::import("os").attr("fspath")(path).cast<std::string>();
+    const std::string p = PathOf(scenario, "scenario");
     const pipeline::PipelineConfig cfg = ConfigFrom(config, "driftcorr");
     pipeline::StreamSetup setup;
     {
@@ -320,7 +320,7 @@ PYBIND11_MODULE(_driftcorr, m) {
     m.def("metrics", &Metrics, py::arg("trajectory_en"), py::arg("ground_truth_en"));
 
     py::class_<Stream>(m, "Stream")
-        .def_static("from_scenario", &StreamFromScenario, py::arg("path"), py::arg("config"),
+        .def_static("from_scenario", &StreamFromScenario, py::arg("scenario"), py::arg("config"),
                     py::arg("synchronous"))
         .def_static("from_map", &StreamFromParts, py::arg("map"), py::arg("anchor"),
                     py::arg("frame"), py::arg("mode"), py::arg("config"), py::arg("synchronous"))

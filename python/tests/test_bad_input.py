@@ -90,6 +90,17 @@ def test_bad_argument_names_it(parts, label, change, error, pattern):
         call(parts, **change(parts))
 
 
+def test_path_arguments(parts):
+    with pytest.raises(ValueError, match=r"^path: missing"):
+        driftcorr.correct_scenario(None)
+    with pytest.raises(TypeError, match=r"^path: expected a path"):
+        driftcorr.load_scenario(3)
+    with pytest.raises(TypeError, match=r"^config: expected a path"):
+        call(parts, config=3)
+    with pytest.raises(TypeError, match=r"^scenario: expected a path"):
+        driftcorr.Stream(3.5)
+
+
 def test_bad_files_raise_input_error_naming_the_file(parts, tmp_path):
     with pytest.raises(driftcorr.InputError, match=r"/nonexistent/scenario: no such file"):
         driftcorr.correct_scenario("/nonexistent/scenario")
