@@ -265,6 +265,26 @@ AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::s
     return anchor;
 }
 
+const Choices<ScenarioMode>& ScenarioModes() {
+    static const Choices<ScenarioMode> modes = {{"road2d", ScenarioMode::kRoad2d},
+                                                {"indoor3d", ScenarioMode::kIndoor3d}};
+    return modes;
+}
+
+const Choices<LayerRole>& LayerRoles() {
+    static const Choices<LayerRole> roles = {{"walkways", LayerRole::kWalkways},
+                                             {"floorplan", LayerRole::kFloorplan}};
+    return roles;
+}
+
+template <typename E>
+std::optional<E> FindChoice(const std::string& name, const Choices<E>& choices) {
+    for (const auto& [text, value] : choices) {
+        if (name == text) return value;
+    }
+    return std::nullopt;
+}
+
 const Choices<MapFormat>& MapFormats() {
     static const Choices<MapFormat> formats = {
         {"osm", MapFormat::kOsm},        {"pbf", MapFormat::kOsm},
@@ -278,12 +298,7 @@ const Choices<MapFormat>& MapFormats() {
 /// `format:` when given, otherwise the layer file's extension (.json counts as GeoJSON).
 MapFormat ParseMapFormat(const Block& block, const std::string& path) {
     if (block.Has("format")) return ParseChoice(block, "format", MapFormats());
-    std::string ext = Lower(fs::path(path).extension().string());
-    if (!ext.empty()) ext.erase(0, 1);
-    if (ext == "json") return MapFormat::kGeoJson;
-    for (const auto& [name, value] : MapFormats()) {
-        if (ext == name) return value;
-    }
+    if (const std::optional<MapFormat> format = MapFormatFromExtension(path)) return *format;
     block.Fail("format", "missing, and the extension of '" + path + "' names no known map format");
 }
 
@@ -295,9 +310,7 @@ MapLayerSpec ParseLayer(const Block& block, const fs::path& dir,
     layer.path = ResolvePath(dir, path);
     layer.format = ParseMapFormat(block, path);
     if (block.Has("role")) {
-        layer.role = ParseChoice<LayerRole>(
-            block, "role",
-            {{"walkways", LayerRole::kWalkways}, {"floorplan", LayerRole::kFloorplan}});
+        layer.role = ParseChoice(block, "role", LayerRoles());
     }
     layer.floor_z_m = block.OptDouble("floor_z_m");
     return layer;
@@ -321,8 +334,7 @@ void ParseRoot(const Block& root, Scenario& s) {
     root.WarnUnknownKeys(
         {"name", "mode", "estimate", "ground_truth", "frame", "anchor", "map"}, s.warnings);
     s.name = root.OptString("name").value_or(dir.filename().string());
-    s.mode = ParseChoice<ScenarioMode>(
-        root, "mode", {{"road2d", ScenarioMode::kRoad2d}, {"indoor3d", ScenarioMode::kIndoor3d}});
+    s.mode = ParseChoice(root, "mode", ScenarioModes());
     s.estimate = ParseSource(root.Child("estimate"), dir, s.warnings);
     if (root.Has("ground_truth")) {
         s.ground_truth = ParseSource(root.Child("ground_truth"), dir, s.warnings);
@@ -348,6 +360,25 @@ Scenario LoadScenario(const std::string& path) {
         throw InputError(s.yaml_path, e.mark.line >= 0 ? e.mark.line + 1 : 0, "", e.msg);
     }
     return s;
+}
+
+std::optional<ScenarioMode> ParseScenarioMode(const std::string& name) {
+    return FindChoice(name, ScenarioModes());
+}
+
+std::optional<MapFormat> ParseMapFormat(const std::string& name) {
+    return FindChoice(name, MapFormats());
+}
+
+std::optional<LayerRole> ParseLayerRole(const std::string& name) {
+    return FindChoice(name, LayerRoles());
+}
+
+std::optional<MapFormat> MapFormatFromExtension(const std::string& path) {
+    std::string ext = Lower(fs::path(path).extension().string());
+    if (!ext.empty()) ext.erase(0, 1);
+    if (ext == "json") return MapFormat::kGeoJson;
+    return FindChoice(ext, MapFormats());
 }
 
 std::string ToString(ScenarioMode mode) {

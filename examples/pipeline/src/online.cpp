@@ -1,14 +1,19 @@
 #include "driftcorr/pipeline/online.h"
 
 #include <stdexcept>
+#include <utility>
 
 #include "driftcorr/core/errors.h"
 
 namespace driftcorr::pipeline {
 
 StreamSetup LoadStreamSetup(const std::string& scenario_path, const PipelineConfig& config) {
+    return LoadStreamSetup(io::LoadScenario(scenario_path), config);
+}
+
+StreamSetup LoadStreamSetup(io::Scenario scenario, const PipelineConfig& config) {
     StreamSetup setup;
-    setup.scenario = io::LoadScenario(scenario_path);
+    setup.scenario = std::move(scenario);
     const io::Scenario& sc = setup.scenario;
     if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
         throw InputError(sc.yaml_path, 0, sc.anchor.yaw_deg ? "anchor.position_search_m" : "anchor.yaw_deg",

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
@@ -245,11 +246,23 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
 }
 
 PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& config) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Trajectory estimate = io::LoadTrajectory(scenario.estimate);
+    std::optional<Trajectory> gt;
+    if (scenario.ground_truth) gt = io::LoadTrajectory(*scenario.ground_truth);
+    const double load_s = Since(t0);
+    PreparedScenario ps =
+        PrepareScenario(std::move(scenario), std::move(estimate), std::move(gt), config);
+    ps.timings.load_s = load_s;
+    return ps;
+}
+
+PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_frame,
+                                 std::optional<Trajectory> gt, const PipelineConfig& config) {
     PreparedScenario ps;
-    auto t0 = std::chrono::steady_clock::now();
     ps.scenario = std::move(scenario);
     const io::Scenario& sc = ps.scenario;
-    ps.estimate_frame = io::LoadTrajectory(sc.estimate);
+    ps.estimate_frame = std::move(estimate_frame);
     WorldFrame world = [&] {
         try {
             return WorldFrame(sc.anchor);
@@ -262,18 +275,14 @@ PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& co
     // Without yaw the corrector takes the heading from the direction of motion (observables.h).
     if (sc.estimate.heading_from_motion) ps.estimate.yaw_rad.clear();
     ps.heading_from_motion = !ps.estimate.HasYaw();
-    std::optional<Trajectory> gt;
-    if (sc.ground_truth) {
-        gt = io::LoadTrajectory(*sc.ground_truth);
-        if (gt->size() != ps.estimate_frame.size()) {
-            throw InputError(sc.ground_truth->path, 0, "",
-                             "ground truth has " + std::to_string(gt->size()) + " poses, the estimate " +
-                                 std::to_string(ps.estimate_frame.size()));
-        }
+    if (gt && gt->size() != ps.estimate_frame.size()) {
+        throw InputError(sc.ground_truth ? sc.ground_truth->path : "", 0,
+                         sc.ground_truth ? "" : "ground_truth",
+                         "ground truth has " + std::to_string(gt->size()) + " poses, the estimate " +
+                             std::to_string(ps.estimate_frame.size()));
     }
-    ps.timings.load_s = Since(t0);
 
-    t0 = std::chrono::steady_clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
         PlaceStart(world, config, ps);
         if (gt) {
@@ -340,12 +349,12 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    return RunPrepared(PrepareScenario(scenario_path, config), config, progress);
+    return RunCorrection(PrepareScenario(scenario_path, config), config, progress);
 }
 
 CorrectionRun RunCorrection(io::Scenario scenario, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    return RunPrepared(PrepareScenario(std::move(scenario), config), config, progress);
+    return RunCorrection(PrepareScenario(std::move(scenario), config), config, progress);
 }
 
 namespace {
@@ -364,8 +373,8 @@ Trajectory CorrectedInFrame(const PreparedScenario& ps, const PipelineConfig& co
 
 }  // namespace
 
-CorrectionRun RunPrepared(PreparedScenario ps, const PipelineConfig& config,
-                          const ProgressCallback& progress) {
+CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
+                            const ProgressCallback& progress) {
     CorrectionRun run;
     run.timings = ps.timings;
     run.map_grid_cells = ps.field.spec().size();

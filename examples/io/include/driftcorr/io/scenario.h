@@ -81,4 +81,14 @@ std::string ToString(TrajectoryFormat format);
 /// "kitti", "tum", "csv", "euroc"; std::nullopt for anything else.
 std::optional<TrajectoryFormat> ParseTrajectoryFormat(const std::string& name);
 
+/// The names scenario.yaml accepts, for scenarios built in memory (the Python bindings):
+/// "road2d" | "indoor3d"; "osm" | "geojson" | "pcd" | "ply" | "bt" | "ot" | "octomap";
+/// "walkways" | "floorplan". std::nullopt for anything else (the caller names its argument).
+std::optional<ScenarioMode> ParseScenarioMode(const std::string& name);
+std::optional<MapFormat> ParseMapFormat(const std::string& name);
+std::optional<LayerRole> ParseLayerRole(const std::string& name);
+/// The map format a layer file's extension names (.json counts as GeoJSON), as scenario.yaml
+/// does when a layer has no `format:`; std::nullopt when it names none.
+std::optional<MapFormat> MapFormatFromExtension(const std::string& path);
+
 }  // namespace driftcorr::io

@@ -21,6 +21,9 @@ struct StreamSetup {
 /// over the network's bounds grown by config.field.margin_m. Throws InputError as RunCorrection.
 StreamSetup LoadStreamSetup(const std::string& scenario_path, const PipelineConfig& config);
 
+/// The same for a scenario already in memory (its estimate and ground truth are not read).
+StreamSetup LoadStreamSetup(io::Scenario scenario, const PipelineConfig& config);
+
 /// One pose of a trajectory frame in the world plane (heading from the orientation).
 PlanarPose ToPlanarPose(double t_s, const Eigen::Vector3d& p_frame,
                         const Eigen::Quaterniond& q_frame_body, FrameAxes axes,

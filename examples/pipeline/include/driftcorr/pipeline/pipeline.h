@@ -125,6 +125,15 @@ PreparedScenario PrepareScenario(const std::string& scenario_path, const Pipelin
 /// as they are (absolute, or relative to the working directory).
 PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& config);
 
+/// The same from a scenario whose trajectories are already in memory (the Python bindings):
+/// `scenario` supplies mode, frame, anchor and map layers (its `estimate` and `ground_truth`
+/// sources are not read), `estimate_frame` and `ground_truth_frame` the poses in the
+/// trajectory's own frame (ground truth: same size as the estimate). Throws InputError as above.
+/// timings.load_s is left 0 (nothing is loaded).
+PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_frame,
+                                 std::optional<Trajectory> ground_truth_frame,
+                                 const PipelineConfig& config);
+
 /// The scenario's map as a field: OSM roads rasterised over `region_en` (road2d), or the indoor
 /// GeoJSON / point-cloud / OctoMap layers (indoor3d; `up_m` picks the floor whose walkways go into
 /// `network` for pictures). Throws InputError naming the file or setting.
@@ -149,12 +158,13 @@ CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConf
                             const ProgressCallback& progress = {});
 CorrectionRun RunCorrection(io::Scenario scenario, const PipelineConfig& config,
                             const ProgressCallback& progress = {});
-/// Correct, verdict and metrics on a prepared scenario (the second half of RunCorrection).
+/// Correct, verdict and metrics on a prepared scenario (RunCorrection(path) is PrepareScenario,
+/// then this).
 ///
 /// Thread safety: independent runs may go on concurrently in several threads (one config each or
 /// a shared const one, no shared progress callback state); the solver serialises its calls into
 /// Ipopt's linear solver MUMPS, which is not thread-safe (optim/ipopt_solver.h).
-CorrectionRun RunPrepared(PreparedScenario prepared, const PipelineConfig& config,
-                          const ProgressCallback& progress = {});
+CorrectionRun RunCorrection(PreparedScenario prepared, const PipelineConfig& config,
+                            const ProgressCallback& progress = {});
 
 }  // namespace driftcorr::pipeline
