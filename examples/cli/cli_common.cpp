@@ -1,12 +1,16 @@
 // What the subcommands share: option parsing, output paths checked before any work is done.
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "commands.h"
@@ -80,16 +84,81 @@ std::vector<ManifestEntry> ReadManifest(const std::string& path) {
     return entries;
 }
 
-void RunOnThreadPool(std::size_t count, int jobs, const std::function<void(std::size_t)>& work) {
-    std::atomic<std::size_t> next{0};
-    const auto worker = [&] {
-        for (std::size_t i = next++; i < count; i = next++) work(i);
+namespace {
+
+// Reads everything a child writes into fd, then closes it.
+std::string Drain(int fd) {
+    std::string text;
+    char buf[4096];
+    for (;;) {
+        const ssize_t got = read(fd, buf, sizeof(buf));
+        if (got > 0) {
+            text.append(buf, static_cast<std::size_t>(got));
+        } else if (got == 0 || errno != EINTR) {
+            break;
+        }
+    }
+    close(fd);
+    return text;
+}
+
+}  // namespace
+
+void RunInProcesses(std::size_t count, int jobs,
+                    const std::function<ProcessOutcome(std::size_t)>& work,
+                    const std::function<void(std::size_t, const ProcessOutcome&)>& done) {
+    struct Child {
+        std::size_t index;
+        int fd;
     };
-    const std::size_t threads = std::min<std::size_t>(count, std::max(1, jobs));
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
-    worker();  // the calling thread is one of the workers
-    for (std::thread& t : pool) t.join();
+    std::map<pid_t, Child> running;
+    std::size_t next = 0;
+    const std::size_t slots = std::min<std::size_t>(count, std::max(1, jobs));
+    while (next < count || !running.empty()) {
+        if (next < count && running.size() < slots) {
+            int fds[2];
+            if (pipe(fds) != 0) throw std::runtime_error("pipe: " + std::string(std::strerror(errno)));
+            std::fflush(nullptr);
+            const pid_t pid = fork();
+            if (pid < 0) throw std::runtime_error("fork: " + std::string(std::strerror(errno)));
+            if (pid == 0) {  // the child: one item, its text into the pipe, its code as exit status
+                close(fds[0]);
+                const ProcessOutcome o = work(next);
+                for (std::size_t off = 0; off < o.text.size();) {
+                    const ssize_t put = write(fds[1], o.text.data() + off, o.text.size() - off);
+                    if (put <= 0 && errno != EINTR) break;
+                    if (put > 0) off += static_cast<std::size_t>(put);
+                }
+                close(fds[1]);
+                std::fflush(nullptr);
+                _exit(o.code);
+            }
+            close(fds[1]);
+            running[pid] = {next++, fds[0]};
+            continue;
+        }
+        // Every slot busy (or nothing left to start): collect the next child to finish. Its
+        // output is small (a few lines), within the pipe's buffer, so it never blocks the child.
+        int status = 0;
+        const pid_t pid = waitpid(-1, &status, 0);
+        if (pid < 0) {
+            if (errno == EINTR) continue;
+            throw std::runtime_error("waitpid: " + std::string(std::strerror(errno)));
+        }
+        const auto it = running.find(pid);
+        if (it == running.end()) continue;
+        ProcessOutcome o;
+        o.text = Drain(it->second.fd);
+        if (WIFEXITED(status)) {
+            o.code = WEXITSTATUS(status);
+        } else {
+            o.code = -1;
+            o.text += "    (the process ended by signal " +
+                      std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0) + ")\n";
+        }
+        done(it->second.index, o);
+        running.erase(it);
+    }
 }
 
 }  // namespace driftcorr::cli

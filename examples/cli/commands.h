@@ -42,9 +42,21 @@ struct ManifestEntry {
 /// is a scenario is found out when it runs (a bad line fails alone).
 std::vector<ManifestEntry> ReadManifest(const std::string& path);
 
-/// Runs work(i) for i in [0, count) on `jobs` std::threads (at most count), each taking the next
-/// index when done; returns when all are done. `work` must not throw.
-void RunOnThreadPool(std::size_t count, int jobs, const std::function<void(std::size_t)>& work);
+/// What one item of RunInProcesses reports: a few lines of text and an exit code.
+struct ProcessOutcome {
+    int code = 0;
+    std::string text;
+};
+
+/// Runs work(i) for i in [0, count), each in a child process of its own (fork), at most `jobs`
+/// at a time, and calls done(i, outcome) in the parent as each one ends (code -1 and a note if
+/// it died by a signal). Processes, not threads: Ipopt 3.11's linear solver MUMPS is not
+/// thread-safe, so threads in one process take turns in every solve (optim/ipopt_solver.h),
+/// and a crash stays with its item. Call it while the process has no other threads; `work`
+/// must not throw. Throws std::runtime_error when a process cannot be started.
+void RunInProcesses(std::size_t count, int jobs,
+                    const std::function<ProcessOutcome(std::size_t)>& work,
+                    const std::function<void(std::size_t, const ProcessOutcome&)>& done);
 
 int RunCorrectCommand(int argc, char** argv);
 int RunStreamCommand(int argc, char** argv);

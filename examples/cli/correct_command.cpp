@@ -18,7 +18,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -65,7 +64,8 @@ const char* kCorrectUsage =
     "  Without orientations, or with --heading motion, the heading is the direction of motion.\n"
     "Several scenarios (or --manifest, one scenario path a line): -o is a folder that gets\n"
     "<name>.tum per scenario (<name>: the scenario's folder, or its .yaml without extension);\n"
-    "-j N corrects N at a time; one line per scenario; a failing one does not stop the others.\n"
+    "-j N corrects N at a time (one process each); one line per scenario; a failing one does not\n"
+    "stop the others.\n"
     "Every run ends with a verdict, judged without ground truth: ok, degraded (written, with the\n"
     "reasons) or failed. --on-failure: refuse (default) writes nothing, estimate writes the input\n"
     "unchanged, write writes the result anyway; a failed run exits 3 in every case.\n"
@@ -549,12 +549,6 @@ void PrepareFolder(const std::string& dir, const char* option) {
     if (::access(dir.c_str(), W_OK) != 0) throw InputError(dir, 0, option, "folder is not writable");
 }
 
-/// One scenario of a batch: its exit code and the lines to print for it.
-struct BatchOutcome {
-    int code = kExitOk;
-    std::string text;
-};
-
 std::string Format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 std::string Format(const char* fmt, ...) {
     char buf[1024];
@@ -565,7 +559,8 @@ std::string Format(const char* fmt, ...) {
     return buf;
 }
 
-BatchOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg,
+/// One scenario of a batch: its exit code and the lines to print for it.
+ProcessOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg,
                               const BatchItem& item) {
     namespace fs = std::filesystem;
     const auto t0 = std::chrono::steady_clock::now();
@@ -574,7 +569,7 @@ BatchOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg
     };
     const OutputPaths out{join(a.output, item.name + ".tum"), join(a.geojson, item.name + ".geojson"),
                           join(a.covariance, item.name + ".cov.txt")};
-    BatchOutcome o;
+    ProcessOutcome o;
     try {
         const pipeline::CorrectionRun run = pipeline::RunCorrection(item.path, cfg);
         const Written written = WriteOutputs(run, a.on_failure, out);
@@ -616,17 +611,19 @@ int RunBatch(const Args& a) {
     if (!a.covariance.empty()) PrepareFolder(a.covariance, "--covariance");
     const pipeline::PipelineConfig cfg = LoadConfig(a);
     const int jobs = std::stoi(a.jobs);
-    std::mutex print_mutex;
     std::vector<int> codes(items.size(), kExitOk);
     std::size_t done = 0;
     const auto t0 = std::chrono::steady_clock::now();
-    RunOnThreadPool(items.size(), jobs, [&](std::size_t i) {
-        const BatchOutcome o = CorrectOneOfMany(a, cfg, items[i]);
-        const std::lock_guard<std::mutex> lock(print_mutex);
-        codes[i] = o.code;
-        std::printf("[%zu/%zu] %s", ++done, items.size(), o.text.c_str());
-        std::fflush(stdout);
-    });
+    RunInProcesses(
+        items.size(), jobs,
+        [&](std::size_t i) { return CorrectOneOfMany(a, cfg, items[i]); },
+        [&](std::size_t i, const ProcessOutcome& o) {
+            codes[i] = o.code < 0 ? kExitInternal : o.code;
+            std::printf("[%zu/%zu] %s", ++done, items.size(),
+                        o.code < 0 ? (items[i].name + " internal error\n" + o.text).c_str()
+                                   : o.text.c_str());
+            std::fflush(stdout);
+        });
     int worst = kExitOk;
     std::size_t written = 0;
     for (const int c : codes) {
