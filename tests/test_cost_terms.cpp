@@ -330,6 +330,55 @@ TEST(RandomWalkTerm, ZeroAtTruthAndDerivativesMatch) {
                 0.5 * 0.7 * (0.04 / 0.02) * (0.04 / 0.02), 1e-12);
 }
 
+TEST(HeadingChangeBiasTerm, ZeroAtTruthAndDerivativesMatch) {
+    // 0.1 s step turning 0.02 rad of which a bias of 0.05 rad/s explains 0.005 rad.
+    const HeadingChangeBiasTerm t{0.015, 0.1, 0.004, 0.8};
+    Eigen::Vector3d g;
+    Eigen::Matrix3d h;
+    EXPECT_NEAR(t.Evaluate(Eigen::Vector3d(0.3, 0.32, 0.05), &g, &h), 0.0, 1e-20);
+    EXPECT_NEAR(g.norm(), 0.0, 1e-9);
+    std::mt19937 rng(78u);
+    std::normal_distribution<double> n(0.0, 0.05);
+    for (int trial = 0; trial < 20; ++trial) {
+        const Eigen::Vector3d x(n(rng), n(rng), n(rng));
+        t.Evaluate(x, &g, &h);
+        for (int k = 0; k < 3; ++k) {
+            Eigen::Vector3d xp = x, xm = x, gp, gm;
+            xp[k] += kStep, xm[k] -= kStep;
+            const double num = (t.Evaluate(xp, &gp, nullptr) - t.Evaluate(xm, &gm, nullptr)) /
+                               (2 * kStep);
+            EXPECT_PRED2(Close, g[k], num) << "trial " << trial;
+            for (int r = 0; r < 3; ++r) {
+                EXPECT_PRED2(Close, h(r, k), (gp[r] - gm[r]) / (2 * kStep)) << "trial " << trial;
+            }
+        }
+        const Linearisation<3> lin = t.Linearise(x);
+        EXPECT_NEAR((lin.information * lin.residual * lin.jacobian - g).norm(), 0.0, 1e-9);
+    }
+}
+
+TEST(ScaleRangeTerm, FreeInsideGaussianOutside) {
+    const ScaleRangeTerm t{0.8, 1.25, 0.05, 1.0};
+    Vector1d g, h;
+    for (double s : {0.8, 0.95, 1.0, 1.25}) {
+        EXPECT_EQ(t.Evaluate(Vector1d(s), &g, &h), 0.0) << s;
+        EXPECT_EQ(g[0], 0.0);
+        EXPECT_EQ(h[0], 0.0);
+    }
+    EXPECT_NEAR(t.Evaluate(Vector1d(1.35), &g, &h), 0.5 * (0.1 / 0.05) * (0.1 / 0.05), 1e-12);
+    EXPECT_NEAR(g[0], 0.1 / 0.0025, 1e-9);
+    EXPECT_NEAR(t.Evaluate(Vector1d(0.7), &g, &h), 0.5 * (0.1 / 0.05) * (0.1 / 0.05), 1e-12);
+    EXPECT_NEAR(g[0], -0.1 / 0.0025, 1e-9);
+    for (double s : {0.5, 0.79, 1.3, 2.0}) {  // away from the kinks at the ends
+        t.Evaluate(Vector1d(s), &g, &h);
+        Vector1d gp, gm;
+        const double num = (t.Evaluate(Vector1d(s + kStep), &gp, nullptr) -
+                            t.Evaluate(Vector1d(s - kStep), &gm, nullptr)) / (2 * kStep);
+        EXPECT_PRED2(Close, g[0], num) << s;
+        EXPECT_PRED2(Close, h[0], (gp[0] - gm[0]) / (2 * kStep)) << s;
+    }
+}
+
 TEST(ScalePriorTerm, ZeroAtOneAndDerivativesMatch) {
     const ScalePriorTerm t{0.1, 0.9};
     double g = -1.0, h = -1.0;

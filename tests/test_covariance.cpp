@@ -441,6 +441,7 @@ TEST(Covariance, DeadReckoningGrowsAndARoadBoundsTheCrossTrack) {
 // twice as often, with independent map terms it falls by more than a quarter.
 TEST(Covariance, TheMapOffsetDoesNotAverageAwayWithThePoseRate) {
     ModelConfig model;
+    model.heading_bias_segment_s = 0.0;  // the two samplings last different times
     const PlanarTrajectory coarse = Curve(301, 0.0, false, 2.0), fine = Curve(601, 0.0, false, 1.0);
     const TraversableField field = RoadAlong(coarse);
     const Eigen::Vector2d normal(-std::sin(0.3), std::cos(0.3));

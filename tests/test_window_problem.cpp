@@ -163,6 +163,10 @@ protected:
         if (GetParam().all_terms) {
             model_.step_robust_k = 3.0;
             model_.accel_sigma_mps2 = 2.0;
+            model_.heading_bias_segment_s = 1.0;  // several bias segments in 6 s
+            model_.scale_range_min = model_.scale_range_max = 1.0;  // every scale off the range
+        } else {
+            model_.heading_bias_segment_s = 0.0;  // the heading change without a bias
         }
         field_ = Field(3.5);
         state_ = StateFrom(Curve(), model_, GetParam().fix_height);
@@ -176,8 +180,11 @@ TEST_P(WindowDerivatives, CallbacksMatchCentralDifferences) {
     const WindowCase c = GetParam();
     WindowProblem p(state_, &field_, model_, c.first, c.last, EveryThird(c.first, c.last));
     const int n = p.NumVariables(), m = p.NumConstraints();
+    const int biases = state_.bias_segment.empty()
+                           ? 0
+                           : state_.bias_segment[c.last] - state_.bias_segment[c.first] + 1;
     ASSERT_EQ(n, 4 * int(c.last - c.first + 1) +
-                     (state_.scale_segment[c.last] - state_.scale_segment[c.first] + 1));
+                     (state_.scale_segment[c.last] - state_.scale_segment[c.first] + 1) + biases);
     ASSERT_EQ(m, int((c.last - c.first) / 3 + 1));
     ASSERT_EQ(p.JacobianStructure().size(), std::size_t(3 * m));
 
@@ -316,6 +323,8 @@ TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
     }
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kHeightChange)] > 0, !c.fix_height);
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kSpeedChange)] > 0, c.all_terms);
+    EXPECT_EQ(seen[static_cast<int>(TermFamily::kHeadingBiasWalk)] > 0, c.all_terms);
+    EXPECT_GT(seen[static_cast<int>(TermFamily::kScaleRange)], 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -395,11 +404,23 @@ TEST(WindowProblem, StoreWritesTheSolutionBack) {
     p.InitialPoint(x.data());
     x[0] += 1.5;                     // pose 3 x
     x[4 * 4 + 3] -= 0.2;             // pose 7 yaw
-    x[p.NumVariables() - 1] = 1.07;  // last scale of the window
+    ASSERT_FALSE(s.bias_segment.empty());
+    x[p.ScaleVar(s.scale_segment[7])] = 1.07;  // last scale of the window
+    x[p.BiasVar(s.bias_segment[7])] = 0.01;     // its heading-rate bias
     p.Store(x.data());
     EXPECT_EQ(s.poses[3].p.x(), x[0]);
     EXPECT_EQ(s.poses[7].yaw_rad, x[19]);
     EXPECT_EQ(s.scales[s.scale_segment[7]], 1.07);
+    EXPECT_EQ(s.biases[s.bias_segment[7]], 0.01);
+}
+
+TEST(BiasSegments, OnePerSegmentOfTimeAndNoneWhenOff) {
+    std::vector<StepObservation> obs(8);
+    for (std::size_t i = 1; i < obs.size(); ++i) obs[i].dt_s = 0.4;
+    // Time before step i: 0, 0.4, 0.8, ...; segments of 1 s.
+    const std::vector<int> expected = {0, 0, 0, 0, 1, 1, 2, 2};
+    EXPECT_EQ(BiasSegments(obs, 1.0), expected);
+    EXPECT_TRUE(BiasSegments(obs, 0.0).empty());
 }
 
 TEST(ScaleSegments, OnePerSegmentOfPathLength) {

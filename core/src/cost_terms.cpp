@@ -213,6 +213,32 @@ Linearisation<9> HeadingChangeTerm::Linearise(const StepVector& x) const {
     return LinearDifference(x, kYawA, kYawB, dheading_rad, sigma_rad, weight);
 }
 
+double HeadingChangeBiasTerm::Evaluate(const Eigen::Vector3d& x, Eigen::Vector3d* grad,
+                                       Eigen::Matrix3d* hess) const {
+    const Eigen::Vector3d j(-1.0, 1.0, -dt_s);
+    return Gaussian<3>(x[1] - x[0] - dheading_rad - x[2] * dt_s, j, nullptr, sigma_rad, weight, grad,
+                       hess);
+}
+
+Linearisation<3> HeadingChangeBiasTerm::Linearise(const Eigen::Vector3d& x) const {
+    const Eigen::Vector3d j(-1.0, 1.0, -dt_s);
+    return LinearGaussian<3>(x[1] - x[0] - dheading_rad - x[2] * dt_s, j, sigma_rad, weight);
+}
+
+// Outside the range: r and dr/ds = +-1; inside: r = 0, dr/ds = 0.
+double ScaleRangeTerm::Evaluate(const Vector1d& x, Vector1d* grad, Vector1d* hess) const {
+    const double s = x[0];
+    const double r = s > max ? s - max : (s < min ? min - s : 0.0);
+    const Vector1d j(s > max ? 1.0 : (s < min ? -1.0 : 0.0));
+    return Gaussian<1>(r, j, nullptr, sigma, weight, grad, hess);
+}
+
+Linearisation<1> ScaleRangeTerm::Linearise(const Vector1d& x) const {
+    const double s = x[0];
+    const double r = s > max ? s - max : (s < min ? min - s : 0.0);
+    return LinearGaussian<1>(r, Vector1d(s > max ? 1.0 : (s < min ? -1.0 : 0.0)), sigma, weight);
+}
+
 double HeadingPreservationTerm::Evaluate(const StepVector& x, StepVector* grad,
                                          StepMatrix* hess) const {
     return LinearYawDifference(x, 0.0, sigma_rad, weight, grad, hess);

@@ -105,6 +105,7 @@ Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s, const M
     o.of_var.assign(p.NumVariables() + 2 * offset.last_pose.size(), -1);
     const std::size_t n = s.poses.size();
     int next_segment = s.scale_segment[1];
+    int next_bias = s.bias_segment.empty() ? 0 : s.bias_segment[1];
     std::size_t next_stretch = 0;
     for (std::size_t i = 1; i < n; ++i) {
         for (int c = 0; c < 4; ++c) {
@@ -113,6 +114,10 @@ Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s, const M
         // The scale segments no later step uses and the map stretches ending here follow pose i.
         const int open = i + 1 < n ? s.scale_segment[i + 1] : s.scale_segment[n - 1] + 1;
         for (; next_segment < open; ++next_segment) o.of_var[p.ScaleVar(next_segment)] = o.size++;
+        if (!s.bias_segment.empty()) {  // likewise the heading-rate bias segments
+            const int open_bias = i + 1 < n ? s.bias_segment[i + 1] : s.bias_segment[n - 1] + 1;
+            for (; next_bias < open_bias; ++next_bias) o.of_var[p.BiasVar(next_bias)] = o.size++;
+        }
         for (; next_stretch < offset.last_pose.size() && offset.last_pose[next_stretch] == i;
              ++next_stretch) {
             for (int c = 0; c < 2; ++c) o.of_var[offset.first_var + 2 * next_stretch + c] = o.size++;
@@ -269,7 +274,8 @@ bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
     for (int f = 0; f < kTermFamilies; ++f) {
         const auto family = static_cast<TermFamily>(f);
         const bool prior =
-            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset;
+            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset ||
+            family == TermFamily::kScaleRange || family == TermFamily::kHeadingBiasWalk;
         const bool estimable = r.families[f].redundancy >= kMinRedundancy;
         factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
         changed = changed || factor[f] > 1.01;
@@ -342,7 +348,11 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
     const std::size_t n = state.poses.size();
     if (n < 2 || state.obs.size() != n || state.scale_segment.size() != n ||
         !std::is_sorted(state.scale_segment.begin() + 1, state.scale_segment.end()) ||
-        std::size_t(state.scale_segment.back()) >= state.scales.size()) {
+        std::size_t(state.scale_segment.back()) >= state.scales.size() ||
+        !(state.bias_segment.empty() ||
+          (state.bias_segment.size() == n &&
+           std::is_sorted(state.bias_segment.begin() + 1, state.bias_segment.end()) &&
+           std::size_t(state.bias_segment.back()) < state.biases.size()))) {
         r.status = CovarianceStatus::kBadInput;
         r.message = "need >= 2 poses with one observation and scale segment each";
         return r;

@@ -21,8 +21,9 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
 // Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1.
 void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
     for (std::size_t i = from; i <= to; ++i) {
+        const double bias = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[i]];
         s.poses[i] = ComposeStep(s.poses[i - 1], s.obs[i], s.scales[s.scale_segment[i]],
-                                 s.fix_height, s.poses[i].p.z());
+                                 s.fix_height, s.poses[i].p.z(), bias);
     }
 }
 
@@ -30,6 +31,10 @@ void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
 void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
     for (int g = s.scale_segment[from - 1] + 1; g <= s.scale_segment[to]; ++g) {
         s.scales[g] = s.scales[g - 1];
+    }
+    if (s.bias_segment.empty()) return;
+    for (int g = s.bias_segment[from - 1] + 1; g <= s.bias_segment[to]; ++g) {
+        s.biases[g] = s.biases[g - 1];
     }
 }
 
@@ -91,7 +96,7 @@ SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* f
                                    const CorrectorConfig& cfg, std::size_t first, std::size_t last,
                                    CorrectionResult& result) {
     const std::vector<PoseState> saved_poses = s.poses;
-    const std::vector<double> saved_scales = s.scales;
+    const std::vector<double> saved_scales = s.scales, saved_biases = s.biases;
     SolveReport best = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
     const double nll_per_pose = best.objective / double(last - first + 1);
     if (!field || cfg.restart_scale_factors.empty() ||
@@ -100,10 +105,11 @@ SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* f
         return best;
     }
     std::vector<PoseState> best_poses = s.poses;
-    std::vector<double> best_scales = s.scales;
+    std::vector<double> best_scales = s.scales, best_biases = s.biases;
     for (double factor : cfg.restart_scale_factors) {
         s.poses = saved_poses;
         s.scales = saved_scales;
+        s.biases = saved_biases;
         for (int g = s.scale_segment[first]; g <= s.scale_segment[last]; ++g) s.scales[g] *= factor;
         ComposeOdometry(s, first, last);
         SolveReport rep = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
@@ -112,10 +118,12 @@ SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* f
             best = rep;
             best_poses = s.poses;
             best_scales = s.scales;
+            best_biases = s.biases;
         }
     }
     s.poses = std::move(best_poses);
     s.scales = std::move(best_scales);
+    s.biases = std::move(best_biases);
     return best;
 }
 
@@ -133,13 +141,13 @@ PlanarTrajectory ToTrajectory(const std::vector<double>& t_s, const TrajectorySt
 }  // namespace
 
 PoseState ComposeStep(const PoseState& a, const StepObservation& o, double scale, bool fix_height,
-                      double up_fixed_m) {
+                      double up_fixed_m, double bias_rad_s) {
     const double phi = a.yaw_rad + o.direction_rad;
     const double len = scale * o.length_m;
     PoseState b;
     const double up = fix_height ? up_fixed_m : a.p.z() + o.dup_m;
     b.p = Eigen::Vector3d(a.p.x() + len * std::cos(phi), a.p.y() + len * std::sin(phi), up);
-    b.yaw_rad = a.yaw_rad + o.dheading_rad;
+    b.yaw_rad = a.yaw_rad + o.dheading_rad + bias_rad_s * std::max(o.dt_s, 0.0);
     return b;
 }
 
@@ -151,6 +159,8 @@ TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig&
                         kOutlierDeviation);
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
+    s.bias_segment = BiasSegments(s.obs, cfg.model.heading_bias_segment_s);
+    if (!s.bias_segment.empty()) s.biases.assign(s.bias_segment.back() + 1, 0.0);
     s.poses.resize(est.size());
     const std::vector<double> yaw = UnwrappedHeadings(est, cfg.stationary_m);
     for (std::size_t i = 0; i < est.size(); ++i) {
@@ -178,6 +188,10 @@ IncrementalCorrector::IncrementalCorrector(const PoseState& pose0, bool fix_heig
     state_.scale_segment.assign(1, 0);
     state_.poses.assign(1, pose0);
     state_.scales.assign(1, 1.0);
+    if (cfg_.model.heading_bias_segment_s > 0.0) {
+        state_.bias_segment.assign(1, 0);
+        state_.biases.assign(1, 0.0);
+    }
     state_.fix_height = fix_height;
     dist_.assign(1, 0.0);
 }
@@ -189,6 +203,14 @@ void IncrementalCorrector::Append(const PoseState& initial, const StepObservatio
     state_.scale_segment.push_back(segment);
     state_.poses.push_back(initial);
     if (segment + 1 > static_cast<int>(state_.scales.size())) state_.scales.resize(segment + 1, 1.0);
+    if (!state_.bias_segment.empty()) {  // same rule as BiasSegments: time before the step
+        const int bias_segment = static_cast<int>(elapsed_s_ / cfg_.model.heading_bias_segment_s);
+        state_.bias_segment.push_back(bias_segment);
+        if (bias_segment + 1 > static_cast<int>(state_.biases.size())) {
+            state_.biases.resize(bias_segment + 1, 0.0);
+        }
+    }
+    elapsed_s_ += std::max(step.dt_s, 0.0);
     dist_.push_back(dist_.back() + step.length_m);
 }
 
@@ -235,6 +257,7 @@ IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end
     const std::vector<PoseState> saved_poses(state_.poses.begin() + lo,
                                              state_.poses.begin() + end + 1);
     const std::vector<double> saved_scales = state_.scales;  // one per scale segment: few
+    const std::vector<double> saved_biases = state_.biases;  // one per bias segment: few
     SeedNewScales(state_, done_ + 1, end);
     // Warm start from the previous preview while it still covers poses after done(): its poses
     // (from the window's first on) and scales, and odometry only after its end.
@@ -260,8 +283,10 @@ IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end
         p.poses.assign(state_.poses.begin() + p.first, state_.poses.begin() + end + 1);
     }
     p.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
+    if (!state_.bias_segment.empty()) p.bias_rad_s = state_.biases[state_.bias_segment[end]];
     std::copy(saved_poses.begin(), saved_poses.end(), state_.poses.begin() + lo);
     state_.scales = saved_scales;
+    state_.biases = saved_biases;
     last_preview_ = p;
     last_preview_end_ = end;
     return p;

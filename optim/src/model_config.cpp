@@ -36,6 +36,12 @@ std::string ModelConfig::Validate() const {
         {"model.scale_prior_sigma", scale_prior_sigma, Positive, "> 0"},
         {"model.scale_rw_sigma", scale_rw_sigma, Positive, "> 0"},
         {"model.scale_rw_robust_k", scale_rw_robust_k, NonNegative, ">= 0"},
+        {"model.scale_range_min", scale_range_min, Positive, "> 0"},
+        {"model.scale_range_max", scale_range_max, Positive, "> 0"},
+        {"model.scale_range_sigma", scale_range_sigma, NonNegative, ">= 0"},
+        {"model.heading_bias_segment_s", heading_bias_segment_s, NonNegative, ">= 0"},
+        {"model.heading_bias_prior_rad_s", heading_bias_prior_rad_s, Positive, "> 0"},
+        {"model.heading_bias_rw_rad_s", heading_bias_rw_rad_s, Positive, "> 0"},
         {"model.step_weight", step_weight, Weight, "in (0, 1]"},
         {"model.heading_weight", heading_weight, Weight, "in (0, 1]"},
         {"model.preservation_weight", preservation_weight, Weight, "in (0, 1]"},
@@ -46,6 +52,9 @@ std::string ModelConfig::Validate() const {
     };
     for (const Check& c : checks) {
         if (!c.ok(c.value)) return std::string(c.name) + ": must be " + c.rule;
+    }
+    if (!(scale_range_min <= scale_range_max)) {
+        return "model.scale_range_min: must be <= model.scale_range_max";
     }
     return "";
 }

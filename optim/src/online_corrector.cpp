@@ -133,7 +133,7 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         }
         out = r.index == 0 ? entry.initial
                            : ComposeStep(current_.back(), entry.step, FrontScale(segment),
-                                         fix_height_, entry.initial.p.z());
+                                         fix_height_, entry.initial.p.z(), front_bias_rad_s_);
         pending_.push_back(entry);
         current_.push_back(out);
         steps_.push_back(entry.step);
@@ -281,7 +281,7 @@ void OnlineCorrector::RunJob(const Job& job) {
 void OnlineCorrector::Recompose(std::size_t end) {
     for (std::size_t i = end + 1; i < current_.size(); ++i) {
         current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
-                                  current_[i].p.z());
+                                  current_[i].p.z(), front_bias_rad_s_);
     }
 }
 
@@ -292,6 +292,7 @@ void OnlineCorrector::Merge() {
     const std::size_t end = solver_->done();
     for (std::size_t i = solver_->last_window_first(); i <= end; ++i) current_[i] = s.poses[i];
     front_scales_.assign(s.scales.begin(), s.scales.begin() + s.scale_segment[end] + 1);
+    front_bias_rad_s_ = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[end]];
     Recompose(end);
 }
 
@@ -300,6 +301,7 @@ void OnlineCorrector::MergePreview(std::size_t end, const IncrementalCorrector::
     if (p.poses.empty()) return;
     for (std::size_t i = p.first; i <= end; ++i) current_[i] = p.poses[i - p.first];
     front_scales_ = p.scales;
+    front_bias_rad_s_ = p.bias_rad_s;
     Recompose(end);
 }
 

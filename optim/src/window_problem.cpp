@@ -28,6 +28,18 @@ std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double s
     return seg;
 }
 
+std::vector<int> BiasSegments(const std::vector<StepObservation>& obs, double segment_s) {
+    if (!(segment_s > 0.0)) return {};
+    std::vector<int> seg(obs.size(), 0);
+    double t = 0.0;
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        seg[i] = static_cast<int>(t / segment_s);
+        t += std::max(obs[i].dt_s, 0.0);
+    }
+    if (!seg.empty()) seg[0] = seg.size() > 1 ? seg[1] : 0;
+    return seg;
+}
+
 WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* field,
                              const ModelConfig& cfg, std::size_t first, std::size_t last,
                              std::vector<std::uint8_t> constrained, WindowUse use)
@@ -37,6 +49,13 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
     seg_first_ = state.scale_segment[first];
     seg_last_ = state.scale_segment[last];
     n_vars_ = 4 * static_cast<int>(last - first + 1) + (seg_last_ - seg_first_ + 1);
+    if (HasBias()) {
+        assert(state.bias_segment.size() == state.poses.size() && "one bias segment per step");
+        bias_first_ = state.bias_segment[first];
+        bias_last_ = state.bias_segment[last];
+        bias_var0_ = n_vars_;
+        n_vars_ += bias_last_ - bias_first_ + 1;
+    }
     for (std::size_t k = 0; k < constrained.size(); ++k) {
         if (constrained[k] && field_) constraint_pose_.push_back(first + k);
     }
@@ -51,6 +70,11 @@ int WindowProblem::PoseVar(std::size_t pose, int component) const {
 int WindowProblem::ScaleVar(int segment) const {
     if (segment < seg_first_) return -1;
     return 4 * static_cast<int>(last_ - first_ + 1) + (segment - seg_first_);
+}
+
+int WindowProblem::BiasVar(int segment) const {
+    if (!HasBias() || segment < bias_first_) return -1;
+    return bias_var0_ + (segment - bias_first_);
 }
 
 int WindowProblem::Slot(std::unordered_map<std::int64_t, int>& slots, int r, int c) {
@@ -97,9 +121,11 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
         StepLengthTerm{o.length_m, o.direction_rad, len_sigma, cfg_.step_weight, robust_k}));
     blocks_.push_back(Core<StepDirectionTerm, 9>(
         TermFamily::kStepDirection, StepDirectionTerm{o.direction_rad, lat_sigma, cfg_.step_weight}));
-    blocks_.push_back(Core<HeadingChangeTerm, 9>(
-        TermFamily::kHeadingChange,
-        HeadingChangeTerm{o.dheading_rad, head_sigma, cfg_.heading_weight}));
+    if (!HasBias()) {
+        blocks_.push_back(Core<HeadingChangeTerm, 9>(
+            TermFamily::kHeadingChange,
+            HeadingChangeTerm{o.dheading_rad, head_sigma, cfg_.heading_weight}));
+    }
     blocks_.push_back(Core<HeadingPreservationTerm, 9>(
         TermFamily::kHeadingPreservation,
         HeadingPreservationTerm{cfg_.preservation_sigma_rad, cfg_.preservation_weight}));
@@ -114,6 +140,16 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
         BindPose(*blocks_[b], kXb, i);
         blocks_[b]->Bind(kScale, scale_var, scale_fixed);
     }
+    if (HasBias()) {  // heading change with the bias: [yaw_a, yaw_b, bias]
+        const int segment = state_.bias_segment[i];
+        blocks_.push_back(Core<HeadingChangeBiasTerm, 3>(
+            TermFamily::kHeadingChange,
+            HeadingChangeBiasTerm{o.dheading_rad, std::max(o.dt_s, 0.0), head_sigma,
+                                  cfg_.heading_weight}));
+        blocks_.back()->Bind(0, PoseVar(i - 1, 3), state_.poses[i - 1].yaw_rad);
+        blocks_.back()->Bind(1, PoseVar(i, 3), 0.0);
+        blocks_.back()->Bind(2, BiasVar(segment), state_.biases[segment]);
+    }
     if (HasSpeedTerm(i)) {
         const StepObservation& a = state_.obs[i - 1];
         const double sigma = cfg_.accel_sigma_mps2 * 0.5 * (a.dt_s + o.dt_s);
@@ -125,7 +161,7 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
 }
 
 // Segment 0 carries the prior around 1 (Gaussian: the walk from a fixed 1); later segments the
-// (robust) random walk from the one before.
+// (robust) random walk from the one before; each the plausible range (ModelConfig).
 void WindowProblem::AddScaleBlocks() {
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
         const RandomWalkTerm walk = sgm == 0
@@ -136,6 +172,24 @@ void WindowProblem::AddScaleBlocks() {
         const int a = ScaleVar(sgm - 1);
         blocks_.back()->Bind(0, a, a >= 0 ? 0.0 : (sgm > 0 ? state_.scales[sgm - 1] : 1.0));
         blocks_.back()->Bind(1, ScaleVar(sgm), 0.0);
+        if (cfg_.scale_range_sigma > 0.0) {
+            blocks_.push_back(Core<ScaleRangeTerm, 1>(
+                TermFamily::kScaleRange, ScaleRangeTerm{cfg_.scale_range_min, cfg_.scale_range_max,
+                                                        cfg_.scale_range_sigma, 1.0}));
+            blocks_.back()->Bind(0, ScaleVar(sgm), 0.0);
+        }
+    }
+}
+
+// Bias segment 0 carries the prior around 0 (the walk from a fixed 0); later segments the walk.
+void WindowProblem::AddBiasBlocks() {
+    for (int sgm = bias_first_; sgm <= bias_last_; ++sgm) {
+        const double sigma = sgm == 0 ? cfg_.heading_bias_prior_rad_s : cfg_.heading_bias_rw_rad_s;
+        blocks_.push_back(
+            Core<RandomWalkTerm, 2>(TermFamily::kHeadingBiasWalk, RandomWalkTerm{sigma, 1.0, 0.0}));
+        const int a = BiasVar(sgm - 1);
+        blocks_.back()->Bind(0, a, a >= 0 || sgm == 0 ? 0.0 : state_.biases[sgm - 1]);
+        blocks_.back()->Bind(1, BiasVar(sgm), 0.0);
     }
 }
 
@@ -150,6 +204,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
         }
     }
     AddScaleBlocks();
+    if (HasBias()) AddBiasBlocks();
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
         for (int c = 0; c < 3; ++c) jac_.emplace_back(static_cast<int>(k), PoseVar(constraint_pose_[k], c));
     }
@@ -180,6 +235,7 @@ void WindowProblem::InitialPoint(double* x) const {
         v[0] = p.p.x(), v[1] = p.p.y(), v[2] = p.p.z(), v[3] = p.yaw_rad;
     }
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) x[ScaleVar(sgm)] = state_.scales[sgm];
+    for (int sgm = bias_first_; sgm <= bias_last_; ++sgm) x[BiasVar(sgm)] = state_.biases[sgm];
 }
 
 void WindowProblem::Bounds(double* x_l, double* x_u, double* g_l, double* g_u) const {
@@ -305,6 +361,7 @@ void WindowProblem::Store(const double* x) const {
         p.yaw_rad = v[3];
     }
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) state_.scales[sgm] = x[ScaleVar(sgm)];
+    for (int sgm = bias_first_; sgm <= bias_last_; ++sgm) state_.biases[sgm] = x[BiasVar(sgm)];
 }
 
 }  // namespace driftcorr

@@ -92,6 +92,12 @@ std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
     num("scale_prior_sigma", &m.scale_prior_sigma);
     num("scale_rw_sigma", &m.scale_rw_sigma);
     num("scale_rw_robust_k", &m.scale_rw_robust_k);
+    num("scale_range_min", &m.scale_range_min);
+    num("scale_range_max", &m.scale_range_max);
+    num("scale_range_sigma", &m.scale_range_sigma);
+    num("heading_bias_segment_s", &m.heading_bias_segment_s);
+    num("heading_bias_prior_rad_s", &m.heading_bias_prior_rad_s);
+    num("heading_bias_rw_rad_s", &m.heading_bias_rw_rad_s);
     num("step_weight", &m.step_weight);
     num("heading_weight", &m.heading_weight);
     num("preservation_weight", &m.preservation_weight);

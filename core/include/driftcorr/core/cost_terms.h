@@ -79,6 +79,26 @@ struct HeadingChangeTerm {
     Linearisation<9> Linearise(const StepVector& x) const;
 };
 
+/// Heading change with a heading-rate bias, variables [yaw_a, yaw_b, bias]:
+/// r = yaw_b - yaw_a - dheading - bias * dt, bias [rad/s] the odometry's slowly varying heading
+/// drift (one unknown per stretch of time, tied by a RandomWalkTerm), so a steady drift costs the
+/// bias's prior once instead of every step's heading sigma.
+struct HeadingChangeBiasTerm {
+    double dheading_rad, dt_s, sigma_rad, weight;
+    double Evaluate(const Eigen::Vector3d& x, Eigen::Vector3d* grad, Eigen::Matrix3d* hess) const;
+    Linearisation<3> Linearise(const Eigen::Vector3d& x) const;
+};
+
+/// The plausible range of the step-length scale as a prior, not a cliff: zero cost within
+/// [min, max], Gaussian with sigma beyond it, r = s - max above, min - s below (continuous with
+/// its gradient; the Hessian steps from 0 to w / sigma^2 at the ends).
+using Vector1d = Eigen::Matrix<double, 1, 1>;
+struct ScaleRangeTerm {
+    double min, max, sigma, weight;
+    double Evaluate(const Vector1d& x, Vector1d* grad, Vector1d* hess) const;
+    Linearisation<1> Linearise(const Vector1d& x) const;
+};
+
 /// Heading preservation prior (turns are small): r = yaw_b - yaw_a.
 struct HeadingPreservationTerm {
     double sigma_rad, weight;

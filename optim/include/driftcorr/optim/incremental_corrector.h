@@ -61,6 +61,7 @@ public:
         std::size_t first = 0;            ///< the window's first pose
         std::vector<PoseState> poses;     ///< poses [first, end]; empty if the solve failed
         std::vector<double> scales;       ///< scale segments [0, segment of end]
+        double bias_rad_s = 0.0;          ///< heading-rate bias of end's segment (0: none)
     };
     /// Precondition: done() < end < size().
     Preview SolvePreview(std::size_t end);
@@ -79,6 +80,7 @@ private:
     const TraversableField* field_;
     CorrectorConfig cfg_;
     std::vector<double> dist_;
+    double elapsed_s_ = 0.0;  ///< time of the appended steps (heading-rate bias segments)
     std::size_t done_ = 0;
     std::size_t window_first_ = 1;
     Preview last_preview_;              ///< warm start of the next preview
@@ -88,10 +90,11 @@ private:
     CorrectionResult stats_;
 };
 
-/// Dead reckoning of one step: pose `a` moved by observation `step` with step-length `scale`.
+/// Dead reckoning of one step: pose `a` moved by observation `step` with step-length `scale`,
+/// its heading change plus `bias_rad_s` * dt (the heading-rate bias; 0 where there is none).
 /// The height follows dup_m unless `fix_height`, when it stays `up_fixed_m`.
 PoseState ComposeStep(const PoseState& a, const StepObservation& step, double scale,
-                      bool fix_height, double up_fixed_m);
+                      bool fix_height, double up_fixed_m, double bias_rad_s);
 
 /// The initial state of a whole estimate (observations, scale segments, poses at the estimate).
 TrajectoryState InitialState(const PlanarTrajectory& estimate, const CorrectorConfig& config,

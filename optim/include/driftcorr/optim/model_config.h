@@ -36,6 +36,15 @@ struct ModelConfig {
     double heading_rw_rad_per_sqrt_s = 0.004;  ///< heading random walk [rad/sqrt(s)]
     double heading_sigma_rel = 0.02;           ///< [-] gyro scale error share of a turn
     double heading_sigma_min_rad = 1e-4;       ///< floor [rad]
+    /// Heading-rate bias: the odometry's heading drifts at a slowly varying rate (a gyro bias, a
+    /// visual / lidar odometry's systematic yaw error), one unknown bias [rad/s] per
+    /// heading_bias_segment_s of time, a random walk of heading_bias_rw_rad_s between segments and a
+    /// prior of heading_bias_prior_rad_s around 0 on the first. A steady drift then costs the
+    /// prior once, not every step's heading sigma, so following the roads stays cheaper than
+    /// bending the scale. heading_bias_segment_s = 0: no bias.
+    double heading_bias_segment_s = 30.0;      ///< [s]
+    double heading_bias_prior_rad_s = 0.0087;  ///< [rad/s] (0.5 deg/s)
+    double heading_bias_rw_rad_s = 0.0017;     ///< [rad/s] per segment (0.1 deg/s)
     // Heading preservation prior (turns are small), per step.
     double preservation_sigma_rad = 1.0;  ///< [rad]; large = weak
     // Height change (indoor3d): sigma = height_sigma_m + height_sigma_rel * |dup|.
@@ -49,6 +58,12 @@ struct ModelConfig {
     double scale_segment_m = 150.0;   ///< [m]
     double scale_prior_sigma = 0.1;   ///< [-]
     double scale_rw_sigma = 0.01;     ///< [-] per segment
+    /// The plausible scale range as a prior: no cost within [scale_range_min, scale_range_max],
+    /// Gaussian with scale_range_sigma beyond (metric odometry is a few percent off; pedestrian
+    /// step models tens of percent). scale_range_sigma = 0: no range prior (the bounds kScaleMin,
+    /// kScaleMax stay hard).
+    double scale_range_min = 0.8, scale_range_max = 1.25;  ///< [-]
+    double scale_range_sigma = 0.05;                       ///< [-]
     /// Cauchy width of the walk in sigmas; 0 = Gaussian. Measured on KITTI: k = 3 or 10 lets the
     /// scale jump into wrong basins (kitti00 gicp ATE 6.8 -> 190 m), so the default is Gaussian.
     double scale_rw_robust_k = 0.0;

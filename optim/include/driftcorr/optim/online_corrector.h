@@ -168,6 +168,7 @@ private:
     std::vector<StepObservation> steps_;  ///< observation of every accepted pose
     std::vector<int> segment_;            ///< scale segment of every accepted pose
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
+    double front_bias_rad_s_ = 0.0;          ///< the latest solved heading-rate bias
     bool stop_ = false;
     std::string worker_error_;
 

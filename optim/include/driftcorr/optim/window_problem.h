@@ -6,7 +6,7 @@
 // problem is built.
 //
 // Variables: per pose (x, y, z, yaw) in the ENU map frame, then one scale per scale segment
-// touched by the window's steps.
+// touched by the window's steps, then one heading-rate bias per bias segment they touch.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -34,6 +34,9 @@ struct TrajectoryState {
     std::vector<int> scale_segment;     ///< scale segment of step i (obs index)
     std::vector<PoseState> poses;
     std::vector<double> scales;         ///< one per scale segment
+    /// Heading-rate bias segment of step i (obs index), ascending; empty: no bias variables.
+    std::vector<int> bias_segment;
+    std::vector<double> biases;         ///< one per bias segment [rad/s]
     bool fix_height = true;             ///< planar mode: heights stay as initialised
 };
 
@@ -43,6 +46,9 @@ constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
 
 /// Assigns scale segments from the estimated path length (one per `segment_m`).
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
+/// Assigns heading-rate bias segments from the time (one per `segment_s`); empty if segment_s
+/// is 0 (no bias).
+std::vector<int> BiasSegments(const std::vector<StepObservation>& obs, double segment_s);
 
 /// What a WindowProblem is built for: kSolve also builds the sparsity of the Hessian (Ipopt needs
 /// it; a hash map of ~50 entries per pose), kLinearise only what LineariseTerms needs.
@@ -86,6 +92,9 @@ public:
     /// The variable of scale segment `segment`, -1 before the window's first segment.
     /// Precondition: segment <= the segment of step last().
     int ScaleVar(int segment) const;
+    /// The variable of heading-rate bias segment `segment`, -1 before the window's first one or
+    /// when the state has no bias.
+    int BiasVar(int segment) const;
 
     /// The window's terms, each one unit (optim/term_block.h), and what they read at x.
     const std::vector<std::unique_ptr<TermBlock>>& Blocks() const { return blocks_; }
@@ -105,6 +114,8 @@ private:
     /// heights are free, speed change) appended to blocks_.
     void AddStepBlocks(std::size_t i);
     void AddScaleBlocks();
+    void AddBiasBlocks();
+    bool HasBias() const { return !state_.bias_segment.empty(); }
     /// Binds local variable k of `block` to component c of `pose` (fixed before the window).
     void BindPose(TermBlock& block, int k0, std::size_t pose) const;
     Eigen::Vector3d PosePosition(const double* x, std::size_t pose) const;
@@ -119,6 +130,7 @@ private:
     ModelConfig cfg_;
     std::size_t first_, last_;
     int seg_first_ = 0, seg_last_ = 0, n_vars_ = 0;
+    int bias_first_ = 0, bias_last_ = -1, bias_var0_ = 0;  // bias segments in the window
     std::vector<std::size_t> constraint_pose_;
     std::vector<std::unique_ptr<TermBlock>> blocks_;
     /// Per block, the Hessian slots of its local lower triangle (r, c <= r) at
