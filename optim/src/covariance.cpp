@@ -269,7 +269,8 @@ bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
     for (int f = 0; f < kTermFamilies; ++f) {
         const auto family = static_cast<TermFamily>(f);
         const bool prior =
-            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset;
+            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset ||
+            family == TermFamily::kBoundaryPrior;
         const bool estimable = r.families[f].redundancy >= kMinRedundancy;
         factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
         changed = changed || factor[f] > 1.01;

@@ -56,6 +56,8 @@ const char* ToString(TermFamily family) {
             return "scale walk";
         case TermFamily::kMapOffset:
             return "map offset";
+        case TermFamily::kBoundaryPrior:
+            return "boundary prior";
     }
     return "?";
 }
@@ -73,13 +75,20 @@ std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double s
 
 WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* field,
                              const ModelConfig& cfg, std::size_t first, std::size_t last,
-                             std::vector<std::uint8_t> constrained, WindowUse use)
-    : state_(state), field_(field), cfg_(cfg), first_(first), last_(last) {
+                             std::vector<std::uint8_t> constrained, WindowUse use,
+                             std::optional<PosePriorTerm> boundary_prior)
+    : state_(state),
+      field_(field),
+      cfg_(cfg),
+      first_(first),
+      last_(last),
+      prior_(std::move(boundary_prior)),
+      var_first_(prior_ ? first - 1 : first) {
     assert(first >= 1 && first <= last && last < state.poses.size() && "bad window");
     assert(constrained.size() == last - first + 1 && "one constraint flag per window pose");
     seg_first_ = state.scale_segment[first];
     seg_last_ = state.scale_segment[last];
-    n_vars_ = 4 * static_cast<int>(last - first + 1) + (seg_last_ - seg_first_ + 1);
+    n_vars_ = 4 * static_cast<int>(last - var_first_ + 1) + (seg_last_ - seg_first_ + 1);
     for (std::size_t k = 0; k < constrained.size(); ++k) {
         if (constrained[k] && field_) constraint_pose_.push_back(first + k);
     }
@@ -87,13 +96,13 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
 }
 
 int WindowProblem::PoseVar(std::size_t pose, int component) const {
-    if (pose < first_) return -1;
-    return 4 * static_cast<int>(pose - first_) + component;
+    if (pose < var_first_) return -1;
+    return 4 * static_cast<int>(pose - var_first_) + component;
 }
 
 int WindowProblem::ScaleVar(int segment) const {
     if (segment < seg_first_) return -1;
-    return 4 * static_cast<int>(last_ - first_ + 1) + (segment - seg_first_);
+    return 4 * static_cast<int>(last_ - var_first_ + 1) + (segment - seg_first_);
 }
 
 int WindowProblem::Slot(std::unordered_map<std::int64_t, int>& slots, int r, int c) {
@@ -170,6 +179,13 @@ void WindowProblem::BuildStructure(WindowUse use) {
         pose_hess_slot_[i - first_] = {slot(x, x), slot(y, x), slot(y, y),
                                        slot(z, x), slot(z, y), slot(z, z)};
     }
+    if (prior_) {
+        for (int r = 0, k = 0; r < 4; ++r) {
+            for (int c = 0; c <= r; ++c) {
+                prior_hess_slot_[k++] = slot(PoseVar(first_ - 1, r), PoseVar(first_ - 1, c));
+            }
+        }
+    }
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
         const int a = ScaleVar(sgm - 1), b = ScaleVar(sgm);
         scale_hess_slot_.push_back({a >= 0 ? slot(a, a) : -1, a >= 0 ? slot(b, a) : -1, slot(b, b)});
@@ -180,7 +196,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
 }
 
 void WindowProblem::InitialPoint(double* x) const {
-    for (std::size_t i = first_; i <= last_; ++i) {
+    for (std::size_t i = var_first_; i <= last_; ++i) {
         const PoseState& p = state_.poses[i];
         double* v = x + PoseVar(i, 0);
         v[0] = p.p.x(), v[1] = p.p.y(), v[2] = p.p.z(), v[3] = p.yaw_rad;
@@ -190,7 +206,7 @@ void WindowProblem::InitialPoint(double* x) const {
 
 void WindowProblem::Bounds(double* x_l, double* x_u, double* g_l, double* g_u) const {
     for (int k = 0; k < n_vars_; ++k) x_l[k] = -kInfBound, x_u[k] = kInfBound;
-    for (std::size_t i = first_; i <= last_; ++i) {
+    for (std::size_t i = var_first_; i <= last_; ++i) {
         if (state_.fix_height) x_l[PoseVar(i, 2)] = x_u[PoseVar(i, 2)] = state_.poses[i].p.z();
     }
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
@@ -272,6 +288,11 @@ const std::vector<std::optional<TraversableSample>>& WindowProblem::Samples(cons
     return cache_samples_;
 }
 
+PoseVector WindowProblem::BoundaryPose(const double* x) const {
+    const double* v = x + PoseVar(first_ - 1, 0);
+    return PoseVector(v[0], v[1], v[2], v[3]);
+}
+
 Eigen::Vector3d WindowProblem::PosePosition(const double* x, std::size_t pose) const {
     const double* v = x + PoseVar(pose, 0);
     return {v[0], v[1], v[2]};
@@ -293,6 +314,7 @@ double WindowProblem::Objective(const double* x) const {
         const double sa = a >= 0 ? x[a] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
         f += ScaleTerm(sgm).Evaluate({sa, x[ScaleVar(sgm)]}, nullptr, nullptr);
     }
+    if (prior_) f += prior_->Evaluate(BoundaryPose(x), nullptr, nullptr);
     return f;
 }
 
@@ -324,6 +346,11 @@ void WindowProblem::Gradient(const double* x, double* grad) const {
         ScaleTerm(sgm).Evaluate({sa, x[b]}, &gs, nullptr);
         if (a >= 0) grad[a] += gs[0];
         grad[b] += gs[1];
+    }
+    if (prior_) {
+        PoseVector gp;
+        prior_->Evaluate(BoundaryPose(x), &gp, nullptr);
+        for (int c = 0; c < 4; ++c) grad[PoseVar(first_ - 1, c)] += gp[c];
     }
 }
 
@@ -396,6 +423,13 @@ void WindowProblem::HessianValues(const double* x, double obj_factor, const doub
         if (sl[0] >= 0) values[sl[0]] += obj_factor * hs(0, 0), values[sl[1]] += obj_factor * hs(1, 0);
         values[sl[2]] += obj_factor * hs(1, 1);
     }
+    if (prior_) {
+        for (int r = 0, k = 0; r < 4; ++r) {
+            for (int c = 0; c <= r; ++c) {
+                values[prior_hess_slot_[k++]] += obj_factor * prior_->information(r, c);
+            }
+        }
+    }
 }
 
 void WindowProblem::LineariseStep(std::size_t i, const StepVector& v,
@@ -447,10 +481,18 @@ void WindowProblem::LineariseTerms(const double* x, std::vector<LinearisedTerm>&
         const double sa = var[0] >= 0 ? x[var[0]] : (sgm > 0 ? state_.scales[sgm - 1] : 1.0);
         Append(TermFamily::kScaleWalk, ScaleTerm(sgm).Linearise({sa, x[var[1]]}), var, terms);
     }
+    if (prior_) {
+        const int var[4] = {PoseVar(first_ - 1, 0), PoseVar(first_ - 1, 1), PoseVar(first_ - 1, 2),
+                            PoseVar(first_ - 1, 3)};
+        for (const Linearisation<4>& l : prior_->Linearise(BoundaryPose(x))) {
+            Append(TermFamily::kBoundaryPrior, l, var, terms);
+            terms.back().pose = static_cast<int>(first_ - 1);
+        }
+    }
 }
 
 void WindowProblem::Store(const double* x) const {
-    for (std::size_t i = first_; i <= last_; ++i) {
+    for (std::size_t i = var_first_; i <= last_; ++i) {
         PoseState& p = state_.poses[i];
         const double* v = x + PoseVar(i, 0);
         p.p = Eigen::Vector3d(v[0], v[1], v[2]);

@@ -110,7 +110,7 @@ struct CovarianceResult {
     std::array<FamilyStatistics, kTermFamilies> families{};  ///< indexed by TermFamily
     /// The variance component applied to each family (method step 6; 1: as modelled); families
     /// holds the statistics after it.
-    std::array<double, kTermFamilies> family_factors{1, 1, 1, 1, 1, 1, 1, 1, 1};
+    std::array<double, kTermFamilies> family_factors{1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
     std::size_t factor_nonzeros = 0;  ///< entries of L below the diagonal (fill diagnostic)
 };
 

@@ -2,10 +2,12 @@
 // The correction as a nonlinear program over a window of poses [first, last] of a trajectory,
 // solver-independent: objective (the weighted NLL), its gradient and exact Hessian, and the
 // hard corridor constraints with their Jacobian and Hessians, in sparse triplet form.
-// Pose first-1 and everything before it is held fixed.
+// Pose first-1 and everything before it is held fixed; with a boundary prior (a fixed-lag window
+// whose earlier poses are marginalised) pose first-1 is a variable too, tied to the window by the
+// step and heading terms of step `first` and to the past by the prior (core PosePriorTerm).
 //
-// Variables: per pose (x, y, z, yaw) in the ENU map frame, then one scale per scale segment
-// touched by the window's steps.
+// Variables: per pose (x, y, z, yaw) in the ENU map frame (from pose first-1 with a boundary
+// prior), then one scale per scale segment touched by the window's steps.
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -51,8 +53,10 @@ enum class TermFamily : int {
     /// The map's lateral offset process of the covariance's model (optim/covariance.h); not a
     /// term of the objective.
     kMapOffset,
+    /// The prior on a fixed-lag window's boundary pose (its marginalised past).
+    kBoundaryPrior,
 };
-constexpr int kTermFamilies = 9;
+constexpr int kTermFamilies = 10;
 const char* ToString(TermFamily family);
 
 /// One term of the objective linearised at a point (core Linearisation), over the window's
@@ -61,7 +65,7 @@ const char* ToString(TermFamily family);
 /// the window (pose first-1, earlier scales) are left out, as are entries whose derivative is zero.
 struct LinearisedTerm {
     TermFamily family = TermFamily::kStepLength;
-    int pose = -1;  ///< the pose of a map distance term; -1 for the other families
+    int pose = -1;  ///< the pose of a map distance or boundary prior term; -1 for the others
     int size = 0;
     std::array<int, 12> var{};
     std::array<double, 12> jacobian{};
@@ -80,9 +84,12 @@ public:
     /// `constrained[k]` (k = pose - first) marks poses that carry the hard corridor constraint.
     /// Preconditions: 1 <= first <= last < poses.size(); field may be null (no map terms);
     /// HessianValues only with use == kSolve (with kLinearise HessianStructure() is empty).
+    /// `boundary_prior`: pose first-1 becomes a variable with this prior (its map term is not
+    /// added: the prior summarises it); none: pose first-1 is held fixed.
     WindowProblem(TrajectoryState& state, const TraversableField* field, const ModelConfig& cfg,
                   std::size_t first, std::size_t last, std::vector<std::uint8_t> constrained,
-                  WindowUse use = WindowUse::kSolve);
+                  WindowUse use = WindowUse::kSolve,
+                  std::optional<PosePriorTerm> boundary_prior = std::nullopt);
 
     int NumVariables() const { return n_vars_; }
     int NumConstraints() const { return static_cast<int>(constraint_pose_.size()); }
@@ -114,8 +121,9 @@ public:
     /// smoothed more widely, as the indoor field over its 0.5 m layers) grad d stays.
     void LineariseTerms(const double* x, std::vector<LinearisedTerm>& terms) const;
 
-    /// The variable of component c (0..3: x, y, z, yaw) of window pose `pose`, -1 before the
-    /// window. Precondition: pose <= last().
+    /// The variable of component c (0..3: x, y, z, yaw) of window pose `pose`, -1 when held
+    /// fixed (before first(), or before first()-1 with a boundary prior). Precondition:
+    /// pose <= last().
     int PoseVar(std::size_t pose, int component) const;
     /// The variable of scale segment `segment`, -1 before the window's first segment.
     /// Precondition: segment <= the segment of step last().
@@ -158,6 +166,7 @@ private:
     StepTerms TermsOfStep(std::size_t i) const;
     double StepCost(std::size_t i, const StepVector& v, StepVector* g, StepMatrix* h) const;
     Eigen::Vector3d PosePosition(const double* x, std::size_t pose) const;
+    PoseVector BoundaryPose(const double* x) const;  ///< pose first-1's variables (with a prior)
     /// Map field samples of every window pose at x, queried once per distinct x (Ipopt evaluates
     /// objective, gradient, constraints and Hessians at the same point).
     const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
@@ -167,6 +176,9 @@ private:
     const TraversableField* field_;
     ModelConfig cfg_;
     std::size_t first_, last_;
+    std::optional<PosePriorTerm> prior_;
+    std::size_t var_first_;  ///< first pose with variables: first_, or first_-1 with a prior
+    std::array<int, 10> prior_hess_slot_{};  ///< lower triangle of the prior's 4x4 block
     int seg_first_ = 0, seg_last_ = 0, n_vars_ = 0;
     std::vector<std::size_t> constraint_pose_;
     std::vector<StepSlots> steps_;
