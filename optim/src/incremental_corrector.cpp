@@ -14,21 +14,6 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1.
-void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
-    for (std::size_t i = from; i <= to; ++i) {
-        s.poses[i] = ComposeStep(s.poses[i - 1], s.obs[i], s.scales[s.scale_segment[i]],
-                                 s.fix_height, s.poses[i].p.z());
-    }
-}
-
-// Scale segments first entered by steps [from, to] start from the latest scale estimate.
-void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
-    for (int g = s.scale_segment[from - 1] + 1; g <= s.scale_segment[to]; ++g) {
-        s.scales[g] = s.scales[g - 1];
-    }
-}
-
 // Share of poses [first, last] farther than limit_m from every traversable centre.
 double OffRoadShare(const TrajectoryState& s, const TraversableField& field, std::size_t first,
                     std::size_t last, double limit_m) {
@@ -59,61 +44,82 @@ std::vector<std::uint8_t> GateConstraints(const TrajectoryState& s, const Traver
 // constraint is imposed in the refinement, once the soft solution sits on its roads.
 SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
                         const CorrectorConfig& cfg, const IpoptOptions& opt, std::size_t first,
-                        std::size_t last, CorrectionResult& result, bool hard) {
+                        std::size_t last, CorrectionResult& result, bool hard,
+                        const std::optional<PosePriorTerm>& prior = std::nullopt) {
     std::vector<std::uint8_t> flags = hard ? GateConstraints(s, field, cfg.model, first, last)
                                            : std::vector<std::uint8_t>(last - first + 1, 0);
     if (hard) {
         result.constrained_poses = std::count(flags.begin(), flags.end(), std::uint8_t(1));
     }
-    WindowProblem problem(s, field, cfg.model, first, last, flags);
+    WindowProblem problem(s, field, cfg.model, first, last, flags, WindowUse::kSolve, prior);
     SolveReport rep = SolveWithIpopt(problem, opt);
     result.iterations += rep.iterations;
     if (Usable(rep.status) || !hard) return rep;
     ++result.window_retries;
     WindowProblem soft(s, field, cfg.model, first, last,
-                       std::vector<std::uint8_t>(last - first + 1, 0));
+                       std::vector<std::uint8_t>(last - first + 1, 0), WindowUse::kSolve, prior);
     SolveReport rep2 = SolveWithIpopt(soft, opt);
     result.iterations += rep2.iterations;
     rep2.message = rep.message + ", re-solved without hard constraints: " + rep2.message;
     return rep2;
 }
 
+// Poses [from, to] of a state, saved to be restored (a window's, not the whole trajectory's).
+struct SavedPoses {
+    std::size_t from;
+    std::vector<PoseState> poses;
+    SavedPoses(const TrajectoryState& s, std::size_t from_, std::size_t to)
+        : from(from_), poses(s.poses.begin() + from_, s.poses.begin() + to + 1) {}
+    void RestoreInto(TrajectoryState& s) const {
+        std::copy(poses.begin(), poses.end(), s.poses.begin() + from);
+    }
+};
+
+}  // namespace
+
 // One incremental window (soft terms). When its solution leaves many poses off the roads, or
 // explains the window poorly (a high NLL per pose), the window fell into a wrong basin (typically:
 // a turn before the junction is reached, with the scale collapsing to keep the poses on the road
 // they left), so it is re-solved from other step-length scale hypotheses, re-composed from the
-// window's fixed start, and the lowest NLL wins.
-SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* field,
-                                   const CorrectorConfig& cfg, std::size_t first, std::size_t last,
-                                   CorrectionResult& result) {
-    const std::vector<PoseState> saved_poses = s.poses;
-    const std::vector<double> saved_scales = s.scales;
-    SolveReport best = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+// window's start, and the lowest NLL wins. Saves and restores the window's poses only (pose
+// first-1 included: with a boundary prior it is a variable), so its cost does not grow with the
+// trajectory.
+SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
+                            const CorrectorConfig& cfg, std::size_t first, std::size_t last,
+                            const std::optional<PosePriorTerm>& prior, bool restarts,
+                            CorrectionResult& result) {
+    const SavedPoses saved(s, first - 1, last);
+    const std::vector<double> saved_scales = s.scales;  // one per scale segment: few
+    SolveReport best =
+        SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false, prior);
     const double nll_per_pose = best.objective / double(last - first + 1);
-    if (!field || cfg.restart_scale_factors.empty() ||
+    if (!restarts || !field || cfg.restart_scale_factors.empty() ||
         (Usable(best.status) && nll_per_pose <= cfg.restart_nll_per_pose &&
          OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <= cfg.restart_offroad_share)) {
         return best;
     }
-    std::vector<PoseState> best_poses = s.poses;
+    SavedPoses best_poses(s, first - 1, last);
     std::vector<double> best_scales = s.scales;
     for (double factor : cfg.restart_scale_factors) {
-        s.poses = saved_poses;
+        saved.RestoreInto(s);
         s.scales = saved_scales;
         for (int g = s.scale_segment[first]; g <= s.scale_segment[last]; ++g) s.scales[g] *= factor;
         ComposeOdometry(s, first, last);
-        SolveReport rep = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+        SolveReport rep =
+            SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false, prior);
         ++result.window_restarts;
         if (Usable(rep.status) && (!Usable(best.status) || rep.objective < best.objective)) {
             best = rep;
-            best_poses = s.poses;
+            best_poses = SavedPoses(s, first - 1, last);
             best_scales = s.scales;
         }
     }
-    s.poses = std::move(best_poses);
+    best_poses.RestoreInto(s);
     s.scales = std::move(best_scales);
     return best;
 }
+
+namespace {
 
 PlanarTrajectory ToTrajectory(const std::vector<double>& t_s, const TrajectoryState& s) {
     PlanarTrajectory out;
@@ -127,6 +133,19 @@ PlanarTrajectory ToTrajectory(const std::vector<double>& t_s, const TrajectorySt
 }
 
 }  // namespace
+
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i <= to; ++i) {
+        s.poses[i] = ComposeStep(s.poses[i - 1], s.obs[i], s.scales[s.scale_segment[i]],
+                                 s.fix_height, s.poses[i].p.z());
+    }
+}
+
+void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
+    for (int g = s.scale_segment[from - 1] + 1; g <= s.scale_segment[to]; ++g) {
+        s.scales[g] = s.scales[g - 1];
+    }
+}
 
 PoseState ComposeStep(const PoseState& a, const StepObservation& o, double scale, bool fix_height,
                       double up_fixed_m) {
@@ -203,7 +222,7 @@ void IncrementalCorrector::SolveChunk(std::size_t end) {
     ComposeOdometry(state_, done_ + 1, end);
     const std::size_t first = WindowFirst(end);
     window_first_ = first;
-    SolveReport rep = SolveIncrementalWindow(state_, field_, cfg_, first, end, stats_);
+    SolveReport rep = SolveSoftWindow(state_, field_, cfg_, first, end, std::nullopt, true, stats_);
     ++stats_.windows;
     if (!Usable(rep.status)) ++stats_.window_failures;
     done_ = end;

@@ -16,6 +16,7 @@
 //
 // No I/O, no threads: the caller decides when to solve. Not thread-safe.
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "driftcorr/optim/corrector.h"
@@ -92,6 +93,23 @@ private:
 /// The height follows dup_m unless `fix_height`, when it stays `up_fixed_m`.
 PoseState ComposeStep(const PoseState& a, const StepObservation& step, double scale,
                       bool fix_height, double up_fixed_m);
+
+/// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1 with
+/// each step's segment scale. Precondition: 1 <= from, to < s.poses.size().
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to);
+/// Scale segments first entered by steps [from, to] start from the latest scale estimate.
+void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to);
+
+/// One trailing-window solve with the soft terms (Ipopt; window_ipopt), written into `s`: poses
+/// [first, last] (and first-1 with a boundary prior) and the window's scales. With `restarts`,
+/// a solution that leaves many poses off the roads or explains the window poorly (a wrong basin)
+/// is re-solved from the restart_scale_factors hypotheses and the lowest NLL wins. Counts its
+/// iterations and restarts into `stats`. Time and memory bounded by the window, not by the
+/// trajectory. Precondition: 1 <= first <= last < s.poses.size().
+SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
+                            const CorrectorConfig& cfg, std::size_t first, std::size_t last,
+                            const std::optional<PosePriorTerm>& prior, bool restarts,
+                            CorrectionResult& stats);
 
 /// The initial state of a whole estimate (observations, scale segments, poses at the estimate).
 TrajectoryState InitialState(const PlanarTrajectory& estimate, const CorrectorConfig& config,
