@@ -50,27 +50,35 @@ PosePriorTerm SomePrior(const TrajectoryState& s, std::size_t pose) {
     return t;
 }
 
-// The dense reference: invert the whole Gauss-Newton information of window [first, last] (with
-// the prior on first-1) and read pose `last`'s block (x, y, yaw; z too with free heights).
-Eigen::MatrixXd DenseMarginalCovariance(TrajectoryState& s, const ModelConfig& model,
-                                        std::size_t first, std::size_t last,
-                                        const PosePriorTerm& prior) {
+// The dense reference: invert the Gauss-Newton information of window [first, last] (with the
+// prior on first-1) over its poses (the scales given) and read pose `last`'s block (x, y, yaw; z
+// too with free heights), and the same block of the Gauss-Newton step -H^-1 g.
+struct DenseMarginal {
+    Eigen::MatrixXd sigma;
+    Eigen::VectorXd shift;
+};
+DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std::size_t first,
+                              std::size_t last, const PosePriorTerm& prior) {
     const WindowProblem p(s, nullptr, model, first, last,
                           std::vector<std::uint8_t>(last - first + 1, 0), WindowUse::kLinearise,
                           prior);
     std::vector<double> x(p.NumVariables());
     p.InitialPoint(x.data());
     Eigen::MatrixXd h = DenseGaussNewtonHessian(p, x.data());
+    std::vector<double> g(p.NumVariables());
+    p.Gradient(x.data(), g.data());
     std::vector<int> keep;
-    for (int k = 0; k < p.NumVariables(); ++k) {
-        const bool fixed_height = s.fix_height && k < p.PoseVar(last, 3) + 1 && k % 4 == 2;
-        if (!fixed_height) keep.push_back(k);
+    for (int k = 0; k < p.PoseVar(last, 3) + 1; ++k) {
+        if (!(s.fix_height && k % 4 == 2)) keep.push_back(k);
     }
     Eigen::MatrixXd hk(keep.size(), keep.size());
     for (std::size_t r = 0; r < keep.size(); ++r) {
         for (std::size_t c = 0; c < keep.size(); ++c) hk(r, c) = h(keep[r], keep[c]);
     }
     const Eigen::MatrixXd sigma = hk.inverse();
+    Eigen::VectorXd gk(keep.size());
+    for (std::size_t r = 0; r < keep.size(); ++r) gk[r] = g[keep[r]];
+    const Eigen::VectorXd step = -sigma * gk;
     std::vector<int> block;
     for (int c = 0; c < 4; ++c) {
         if (s.fix_height && c == 2) continue;
@@ -78,9 +86,10 @@ Eigen::MatrixXd DenseMarginalCovariance(TrajectoryState& s, const ModelConfig& m
             if (keep[k] == p.PoseVar(last, c)) block.push_back(static_cast<int>(k));
         }
     }
-    Eigen::MatrixXd out(block.size(), block.size());
+    DenseMarginal out{Eigen::MatrixXd(block.size(), block.size()), Eigen::VectorXd(block.size())};
     for (std::size_t r = 0; r < block.size(); ++r) {
-        for (std::size_t c = 0; c < block.size(); ++c) out(r, c) = sigma(block[r], block[c]);
+        for (std::size_t c = 0; c < block.size(); ++c) out.sigma(r, c) = sigma(block[r], block[c]);
+        out.shift[r] = step[block[r]];
     }
     return out;
 }
@@ -91,11 +100,23 @@ TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
         SCOPED_TRACE(fix_height ? "planar" : "free height");
         TrajectoryState s = test::StateFrom(Curve(), model, fix_height);
         const PosePriorTerm prior = SomePrior(s, 4);
+        // Off the estimate (and the prior's mean) the old terms have a gradient: the mean moves.
+        for (std::size_t i = 5; i <= 17; ++i) s.poses[i].p.x() += 0.02 * double(i - 4);
         const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior);
         ASSERT_TRUE(marginal.has_value());
         const PoseState& b = s.poses[17];
-        EXPECT_EQ(marginal->mean, PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad));
-        const Eigen::MatrixXd dense = DenseMarginalCovariance(s, model, 5, 17, prior);
+        const PoseVector shift =
+            marginal->mean - PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad);
+        const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior);
+        const Eigen::MatrixXd& dense = reference.sigma;
+        for (int r = 0, k = 0; r < 4; ++r) {
+            if (fix_height && r == 2) {
+                EXPECT_EQ(shift[r], 0.0);
+                continue;
+            }
+            EXPECT_NEAR(shift[r], reference.shift[k++], 1e-8) << "component " << r;
+        }
+        EXPECT_GT(shift.head<2>().norm(), 1e-3);
         Eigen::MatrixXd info = marginal->information;
         if (fix_height) {
             EXPECT_EQ(info.row(2).norm() + info.col(2).norm(), 0.0);

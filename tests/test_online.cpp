@@ -162,6 +162,7 @@ TEST_F(OnlineSynthetic, BackPressureKeepsEveryOutputFresh) {
     EXPECT_EQ(st.max_age_epochs, max_age);
     EXPECT_GT(st.solves, 10u);
     EXPECT_EQ(st.solve_s.size(), st.solves);
+    EXPECT_GT(st.prior_solves, 0u) << "windows after the first carry a marginalised prior";
     const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
     std::printf("synthetic, as fast as possible with max_lag_epochs 1: causal ATE %.3f m, "
                 "%zu solves for %zu requests, %zu waits\n", ate, st.solves, st.requests, st.waits);
@@ -212,14 +213,15 @@ TEST_F(OnlineSynthetic, SynchronousRequestPosesHaveAgeZero) {
     EXPECT_EQ(st.stale_poses, 0u);
 }
 
-// With boundary_prior the online windows' boundary carries the marginalised past (the option is
-// off by default: measured worse, see OnlineConfig). The output still follows the map: its
-// causal ATE stays far below the uncorrected estimate's.
-TEST_F(OnlineSynthetic, BoundaryPriorWindowsCorrectTheOutput) {
+// Without boundary_prior the online windows hold their boundary pose fixed (as the batch windows
+// do); with it (the default) the boundary carries the marginalised past. Both follow the map: the
+// causal ATE stays within the synchronous bound of the batch result.
+TEST_F(OnlineSynthetic, FixedAndMarginalisedBoundariesBothCorrectTheOutput) {
+  for (bool boundary_prior : {true, false}) {
     const PlanarTrajectory& est = run_->estimate;
     OnlineConfig cfg;
     cfg.synchronous = true;
-    cfg.boundary_prior = true;
+    cfg.boundary_prior = boundary_prior;
     OnlineCorrector online(&setup_->field, cfg);
     PlanarTrajectory causal;
     for (std::size_t i = 0; i < est.size(); ++i) {
@@ -230,11 +232,15 @@ TEST_F(OnlineSynthetic, BoundaryPriorWindowsCorrectTheOutput) {
         causal.up_m.push_back(r.corrected.up_m);
     }
     const OnlineStatistics st = online.Statistics();
-    EXPECT_GT(st.prior_solves, st.solves / 2);
+    if (boundary_prior) {
+        EXPECT_GT(st.prior_solves, st.solves / 2);
+    } else {
+        EXPECT_EQ(st.prior_solves, 0u);
+    }
     const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
-    const double estimate = run_->before->ate_m;
-    std::printf("synthetic, boundary prior: causal ATE %.3f m (estimate %.3f m)\n", ate, estimate);
-    EXPECT_LT(ate, 0.25 * estimate);
+    std::printf("synthetic, boundary prior %d: causal ATE %.3f m\n", int(boundary_prior), ate);
+    EXPECT_LE(ate, 1.5 * run_->after->ate_m + 0.5);
+  }
 }
 
 TEST_F(OnlineSynthetic, BadPosesAreSkippedAndTheStreamGoesOn) {

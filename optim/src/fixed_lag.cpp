@@ -11,12 +11,18 @@
 namespace driftcorr {
 namespace {
 
-// The Gauss-Newton information of `problem` at its initial point, over its variables; a fixed
-// height (planar mode: no term sees it) gets a unit diagonal so that the matrix can be factored
-// without coupling it to anything.
+// The number of pose variables of `problem` (they come first; the scales follow).
+int PoseVariables(const WindowProblem& problem) { return problem.PoseVar(problem.last(), 3) + 1; }
+
+// The Gauss-Newton information of `problem` at its initial point over its pose variables, the
+// scales held at their values (conditioned on: the next window holds the earlier segments' scales
+// fixed, so a prior that had integrated them out would count their uncertainty twice, once in the
+// boundary's along-track spread and once in the window's free scale). A fixed height (planar
+// mode: no term sees it) gets a unit diagonal so that the matrix can be factored without coupling
+// it to anything.
 Eigen::SparseMatrix<double> Information(const WindowProblem& problem, bool fix_height) {
-    const int n = problem.NumVariables();
-    std::vector<double> x(n);
+    const int n = PoseVariables(problem);
+    std::vector<double> x(problem.NumVariables());
     problem.InitialPoint(x.data());
     std::vector<LinearisedTerm> terms;
     problem.LineariseTerms(x.data(), terms);
@@ -25,6 +31,7 @@ Eigen::SparseMatrix<double> Information(const WindowProblem& problem, bool fix_h
         if (!(t.information > 0.0)) continue;
         for (int a = 0; a < t.size; ++a) {
             for (int b = 0; b < t.size; ++b) {
+                if (t.var[a] >= n || t.var[b] >= n) continue;
                 entries.emplace_back(t.var[a], t.var[b],
                                      t.information * t.jacobian[a] * t.jacobian[b]);
             }
@@ -44,24 +51,38 @@ Eigen::SparseMatrix<double> Information(const WindowProblem& problem, bool fix_h
     return h;
 }
 
-// The 4x4 marginal covariance of pose `pose` under `problem`'s curvature, or nullopt.
-std::optional<PoseMatrix> MarginalCovariance(const WindowProblem& problem, std::size_t pose,
-                                             bool fix_height) {
+// The marginal of pose `pose` under `problem`'s NLL given the scales, linearised at its initial
+// point x0 (the state): f(x0 + d) ~ f(x0) + g^T d + d^T H d / 2 (H Gauss-Newton, over the pose
+// variables). Its minimiser d* = -H^-1 g and covariance H^-1, read at the pose's variables: the
+// mean shift d*_pose and the 4x4 block.
+struct PoseMarginal {
+    PoseMatrix sigma;
+    PoseVector shift;
+};
+
+std::optional<PoseMarginal> Marginal(const WindowProblem& problem, std::size_t pose,
+                                     bool fix_height) {
     const Eigen::SparseMatrix<double> h = Information(problem, fix_height);
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
-    PoseMatrix sigma;
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(problem.NumVariables());
+    const int n = PoseVariables(problem);
+    PoseMarginal m;
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
     for (int c = 0; c < 4; ++c) {
         e.setZero();
         e[problem.PoseVar(pose, c)] = 1.0;
         const Eigen::VectorXd col = ldlt.solve(e);
-        for (int r = 0; r < 4; ++r) sigma(r, c) = col[problem.PoseVar(pose, r)];
+        for (int r = 0; r < 4; ++r) m.sigma(r, c) = col[problem.PoseVar(pose, r)];
     }
-    if (!sigma.allFinite()) return std::nullopt;
-    sigma = 0.5 * (sigma + sigma.transpose());
-    if (fix_height) sigma.row(2).setZero(), sigma.col(2).setZero();
-    return sigma;
+    std::vector<double> x0(problem.NumVariables()), g(problem.NumVariables());
+    problem.InitialPoint(x0.data());
+    problem.Gradient(x0.data(), g.data());
+    const Eigen::VectorXd step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(g.data(), n));
+    for (int c = 0; c < 4; ++c) m.shift[c] = step[problem.PoseVar(pose, c)];
+    if (!m.sigma.allFinite() || !m.shift.allFinite()) return std::nullopt;
+    m.sigma = 0.5 * (m.sigma + m.sigma.transpose());
+    if (fix_height) m.sigma.row(2).setZero(), m.sigma.col(2).setZero(), m.shift[2] = 0.0;
+    return m;
 }
 
 // Sigma's inverse on the variables that are not fixed (height excluded when fixed).
@@ -109,11 +130,11 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
     const WindowProblem problem(s, field, model, first, last,
                                 std::vector<std::uint8_t>(last - first + 1, 0),
                                 WindowUse::kLinearise, prior);
-    const std::optional<PoseMatrix> sigma = MarginalCovariance(problem, last, s.fix_height);
-    if (!sigma) return std::nullopt;
-    const std::optional<PoseMatrix> info = InformationOf(*sigma, s.fix_height);
+    const std::optional<PoseMarginal> m = Marginal(problem, last, s.fix_height);
+    if (!m) return std::nullopt;
+    const std::optional<PoseMatrix> info = InformationOf(m->sigma, s.fix_height);
     if (!info) return std::nullopt;
-    return PosePriorTerm{ToVector(s.poses[last]), *info};
+    return PosePriorTerm{ToVector(s.poses[last]) + m->shift, *info};
 }
 
 FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
@@ -190,8 +211,8 @@ FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
     const WindowProblem problem(state_, field_, cfg_.model, first, end,
                                 std::vector<std::uint8_t>(end - first + 1, 0),
                                 WindowUse::kLinearise, prior);
-    if (const auto sigma = MarginalCovariance(problem, end, state_.fix_height)) {
-        out.end_covariance = ToPoseCovariance(*sigma);
+    if (const auto m = Marginal(problem, end, state_.fix_height)) {
+        out.end_covariance = ToPoseCovariance(m->sigma);
         out.end_covariance_ok = true;
     }
     solved_end_ = end;
