@@ -10,7 +10,6 @@
 #include "driftcorr/core/observables.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/fixed_lag.h"
-
 #include "test_state.h"
 
 namespace driftcorr {
@@ -105,8 +104,7 @@ TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
         const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior);
         ASSERT_TRUE(marginal.has_value());
         const PoseState& b = s.poses[17];
-        const PoseVector shift =
-            marginal->mean - PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad);
+        const PoseVector shift = marginal->mean - PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad);
         const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior);
         const Eigen::MatrixXd& dense = reference.sigma;
         for (int r = 0, k = 0; r < 4; ++r) {
@@ -120,15 +118,17 @@ TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
         Eigen::MatrixXd info = marginal->information;
         if (fix_height) {
             EXPECT_EQ(info.row(2).norm() + info.col(2).norm(), 0.0);
-            const Eigen::Matrix3d i3 = (Eigen::Matrix3d() << info(0, 0), info(0, 1), info(0, 3),
-                                        info(1, 0), info(1, 1), info(1, 3), info(3, 0), info(3, 1),
-                                        info(3, 3))
-                                           .finished();
+            const Eigen::Matrix3d i3 =
+                (Eigen::Matrix3d() << info(0, 0), info(0, 1), info(0, 3), info(1, 0), info(1, 1),
+                 info(1, 3), info(3, 0), info(3, 1), info(3, 3))
+                    .finished();
             info = i3;
         }
         const Eigen::MatrixXd sigma = info.inverse();
         EXPECT_LT((sigma - dense).cwiseAbs().maxCoeff(), 1e-8 * dense.cwiseAbs().maxCoeff())
-            << "marginal\n" << sigma << "\ndense\n" << dense;
+            << "marginal\n"
+            << sigma << "\ndense\n"
+            << dense;
     }
 }
 
@@ -143,8 +143,8 @@ TEST(MarginalPrior, GrowsAlongTheOdometry) {
         ASSERT_TRUE(m.has_value());
         const Eigen::Matrix2d xy =
             (Eigen::Matrix3d() << m->information(0, 0), m->information(0, 1), m->information(0, 3),
-             m->information(1, 0), m->information(1, 1), m->information(1, 3),
-             m->information(3, 0), m->information(3, 1), m->information(3, 3))
+             m->information(1, 0), m->information(1, 1), m->information(1, 3), m->information(3, 0),
+             m->information(3, 1), m->information(3, 3))
                 .finished()
                 .inverse()
                 .topLeftCorner<2, 2>();

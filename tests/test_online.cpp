@@ -164,8 +164,10 @@ TEST_F(OnlineSynthetic, BackPressureKeepsEveryOutputFresh) {
     EXPECT_EQ(st.solve_s.size(), st.solves);
     EXPECT_GT(st.prior_solves, 0u) << "windows after the first carry a marginalised prior";
     const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
-    std::printf("synthetic, as fast as possible with max_lag_epochs 1: causal ATE %.3f m, "
-                "%zu solves for %zu requests, %zu waits\n", ate, st.solves, st.requests, st.waits);
+    std::printf(
+        "synthetic, as fast as possible with max_lag_epochs 1: causal ATE %.3f m, "
+        "%zu solves for %zu requests, %zu waits\n",
+        ate, st.solves, st.requests, st.waits);
     EXPECT_LE(ate, 1.5 * run_->after->ate_m + 0.5);
     EXPECT_TRUE(Usable(online.Finish().status));
 }
@@ -180,13 +182,14 @@ TEST_F(OnlineSynthetic, BurstSkipsAheadAndReportsTheAge) {
         const PushResult r = online.Push(At(est, i));
         ASSERT_TRUE(r.Accepted());
         stale += !r.fresh;
-        EXPECT_NEAR(r.correction_age_s,
-                    est.t_s[i] - est.t_s[i - r.correction_age_epochs], 1e-9);
+        EXPECT_NEAR(r.correction_age_s, est.t_s[i] - est.t_s[i - r.correction_age_epochs], 1e-9);
     }
     const OnlineStatistics st = online.Statistics();
     EXPECT_EQ(st.stale_poses, stale);
-    std::printf("synthetic burst: %zu solves for %zu requests, %zu of %zu poses stale, worst age "
-                "%zu epochs\n", st.solves, st.requests, stale, est.size(), st.max_age_epochs);
+    std::printf(
+        "synthetic burst: %zu solves for %zu requests, %zu of %zu poses stale, worst age "
+        "%zu epochs\n",
+        st.solves, st.requests, stale, est.size(), st.max_age_epochs);
     EXPECT_LT(st.solves, st.requests) << "a burst of " << est.size() << " poses queued no solves";
     EXPECT_GT(stale, 0u);
     const CorrectionResult smoothed = online.Finish();
@@ -217,30 +220,30 @@ TEST_F(OnlineSynthetic, SynchronousRequestPosesHaveAgeZero) {
 // do); with it (the default) the boundary carries the marginalised past. Both follow the map: the
 // causal ATE stays within the synchronous bound of the batch result.
 TEST_F(OnlineSynthetic, FixedAndMarginalisedBoundariesBothCorrectTheOutput) {
-  for (bool boundary_prior : {true, false}) {
-    const PlanarTrajectory& est = run_->estimate;
-    OnlineConfig cfg;
-    cfg.synchronous = true;
-    cfg.boundary_prior = boundary_prior;
-    OnlineCorrector online(&setup_->field, cfg);
-    PlanarTrajectory causal;
-    for (std::size_t i = 0; i < est.size(); ++i) {
-        const PushResult r = online.Push(At(est, i));
-        ASSERT_TRUE(r.Accepted());
-        causal.t_s.push_back(r.corrected.t_s);
-        causal.p_en.push_back(r.corrected.p_en);
-        causal.up_m.push_back(r.corrected.up_m);
+    for (bool boundary_prior : {true, false}) {
+        const PlanarTrajectory& est = run_->estimate;
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.boundary_prior = boundary_prior;
+        OnlineCorrector online(&setup_->field, cfg);
+        PlanarTrajectory causal;
+        for (std::size_t i = 0; i < est.size(); ++i) {
+            const PushResult r = online.Push(At(est, i));
+            ASSERT_TRUE(r.Accepted());
+            causal.t_s.push_back(r.corrected.t_s);
+            causal.p_en.push_back(r.corrected.p_en);
+            causal.up_m.push_back(r.corrected.up_m);
+        }
+        const OnlineStatistics st = online.Statistics();
+        if (boundary_prior) {
+            EXPECT_GT(st.prior_solves, st.solves / 2);
+        } else {
+            EXPECT_EQ(st.prior_solves, 0u);
+        }
+        const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
+        std::printf("synthetic, boundary prior %d: causal ATE %.3f m\n", int(boundary_prior), ate);
+        EXPECT_LE(ate, 1.5 * run_->after->ate_m + 0.5);
     }
-    const OnlineStatistics st = online.Statistics();
-    if (boundary_prior) {
-        EXPECT_GT(st.prior_solves, st.solves / 2);
-    } else {
-        EXPECT_EQ(st.prior_solves, 0u);
-    }
-    const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
-    std::printf("synthetic, boundary prior %d: causal ATE %.3f m\n", int(boundary_prior), ate);
-    EXPECT_LE(ate, 1.5 * run_->after->ate_m + 0.5);
-  }
 }
 
 TEST_F(OnlineSynthetic, BadPosesAreSkippedAndTheStreamGoesOn) {
@@ -325,8 +328,8 @@ TEST(Online, OutputIsProjectedOnlyAlongAHorizontalSlope) {
         return r.corrected;
     };
     // Outside by 1.5 m, slope 1 along x: moved onto the edge x = 8 (slack 0).
-    const PlanarPose across = first_output(
-        LinearCorridorField([](const Eigen::Vector3d& p) { return p.x() - 8.0; }));
+    const PlanarPose across =
+        first_output(LinearCorridorField([](const Eigen::Vector3d& p) { return p.x() - 8.0; }));
     EXPECT_NEAR(across.p_en.x(), 8.0, 0.05);
     EXPECT_NEAR(across.p_en.y(), 10.0, 1e-6);
     // Outside by 0.89 m, falling with height (slope 1 in z, 0.02 along x): not moved.
@@ -393,12 +396,12 @@ TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
         return io::FormatTumLine(est.t_s[i], est.p_frame[i], est.q_frame_body[i]);
     };
     for (std::size_t i = 0; i < 20; ++i) input += line(i);
-    input += "this is not a pose\n";                 // line 21
-    input += "99 nan 0 0 0 0 0 1\n";                 // line 22
-    input += line(19);                               // line 23: repeated timestamp
+    input += "this is not a pose\n";  // line 21
+    input += "99 nan 0 0 0 0 0 1\n";  // line 22
+    input += line(19);                // line 23: repeated timestamp
     for (std::size_t i = 20; i < 40; ++i) input += line(i);
     std::string last = line(40);
-    input += last.substr(0, last.size() / 2);       // line 44: ends mid-line
+    input += last.substr(0, last.size() / 2);  // line 44: ends mid-line
     const std::string dir = TmpDir("pipe");
     fs::create_directories(dir);
     std::ofstream(dir + "/in.tum") << input;
@@ -431,16 +434,16 @@ TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
     }
     // The pause starts once the first 150 lines have come out (the map is loaded by then).
     const std::string out_path = dir + "/out.txt";
-    const std::string cmd = "(cat " + dir + "/a.tum; while [ $(wc -l < " + out_path +
-                            ") -lt 150 ]; do sleep 0.05; done; sleep 0.8; cat " + dir +
-                            "/b.tum) | " + std::string(DRIFTCORR_BINARY_DIR) +
-                            "/examples/driftcorr stream " + *dir_ + " --config " + dir +
-                            "/params.yaml --status-column > " + out_path + " 2> " + dir +
-                            "/err.txt";
+    const std::string cmd =
+        "(cat " + dir + "/a.tum; while [ $(wc -l < " + out_path +
+        ") -lt 150 ]; do sleep 0.05; done; sleep 0.8; cat " + dir + "/b.tum) | " +
+        std::string(DRIFTCORR_BINARY_DIR) + "/examples/driftcorr stream " + *dir_ + " --config " +
+        dir + "/params.yaml --status-column > " + out_path + " 2> " + dir + "/err.txt";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << Slurp(dir + "/err.txt");
     const std::string err = Slurp(dir + "/err.txt");
     std::size_t pauses = 0;
-    for (std::size_t at = err.find("pause"); at != std::string::npos; at = err.find("pause", at + 1)) {
+    for (std::size_t at = err.find("pause"); at != std::string::npos;
+         at = err.find("pause", at + 1)) {
         ++pauses;
     }
     EXPECT_EQ(pauses, 1u) << err;

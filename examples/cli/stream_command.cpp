@@ -43,7 +43,8 @@ const char* kStreamUsage =
     "Invalid lines (bad numbers, NaN, timestamps not increasing, a last line without newline) are\n"
     "skipped with a warning on stderr naming the line; the stream goes on. A pause of the input\n"
     "longer than online.gap_warn_s is reported once, when it resumes.\n"
-    "At the end of input: a summary on stderr (share of poses emitted without a fresh solve, worst\n"
+    "At the end of input: a summary on stderr (share of poses emitted without a fresh solve, "
+    "worst\n"
     "age, solve time per window, output latency per line), then the whole trajectory is smoothed\n"
     "(the batch result) and judged (the verdict); --smoothed-out writes it as TUM.\n"
     "--sync solves inside the pose loop (deterministic; slower per pose).\n"
@@ -57,16 +58,15 @@ struct StreamArgs {
 
 bool ParseStreamArgs(int argc, char** argv, StreamArgs& a, std::string& err) {
     std::string rate;
-    const OptionTable table{
-        {{"--replay", &a.replay},
-         {"--sync", &a.sync},
-         {"--quiet", &a.quiet},
-         {"-q", &a.quiet},
-         {"--status-column", &a.status_column}},
-        {{"--config", &a.config},
-         {"--smoothed-out", &a.smoothed_out},
-         {"--rate-hz", &rate},
-         {"--max-lag", &a.max_lag}}};
+    const OptionTable table{{{"--replay", &a.replay},
+                             {"--sync", &a.sync},
+                             {"--quiet", &a.quiet},
+                             {"-q", &a.quiet},
+                             {"--status-column", &a.status_column}},
+                            {{"--config", &a.config},
+                             {"--smoothed-out", &a.smoothed_out},
+                             {"--rate-hz", &rate},
+                             {"--max-lag", &a.max_lag}}};
     auto positional = [&a](const std::string& arg) -> std::string {
         if (!a.scenario.empty()) return "unexpected argument " + arg;
         a.scenario = arg;
@@ -81,8 +81,8 @@ bool ParseStreamArgs(int argc, char** argv, StreamArgs& a, std::string& err) {
             return false;
         }
     }
-    if (!a.max_lag.empty() && (a.max_lag.size() > 9 ||
-                               a.max_lag.find_first_not_of("0123456789") != std::string::npos)) {
+    if (!a.max_lag.empty() &&
+        (a.max_lag.size() > 9 || a.max_lag.find_first_not_of("0123456789") != std::string::npos)) {
         err = "--max-lag needs a whole number of epochs >= 0";
         return false;
     }
@@ -103,7 +103,8 @@ double Percentile(std::vector<double> v, double p) {
 std::string Milliseconds(const std::vector<double>& s) {
     char buf[96];
     std::snprintf(buf, sizeof(buf), "p50 %.2f / p99 %.2f / max %.2f ms", 1e3 * Percentile(s, 0.5),
-                  1e3 * Percentile(s, 0.99), s.empty() ? 0.0 : 1e3 * *std::max_element(s.begin(), s.end()));
+                  1e3 * Percentile(s, 0.99),
+                  s.empty() ? 0.0 : 1e3 * *std::max_element(s.begin(), s.end()));
     return buf;
 }
 
@@ -117,7 +118,8 @@ public:
 
     // One input line (without newline), read at `arrived`; `complete` is false for a last line
     // without newline.
-    void HandleLine(long number, const std::string& text, bool complete, Clock::time_point arrived) {
+    void HandleLine(long number, const std::string& text, bool complete,
+                    Clock::time_point arrived) {
         const double pause_s =
             seen_line_ ? std::chrono::duration<double>(arrived - last_arrival_).count() : 0.0;
         seen_line_ = true;
@@ -195,11 +197,15 @@ private:
                      "prior, %zu failed); solve time per window %s\n",
                      st.solves, st.requests, st.prior_solves, st.failed_solves,
                      Milliseconds(st.solve_s).c_str());
-        std::fprintf(stderr, "driftcorr stream: output latency per line %s; waited %zu times, "
-                     "%.2f s (--max-lag)\n", Milliseconds(latency_s_).c_str(), st.waits, st.wait_s);
+        std::fprintf(stderr,
+                     "driftcorr stream: output latency per line %s; waited %zu times, "
+                     "%.2f s (--max-lag)\n",
+                     Milliseconds(latency_s_).c_str(), st.waits, st.wait_s);
         if (!st.worker_error.empty()) {
-            std::fprintf(stderr, "driftcorr stream: warning: %s; later outputs were composed "
-                         "onto the last solve\n", st.worker_error.c_str());
+            std::fprintf(stderr,
+                         "driftcorr stream: warning: %s; later outputs were composed "
+                         "onto the last solve\n",
+                         st.worker_error.c_str());
         }
     }
     void Skip(long number, const std::string& why) {
@@ -281,8 +287,10 @@ int RunStream(const StreamArgs& a) {
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
     StreamSession session(setup, online, a.status_column);
-    if (a.replay) Replay(setup.scenario, a.rate_hz, session);
-    else ReadStdin(session);
+    if (a.replay)
+        Replay(setup.scenario, a.rate_hz, session);
+    else
+        ReadStdin(session);
     return session.Finish(a.smoothed_out, a.quiet);
 }
 

@@ -155,7 +155,8 @@ void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& s
     state_.obs.push_back(step);
     state_.scale_segment.push_back(segment);
     state_.poses.push_back(initial);
-    if (segment + 1 > static_cast<int>(state_.scales.size())) state_.scales.resize(segment + 1, 1.0);
+    if (segment + 1 > static_cast<int>(state_.scales.size()))
+        state_.scales.resize(segment + 1, 1.0);
     dist_.push_back(dist_.back() + step.length_m);
 }
 

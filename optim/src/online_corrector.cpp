@@ -1,7 +1,5 @@
 #include "driftcorr/optim/online_corrector.h"
 
-#include "driftcorr/core/format.h"
-
 #include <algorithm>
 #include <cassert>
 #include <chrono>
@@ -9,6 +7,7 @@
 #include <exception>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
 namespace driftcorr {
@@ -72,9 +71,9 @@ std::optional<PushResult> OnlineCorrector::Validate(const PlanarPose& pose) cons
     if (finished_) return Reject(PushStatus::kRejectedFinished, "Push after Finish()");
     if (!Finite(pose)) return Reject(PushStatus::kRejectedNonFinite, "pose has a NaN or inf value");
     if (!t_s_.empty() && !(pose.t_s > last_t_s_)) {
-        return Reject(PushStatus::kRejectedTime,
-                      "timestamp " + FormatFixed(pose.t_s, 6) + " is not after the previous one (" +
-                          FormatFixed(last_t_s_, 6) + ")");
+        return Reject(PushStatus::kRejectedTime, "timestamp " + FormatFixed(pose.t_s, 6) +
+                                                     " is not after the previous one (" +
+                                                     FormatFixed(last_t_s_, 6) + ")");
     }
     if (has_yaw_ && *has_yaw_ != pose.yaw_rad.has_value()) {
         return Reject(PushStatus::kRejectedHeading,
@@ -104,7 +103,7 @@ OnlineCorrector::Entry OnlineCorrector::MakeEntry(const PlanarPose& pose, double
 
 double OnlineCorrector::FrontScale(int segment) const {
     return segment < static_cast<int>(front_scales_.size()) ? front_scales_[segment]
-                                                             : front_scales_.back();
+                                                            : front_scales_.back();
 }
 
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
@@ -137,10 +136,10 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
             for (Entry& e : entries_) e.initial.yaw_rad = last_yaw_u_;
             for (PoseState& s : current_) s.yaw_rad = last_yaw_u_;
         }
-        current_.push_back(r.index == 0 ? entry.initial
-                                        : ComposeStep(current_.back(), entry.step,
-                                                      FrontScale(segment), fix_height_,
-                                                      entry.initial.p.z()));
+        current_.push_back(r.index == 0
+                               ? entry.initial
+                               : ComposeStep(current_.back(), entry.step, FrontScale(segment),
+                                             fix_height_, entry.initial.p.z()));
         pending_.push_back(entry);
         steps_.push_back(entry.step);
         segment_.push_back(segment);
@@ -174,7 +173,8 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     }
     r.corrected = ToPlanarPose(pose.t_s, out);
     if (r.gap) {
-        const std::string msg = "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
+        const std::string msg =
+            "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
         r.message = r.message.empty() ? msg : msg + "; " + r.message;
     }
     return r;
@@ -203,7 +203,8 @@ bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
     auto q = field_->Query(pose.p);
     if (!q) return false;
     const ModelConfig& m = cfg_.corrector.model;
-    if (!cfg_.project_output || !m.hard_corridor || q->corridor.value > m.corridor_gate_m) return true;
+    if (!cfg_.project_output || !m.hard_corridor || q->corridor.value > m.corridor_gate_m)
+        return true;
     // Only the horizontal position moves. Where the corridor distance falls mostly with height
     // (a pose between floors, on stairs) its horizontal slope is small and a Newton step along it
     // would be long: on a real walk one went 165 m. So a step is taken only where the slope is at

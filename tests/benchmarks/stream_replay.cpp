@@ -94,13 +94,14 @@ int Score(const std::string& scenario, const std::string& output) {
     const PlanarTrajectory causal = ToPlanar(out.poses, ps.scenario.frame, ps.anchor);
     const ErrorMetrics m = ComputeMetrics(causal, gt);
     const ErrorMetrics e = ComputeMetrics(ps.estimate, gt);
-    std::printf("%s: causal ATE %.2f m (final %.2f, max %.2f, right floor %.1f %%), estimate ATE "
-                "%.2f m",
-                ps.scenario.name.c_str(), m.ate_m, m.final_m, m.max_m, 100.0 * m.floor_accuracy,
-                e.ate_m);
+    std::printf(
+        "%s: causal ATE %.2f m (final %.2f, max %.2f, right floor %.1f %%), estimate ATE "
+        "%.2f m",
+        ps.scenario.name.c_str(), m.ate_m, m.final_m, m.max_m, 100.0 * m.floor_accuracy, e.ate_m);
     if (!out.age_epochs.empty()) {
-        std::printf("; stale %.1f %%, age p50 %.0f / max %.0f epochs", 100.0 * out.stale / out.poses.size(),
-                    Quantile(out.age_epochs, 0.5), Quantile(out.age_epochs, 1.0));
+        std::printf("; stale %.1f %%, age p50 %.0f / max %.0f epochs",
+                    100.0 * out.stale / out.poses.size(), Quantile(out.age_epochs, 0.5),
+                    Quantile(out.age_epochs, 1.0));
     }
     std::printf("\n");
     return 0;

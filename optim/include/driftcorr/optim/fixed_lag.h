@@ -53,10 +53,10 @@ struct FixedLagSolution {
 
 /// The marginal of pose `last` under the NLL of window [first, last] (with `prior` on pose
 /// first-1; none: pose first-1 held fixed) given the window's scales, linearised at the state's
-/// values (gradient and Gauss-Newton curvature), as a prior: mean = the pose moved by the b-part of the Gauss-Newton
-/// step, information = (Sigma_last)^-1 (zero height row and column when heights are fixed).
-/// nullopt when the curvature is singular (an unobserved variable).
-/// Precondition: 1 <= first <= last < s.poses.size().
+/// values (gradient and Gauss-Newton curvature), as a prior: mean = the pose moved by the b-part of
+/// the Gauss-Newton step, information = (Sigma_last)^-1 (zero height row and column when heights
+/// are fixed). nullopt when the curvature is singular (an unobserved variable). Precondition: 1 <=
+/// first <= last < s.poses.size().
 std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const TraversableField* field,
                                            const ModelConfig& model, std::size_t first,
                                            std::size_t last,
