@@ -277,6 +277,7 @@ void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
 }
 
 int RunStream(const StreamArgs& a) {
+    const auto start = Clock::now();
     if (!a.smoothed_out.empty()) CheckOutputPath(a.smoothed_out, "--smoothed-out");
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
@@ -287,6 +288,11 @@ int RunStream(const StreamArgs& a) {
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
     StreamSession session(setup, online, a.status_column);
+    if (!a.quiet) {
+        // Poses a producer writes before this line wait in the pipe and arrive as one burst.
+        std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",
+                     std::chrono::duration<double>(Clock::now() - start).count());
+    }
     if (a.replay)
         Replay(setup.scenario, a.rate_hz, session);
     else

@@ -6,6 +6,12 @@
 #include <cmath>
 #include <exception>
 
+#if defined(__linux__)
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
@@ -16,6 +22,18 @@ namespace {
 bool Finite(const PlanarPose& p) {
     return std::isfinite(p.t_s) && p.p_en.allFinite() && std::isfinite(p.up_m) &&
            (!p.yaw_rad || std::isfinite(*p.yaw_rad));
+}
+
+// The worker runs the solves at a lower scheduling priority than the thread that calls Push, so
+// that on a busy or single core an arriving pose pre-empts a running solve instead of waiting for
+// its time slice (the output latency is the Push path's, not the solver's). Best effort: where
+// the system refuses, the worker keeps the caller's priority.
+void LowerWorkerPriority() {
+#if defined(__linux__)
+    const auto tid = static_cast<id_t>(syscall(SYS_gettid));
+    const int nice = getpriority(PRIO_PROCESS, tid);
+    setpriority(PRIO_PROCESS, tid, std::min(nice + 10, 19));
+#endif
 }
 
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
@@ -266,6 +284,7 @@ void OnlineCorrector::Request(std::size_t end, bool restarts) {
 // Takes the newest request: the window that ends at the newest accepted pose (requests made
 // while a solve was running are merged into it: skipped, not queued).
 void OnlineCorrector::WorkerLoop() {
+    LowerWorkerPriority();
     for (;;) {
         std::size_t end = 0;
         bool restarts = false;

@@ -3,7 +3,8 @@
 # lines at each rate (0: as fast as the pipe takes them) into `driftcorr stream --status-column`,
 # whose output is scored against the ground truth (causal ATE, no re-alignment). Prints one line
 # per run and keeps the stream's stderr summary (freshness, solve time per window, output latency
-# per line, the verdict) in <out>/<scenario>_<rate>.log.
+# per line, the verdict) in <out>/<scenario>_<rate>.log. The producer starts once the stream has
+# loaded its map (STARTUP_BURST=1: at once, so the poses written meanwhile arrive as a burst).
 # Usage: tests/benchmarks/run_stream_bench.sh [build dir] [out dir] -- [scenario dirs...]
 #   RATES="10 100 1000 0" (default), STREAM_ARGS="--max-lag 20" (extra stream options),
 #   CPU=0 pins the stream to one core (taskset), as "keeping up on one core" means.
@@ -27,7 +28,10 @@ for scenario in "$@"; do
     name=$(basename "$scenario")
     for rate in $rates; do
         tag="${name}_${rate}hz"
-        "$build/tests/stream_replay" feed "$scenario" "$rate" |
+        rm -f "$out/$tag.log"
+        ready=("$out/$tag.log")
+        [[ -n "${STARTUP_BURST:-}" ]] && ready=()
+        "$build/tests/stream_replay" feed "$scenario" "$rate" "${ready[@]}" |
             "${pin[@]}" "$build/examples/driftcorr" stream "$scenario" --status-column \
                 ${STREAM_ARGS:-} >"$out/$tag.tum" 2>"$out/$tag.log"
         score=$("$build/tests/stream_replay" score "$scenario" "$out/$tag.tum")

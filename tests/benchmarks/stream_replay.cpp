@@ -1,8 +1,11 @@
 // Replays a scenario through the real `driftcorr stream` binary and a pipe, and scores its causal
 // output (tests/benchmarks/run_stream_bench.sh runs both around the binary):
-//   stream_replay feed <scenario> <rate_hz>   the scenario's estimate as TUM lines on stdout, one
+//   stream_replay feed <scenario> <rate_hz> [<stream log>]
+//                                             the scenario's estimate as TUM lines on stdout, one
 //                                             every 1/rate_hz s (0: as fast as the pipe takes
-//                                             them), flushed per line
+//                                             them), flushed per line; with a log, only once the
+//                                             stream wrote "reading poses" into it (its map is
+//                                             loaded: no start-up backlog in the pipe)
 //   stream_replay score <scenario> <out.tum>  the causal ATE of the stream's output (its lines in
 //                                             order, one per estimate pose; a --status-column is
 //                                             read too) against the ground truth, with no
@@ -28,9 +31,22 @@ namespace {
 
 using namespace driftcorr;
 
-int Feed(const std::string& scenario, double rate_hz) {
+// Waits until `log` contains `text` (gives up after 10 min).
+void WaitFor(const std::string& log, const std::string& text) {
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - t0 < std::chrono::minutes(10)) {
+        std::ifstream in(log);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        if (ss.str().find(text) != std::string::npos) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+}
+
+int Feed(const std::string& scenario, double rate_hz, const std::string& ready_log) {
     const io::Scenario sc = io::LoadScenario(scenario);
     const Trajectory est = io::LoadTrajectory(sc.estimate);
+    if (!ready_log.empty()) WaitFor(ready_log, "reading poses");
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < est.size(); ++i) {
         if (rate_hz > 0.0) {
@@ -111,14 +127,15 @@ int Score(const std::string& scenario, const std::string& output) {
 
 int main(int argc, char** argv) {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (argc != 4 || (mode != "feed" && mode != "score")) {
+    if (argc < 4 || argc > 5 || (mode != "feed" && mode != "score") ||
+        (mode == "score" && argc != 4)) {
         std::fprintf(stderr,
-                     "usage: stream_replay feed <scenario> <rate_hz>\n"
+                     "usage: stream_replay feed <scenario> <rate_hz> [<stream log>]\n"
                      "       stream_replay score <scenario> <stream output.tum>\n");
         return 1;
     }
     try {
-        if (mode == "feed") return Feed(argv[2], std::atof(argv[3]));
+        if (mode == "feed") return Feed(argv[2], std::atof(argv[3]), argc == 5 ? argv[4] : "");
         return Score(argv[2], argv[3]);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "stream_replay: %s\n", e.what());
