@@ -105,7 +105,7 @@ TEST_F(OnlineSynthetic, SynchronousMatchesBatch) {
 // result is the batch solve, the same with them and without them (same process, same solves:
 // equal to rounding). They do move it (on this synthetic drive both are within the same bound of
 // the batch result).
-TEST_F(OnlineSynthetic, PreviewsMoveOnlyTheCausalOutput) {
+TEST_F(OnlineSynthetic, IntermediateSolvesMoveOnlyTheCausalOutput) {
     const OnlineOutcome with = RunOnline(run_->estimate, setup_->field, true, 0.125);
     const OnlineOutcome without = RunOnline(run_->estimate, setup_->field, true, 0.0);
     ASSERT_TRUE(Usable(with.smoothed.status) && Usable(without.smoothed.status));
@@ -117,7 +117,7 @@ TEST_F(OnlineSynthetic, PreviewsMoveOnlyTheCausalOutput) {
     }
     const double causal_with = ComputeMetrics(with.causal, *run_->ground_truth).ate_m;
     const double causal_without = ComputeMetrics(without.causal, *run_->ground_truth).ate_m;
-    std::printf("synthetic causal ATE: %.3f m with previews, %.3f m without\n", causal_with,
+    std::printf("synthetic causal ATE: %.3f m with intermediate solves, %.3f m without\n", causal_with,
                 causal_without);
     double moved = 0.0;
     for (std::size_t i = 0; i < with.causal.size(); ++i) {
@@ -434,6 +434,7 @@ TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
     }
     // The pause starts once the first 150 lines have come out (the map is loaded by then).
     const std::string out_path = dir + "/out.txt";
+    std::ofstream(out_path).flush();
     const std::string cmd =
         "(cat " + dir + "/a.tum; while [ $(wc -l < " + out_path +
         ") -lt 150 ]; do sleep 0.05; done; sleep 0.8; cat " + dir + "/b.tum) | " +

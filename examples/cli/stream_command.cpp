@@ -116,14 +116,11 @@ public:
     StreamSession(const pipeline::StreamSetup& setup, const OnlineConfig& cfg, bool status_column)
         : setup_(setup), cfg_(cfg), corrector_(&setup.field, cfg), status_column_(status_column) {}
 
-    // One input line (without newline), read at `arrived`; `complete` is false for a last line
-    // without newline.
-    void HandleLine(long number, const std::string& text, bool complete,
-                    Clock::time_point arrived) {
-        const double pause_s =
-            seen_line_ ? std::chrono::duration<double>(arrived - last_arrival_).count() : 0.0;
-        seen_line_ = true;
-        last_arrival_ = arrived;
+    // One input line (without newline), read at `arrived` after waiting `pause_s` for it (the
+    // producer's pause, not this program's own work); `complete` is false for a last line without
+    // newline.
+    void HandleLine(long number, const std::string& text, bool complete, Clock::time_point arrived,
+                    double pause_s) {
         const io::TumLine line = io::ParseTumLine(text);
         if (line.kind == io::TumLine::Kind::kSkip) return;
         if (!complete) return Skip(number, "input ended mid-line (no newline); line ignored");
@@ -248,17 +245,20 @@ private:
     PlanarTrajectory reference_;
     std::size_t skipped_ = 0;
     bool outside_ = false;
-    bool seen_line_ = false;
-    Clock::time_point last_arrival_;
     std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]
 };
 
 void ReadStdin(StreamSession& session) {
     std::string text;
     long number = 0;
+    Clock::time_point waiting_since = Clock::now();
     while (std::getline(std::cin, text)) {
         ++number;
-        session.HandleLine(number, text, !std::cin.eof(), Clock::now());
+        const Clock::time_point arrived = Clock::now();
+        const double waited_s =
+            number > 1 ? std::chrono::duration<double>(arrived - waiting_since).count() : 0.0;
+        session.HandleLine(number, text, !std::cin.eof(), arrived, waited_s);
+        waiting_since = Clock::now();
     }
 }
 
@@ -272,7 +272,7 @@ void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
         }
         std::string text = io::FormatTumLine(est.t_s[i], est.p_frame[i], est.q_frame_body[i]);
         text.pop_back();  // the newline
-        session.HandleLine(long(i + 1), text, true, Clock::now());
+        session.HandleLine(long(i + 1), text, true, Clock::now(), 0.0);
     }
 }
 

@@ -238,48 +238,6 @@ std::size_t IncrementalCorrector::WindowFirst(std::size_t end) const {
     return first;
 }
 
-IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end) {
-    assert(done_ < end && end < size() && "preview must add poses");
-    Preview p;
-    p.first = WindowFirst(end);
-    // A preview changes poses [lo, end] only (the window, and the poses after done() it
-    // initialises): those are saved and restored, not the whole trajectory.
-    const std::size_t lo = std::min(p.first, done_ + 1);
-    const std::vector<PoseState> saved_poses(state_.poses.begin() + lo,
-                                             state_.poses.begin() + end + 1);
-    const std::vector<double> saved_scales = state_.scales;  // one per scale segment: few
-    SeedNewScales(state_, done_ + 1, end);
-    // Warm start from the previous preview while it still covers poses after done(): its poses
-    // (from the window's first on) and scales, and odometry only after its end.
-    std::size_t from = done_ + 1;
-    if (!last_preview_.poses.empty() && last_preview_end_ > done_ && last_preview_end_ <= end) {
-        for (std::size_t i = std::max(p.first, last_preview_.first); i <= last_preview_end_; ++i) {
-            state_.poses[i] = last_preview_.poses[i - last_preview_.first];
-        }
-        for (std::size_t g = 0; g < last_preview_.scales.size(); ++g) {
-            state_.scales[g] = last_preview_.scales[g];
-        }
-        SeedNewScales(state_, last_preview_end_ + 1, end);
-        from = last_preview_end_ + 1;
-    }
-    if (from <= end) ComposeOdometry(state_, from, end);
-    // One solve, no restarts: restarting from other scale hypotheses is the chunk solve's job.
-    // Measured on hcu_eight (causal ATE): restarted previews 3.17 m (one chose a wrong basin and
-    // put the output 11 m off for 12 steps), single-solve previews 1.54 m, no previews 1.73 m.
-    CorrectionResult preview_stats;  // not counted in the chunk statistics
-    const SolveReport rep =
-        SolveWindow(state_, field_, cfg_, cfg_.window_ipopt, p.first, end, preview_stats, false);
-    if (Usable(rep.status)) {
-        p.poses.assign(state_.poses.begin() + p.first, state_.poses.begin() + end + 1);
-    }
-    p.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
-    std::copy(saved_poses.begin(), saved_poses.end(), state_.poses.begin() + lo);
-    state_.scales = saved_scales;
-    last_preview_ = p;
-    last_preview_end_ = end;
-    return p;
-}
-
 void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {
     while (done_ + 1 < size()) {
         SolveChunk(NextChunkEnd());

@@ -1,6 +1,7 @@
 #pragma once
-// The incremental machinery shared by the batch corrector (CorrectTrajectory) and the online
-// corrector (OnlineCorrector): a growing trajectory state, solved chunk by chunk.
+// The incremental machinery of the batch corrector (CorrectTrajectory; OnlineCorrector::Finish
+// runs it too): a growing trajectory state, solved chunk by chunk. SolveSoftWindow, the window
+// solve with restarts, is shared with the online corrector's fixed-lag windows (fixed_lag.h).
 //
 // One chunk step (SolveChunk): the scale segments first entered by the new poses start from the
 // latest scale estimate, the new poses are dead-reckoned by composing the odometry observations
@@ -11,8 +12,9 @@
 // What a window keeps of the poses before it (they are not re-solved): pose first-1 is held fixed
 // and anchors the window through the step and heading terms of step `first`; the step-length scale
 // of the segments before the window is held fixed and the scale random walk ties the window's first
-// scale segment to it. No marginalisation prior (covariance) is carried: the boundary pose is
-// treated as exact.
+// scale segment to it. No marginalisation prior (covariance) is carried here: the boundary pose is
+// treated as exact (the batch windows re-solve everything in the refinement; the online windows
+// carry one, fixed_lag.h).
 //
 // No I/O, no threads: the caller decides when to solve. Not thread-safe.
 #include <cstddef>
@@ -55,16 +57,6 @@ public:
     /// Initialises poses (done(), end] by odometry and solves the trailing window ending at `end`.
     /// Precondition: done() < end < size().
     void SolveChunk(std::size_t end);
-    /// A look-ahead solve for a causal output: the trailing window ending at `end` solved once
-    /// (no restarts) on a copy, warm-started from the previous preview; the state, done() and the
-    /// chunk sequence are unchanged. `poses` is empty when Ipopt did not converge.
-    struct Preview {
-        std::size_t first = 0;            ///< the window's first pose
-        std::vector<PoseState> poses;     ///< poses [first, end]; empty if the solve failed
-        std::vector<double> scales;       ///< scale segments [0, segment of end]
-    };
-    /// Precondition: done() < end < size().
-    Preview SolvePreview(std::size_t end);
     /// Solves chunks until every appended pose is corrected.
     void SolveRemaining(const ProgressCallback& progress = {});
     /// Final whole-trajectory solve with the hard corridor (if config.refine) and the outcome.
@@ -82,8 +74,6 @@ private:
     std::vector<double> dist_;
     std::size_t done_ = 0;
     std::size_t window_first_ = 1;
-    Preview last_preview_;              ///< warm start of the next preview
-    std::size_t last_preview_end_ = 0;
     /// First pose of the trailing window that ends at `end`.
     std::size_t WindowFirst(std::size_t end) const;
     CorrectionResult stats_;
