@@ -39,7 +39,8 @@ const char* kStreamUsage =
     "solve requested before the pose (fresh), else 0.\n"
     "--max-lag N waits (stops reading input) while the newest pose is more than N epochs past the\n"
     "last solved pose and a solve is under way: for replays and bursts, accuracy instead of speed\n"
-    "(0, the default: never wait; online.max_lag_epochs in --config).\n"
+    "(0, the default: never wait; online.max_lag_epochs in --config; --replay without --rate-hz:\n"
+    "1).\n"
     "Invalid lines (bad numbers, NaN, timestamps not increasing, a last line without newline) are\n"
     "skipped with a warning on stderr naming the line; the stream goes on. A pause of the input\n"
     "longer than online.gap_warn_s is reported once, when it resumes.\n"
@@ -285,7 +286,11 @@ int RunStream(const StreamArgs& a) {
     OnlineConfig online = cfg.online;
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = a.sync;
-    if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
+    if (!a.max_lag.empty()) {
+        online.max_lag_epochs = std::stoul(a.max_lag);
+    } else if (a.replay && a.rate_hz == 0.0) {
+        online.max_lag_epochs = 1;  // our own replay as fast as possible: wait for the solver
+    }
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
     StreamSession session(setup, online, a.status_column);
     if (!a.quiet) {
