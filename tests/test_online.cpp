@@ -101,12 +101,11 @@ TEST_F(OnlineSynthetic, SynchronousMatchesBatch) {
     EXPECT_EQ(o.smoothed.windows, run_->result.windows);
 }
 
-// The look-ahead solves between chunk ends (update_fraction) only move the causal output: the
-// chunk sequence, and so the smoothed result, is the same with them and without them (same
-// process, same solves: equal to rounding). They do move it (on KITTI they lower the causal ATE
-// on 5 of 7 drives, measured with tests/benchmarks/eval_online; on this synthetic drive both are
-// within the same bound of the batch result).
-TEST_F(OnlineSynthetic, PreviewsMoveOnlyTheCausalOutput) {
+// The solves between chunk ends (update_fraction) only move the causal output: the smoothed
+// result is the batch solve, the same with them and without them (same process, same solves:
+// equal to rounding). They do move it (on this synthetic drive both are within the same bound of
+// the batch result).
+TEST_F(OnlineSynthetic, IntermediateSolvesMoveOnlyTheCausalOutput) {
     const OnlineOutcome with = RunOnline(run_->estimate, setup_->field, true, 0.125);
     const OnlineOutcome without = RunOnline(run_->estimate, setup_->field, true, 0.0);
     ASSERT_TRUE(Usable(with.smoothed.status) && Usable(without.smoothed.status));
@@ -118,7 +117,7 @@ TEST_F(OnlineSynthetic, PreviewsMoveOnlyTheCausalOutput) {
     }
     const double causal_with = ComputeMetrics(with.causal, *run_->ground_truth).ate_m;
     const double causal_without = ComputeMetrics(without.causal, *run_->ground_truth).ate_m;
-    std::printf("synthetic causal ATE: %.3f m with previews, %.3f m without\n", causal_with,
+    std::printf("synthetic causal ATE: %.3f m with intermediate solves, %.3f m without\n", causal_with,
                 causal_without);
     double moved = 0.0;
     for (std::size_t i = 0; i < with.causal.size(); ++i) {
@@ -128,13 +127,123 @@ TEST_F(OnlineSynthetic, PreviewsMoveOnlyTheCausalOutput) {
     EXPECT_LE(causal_with, 1.5 * run_->after->ate_m + 0.5);
 }
 
-// The worker thread solves the same chunks in the same order, whatever the timing.
+// Finish() is the batch solve, whatever the worker did.
 TEST_F(OnlineSynthetic, ThreadedSmoothedMatchesBatch) {
     const OnlineOutcome o = RunOnline(run_->estimate, setup_->field, false);
     ASSERT_TRUE(Usable(o.smoothed.status)) << o.smoothed.message;
     const double smoothed = ComputeMetrics(o.smoothed.corrected, *run_->ground_truth).ate_m;
     EXPECT_LE(smoothed, 1.05 * run_->after->ate_m + 0.05);
     EXPECT_EQ(o.smoothed.windows, run_->result.windows);
+}
+
+// A replay pushed as fast as possible, with back-pressure (max_lag_epochs 1): every output chains
+// from the solve its schedule asked for (fresh), so the causal output is as good as the
+// synchronous one (same bound), and ages stay within one request interval.
+TEST_F(OnlineSynthetic, BackPressureKeepsEveryOutputFresh) {
+    const PlanarTrajectory& est = run_->estimate;
+    OnlineConfig cfg;
+    cfg.max_lag_epochs = 1;
+    OnlineCorrector online(&setup_->field, cfg);
+    PlanarTrajectory causal;
+    std::size_t max_age = 0;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        const PushResult r = online.Push(At(est, i));
+        ASSERT_TRUE(r.Accepted()) << r.message;
+        EXPECT_TRUE(r.fresh) << "pose " << i;
+        EXPECT_LE(r.correction_age_epochs, i);
+        max_age = std::max(max_age, r.correction_age_epochs);
+        causal.t_s.push_back(r.corrected.t_s);
+        causal.p_en.push_back(r.corrected.p_en);
+        causal.up_m.push_back(r.corrected.up_m);
+    }
+    const OnlineStatistics st = online.Statistics();
+    EXPECT_EQ(st.poses, est.size());
+    EXPECT_EQ(st.stale_poses, 0u);
+    EXPECT_EQ(st.max_age_epochs, max_age);
+    EXPECT_GT(st.solves, 10u);
+    EXPECT_EQ(st.solve_s.size(), st.solves);
+    EXPECT_GT(st.prior_solves, 0u) << "windows after the first carry a marginalised prior";
+    const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
+    std::printf(
+        "synthetic, as fast as possible with max_lag_epochs 1: causal ATE %.3f m, "
+        "%zu solves for %zu requests, %zu waits\n",
+        ate, st.solves, st.requests, st.waits);
+    EXPECT_LE(ate, 1.5 * run_->after->ate_m + 0.5);
+    EXPECT_TRUE(Usable(online.Finish().status));
+}
+
+// Without back-pressure a burst outruns the solver: the worker skips to the newest pose instead
+// of solving every request in turn, and the outputs say how old their correction is.
+TEST_F(OnlineSynthetic, BurstSkipsAheadAndReportsTheAge) {
+    const PlanarTrajectory& est = run_->estimate;
+    OnlineCorrector online(&setup_->field, OnlineConfig{});
+    std::size_t stale = 0;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        const PushResult r = online.Push(At(est, i));
+        ASSERT_TRUE(r.Accepted());
+        stale += !r.fresh;
+        EXPECT_NEAR(r.correction_age_s, est.t_s[i] - est.t_s[i - r.correction_age_epochs], 1e-9);
+    }
+    const OnlineStatistics st = online.Statistics();
+    EXPECT_EQ(st.stale_poses, stale);
+    std::printf(
+        "synthetic burst: %zu solves for %zu requests, %zu of %zu poses stale, worst age "
+        "%zu epochs\n",
+        st.solves, st.requests, stale, est.size(), st.max_age_epochs);
+    EXPECT_LT(st.solves, st.requests) << "a burst of " << est.size() << " poses queued no solves";
+    EXPECT_GT(stale, 0u);
+    const CorrectionResult smoothed = online.Finish();
+    ASSERT_TRUE(Usable(smoothed.status));
+    EXPECT_LE(ComputeMetrics(smoothed.corrected, *run_->ground_truth).ate_m,
+              1.05 * run_->after->ate_m + 0.05);
+}
+
+// Synchronous: the pose that asks for a solve is composed onto it (age 0).
+TEST_F(OnlineSynthetic, SynchronousRequestPosesHaveAgeZero) {
+    const PlanarTrajectory& est = run_->estimate;
+    OnlineConfig cfg;
+    cfg.synchronous = true;
+    OnlineCorrector online(&setup_->field, cfg);
+    std::size_t zero_age = 0;
+    for (std::size_t i = 0; i < 600; ++i) {
+        const PushResult r = online.Push(At(est, i));
+        ASSERT_TRUE(r.Accepted() && r.fresh);
+        zero_age += i > 0 && r.correction_age_epochs == 0;
+    }
+    const OnlineStatistics st = online.Statistics();
+    EXPECT_EQ(zero_age, st.requests);
+    EXPECT_EQ(st.solves, st.requests);
+    EXPECT_EQ(st.stale_poses, 0u);
+}
+
+// Without boundary_prior the online windows hold their boundary pose fixed (as the batch windows
+// do); with it (the default) the boundary carries the marginalised past. Both follow the map: the
+// causal ATE stays within the synchronous bound of the batch result.
+TEST_F(OnlineSynthetic, FixedAndMarginalisedBoundariesBothCorrectTheOutput) {
+    for (bool boundary_prior : {true, false}) {
+        const PlanarTrajectory& est = run_->estimate;
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.boundary_prior = boundary_prior;
+        OnlineCorrector online(&setup_->field, cfg);
+        PlanarTrajectory causal;
+        for (std::size_t i = 0; i < est.size(); ++i) {
+            const PushResult r = online.Push(At(est, i));
+            ASSERT_TRUE(r.Accepted());
+            causal.t_s.push_back(r.corrected.t_s);
+            causal.p_en.push_back(r.corrected.p_en);
+            causal.up_m.push_back(r.corrected.up_m);
+        }
+        const OnlineStatistics st = online.Statistics();
+        if (boundary_prior) {
+            EXPECT_GT(st.prior_solves, st.solves / 2);
+        } else {
+            EXPECT_EQ(st.prior_solves, 0u);
+        }
+        const double ate = ComputeMetrics(causal, *run_->ground_truth).ate_m;
+        std::printf("synthetic, boundary prior %d: causal ATE %.3f m\n", int(boundary_prior), ate);
+        EXPECT_LE(ate, 1.5 * run_->after->ate_m + 0.5);
+    }
 }
 
 TEST_F(OnlineSynthetic, BadPosesAreSkippedAndTheStreamGoesOn) {
@@ -219,8 +328,8 @@ TEST(Online, OutputIsProjectedOnlyAlongAHorizontalSlope) {
         return r.corrected;
     };
     // Outside by 1.5 m, slope 1 along x: moved onto the edge x = 8 (slack 0).
-    const PlanarPose across = first_output(
-        LinearCorridorField([](const Eigen::Vector3d& p) { return p.x() - 8.0; }));
+    const PlanarPose across =
+        first_output(LinearCorridorField([](const Eigen::Vector3d& p) { return p.x() - 8.0; }));
     EXPECT_NEAR(across.p_en.x(), 8.0, 0.05);
     EXPECT_NEAR(across.p_en.y(), 10.0, 1e-6);
     // Outside by 0.89 m, falling with height (slope 1 in z, 0.02 along x): not moved.
@@ -287,12 +396,12 @@ TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
         return io::FormatTumLine(est.t_s[i], est.p_frame[i], est.q_frame_body[i]);
     };
     for (std::size_t i = 0; i < 20; ++i) input += line(i);
-    input += "this is not a pose\n";                 // line 21
-    input += "99 nan 0 0 0 0 0 1\n";                 // line 22
-    input += line(19);                               // line 23: repeated timestamp
+    input += "this is not a pose\n";  // line 21
+    input += "99 nan 0 0 0 0 0 1\n";  // line 22
+    input += line(19);                // line 23: repeated timestamp
     for (std::size_t i = 20; i < 40; ++i) input += line(i);
     std::string last = line(40);
-    input += last.substr(0, last.size() / 2);       // line 44: ends mid-line
+    input += last.substr(0, last.size() / 2);  // line 44: ends mid-line
     const std::string dir = TmpDir("pipe");
     fs::create_directories(dir);
     std::ofstream(dir + "/in.tum") << input;
@@ -308,6 +417,53 @@ TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
     EXPECT_NE(err.find("line 44"), std::string::npos) << err;
     EXPECT_EQ(io::ReadTum(dir + "/out.tum").size(), 40u);
     EXPECT_EQ(io::ReadTum(dir + "/smoothed.tum").size(), 40u);
+}
+
+// A producer that pauses longer than gap_warn_s and resumes: the stream goes on and says so once;
+// --status-column adds the correction's age to every line; the summary says how fresh they were.
+TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
+    const Trajectory est = io::LoadTrajectory(run_->scenario.estimate);
+    const std::string dir = TmpDir("pause");
+    fs::create_directories(dir);
+    {
+        std::ofstream a(dir + "/a.tum"), b(dir + "/b.tum");
+        for (std::size_t i = 0; i < 300; ++i) {
+            (i < 150 ? a : b) << io::FormatTumLine(est.t_s[i], est.p_frame[i], est.q_frame_body[i]);
+        }
+        std::ofstream(dir + "/params.yaml") << "online: {gap_warn_s: 0.3}\n";
+    }
+    // The pause starts once the first 150 lines have come out (the map is loaded by then).
+    const std::string out_path = dir + "/out.txt";
+    std::ofstream(out_path).flush();
+    const std::string cmd =
+        "(cat " + dir + "/a.tum; while [ $(wc -l < " + out_path +
+        ") -lt 150 ]; do sleep 0.05; done; sleep 0.8; cat " + dir + "/b.tum) | " +
+        std::string(DRIFTCORR_BINARY_DIR) + "/examples/driftcorr stream " + *dir_ + " --config " +
+        dir + "/params.yaml --status-column > " + out_path + " 2> " + dir + "/err.txt";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << Slurp(dir + "/err.txt");
+    const std::string err = Slurp(dir + "/err.txt");
+    std::size_t pauses = 0;
+    for (std::size_t at = err.find("pause"); at != std::string::npos;
+         at = err.find("pause", at + 1)) {
+        ++pauses;
+    }
+    EXPECT_EQ(pauses, 1u) << err;
+    EXPECT_NE(err.find("line 151"), std::string::npos) << err;
+    EXPECT_NE(err.find("freshness"), std::string::npos) << err;
+    EXPECT_NE(err.find("solve time per window"), std::string::npos) << err;
+    EXPECT_NE(err.find("verdict"), std::string::npos) << err;
+    std::ifstream out(dir + "/out.txt");
+    std::string line;
+    std::size_t lines = 0;
+    while (std::getline(out, line)) {
+        std::istringstream ss(line);
+        double v;
+        int fields = 0;
+        while (ss >> v) ++fields;
+        ASSERT_EQ(fields, 11) << "line " << lines + 1 << ": " << line;
+        ++lines;
+    }
+    EXPECT_EQ(lines, 300u);
 }
 
 // An unwritable --smoothed-out is refused before the first pose is read (exit 2), not after an

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <ostream>
 #include <random>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include "driftcorr/core/observables.h"
 #include "driftcorr/mapping/road_network.h"
+#include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/ipopt_solver.h"
 #include "driftcorr/optim/window_problem.h"
 
@@ -90,7 +92,7 @@ std::vector<double> Perturbed(const WindowProblem& p, std::mt19937& rng) {
     std::vector<double> x(p.NumVariables());
     p.InitialPoint(x.data());
     std::normal_distribution<double> n(0.0, 1.0);
-    const int pose_vars = 4 * static_cast<int>(p.last() - p.first() + 1);
+    const int pose_vars = p.PoseVar(p.last(), 3) + 1;
     for (int k = 0; k < p.NumVariables(); ++k) {
         const double sd = k >= pose_vars ? 0.02 : (k % 4 == 3 ? 0.03 : 0.3);
         x[k] += sd * n(rng);
@@ -147,13 +149,30 @@ struct WindowCase {
     bool fix_height;
     unsigned seed;
     bool all_terms = false;  ///< also the robust step length and the speed-continuity terms
+    bool boundary_prior = false;  ///< pose first-1 a variable under a PosePriorTerm
 };
+
+/// A prior on pose `pose` of `s`: its mean 0.4 m / 0.05 rad off the pose, a full information
+/// matrix (a fixed height's row and column zero, as the fixed-lag window passes it).
+PosePriorTerm PriorOn(const TrajectoryState& s, std::size_t pose) {
+    PosePriorTerm t;
+    const PoseState& b = s.poses[pose];
+    t.mean << b.p.x() + 0.4, b.p.y() - 0.3, b.p.z() + 0.1, b.yaw_rad + 0.05;
+    Eigen::Matrix4d a;
+    a << 3.0, 0.5, 0.0, 0.2,  //
+        0.2, 2.0, 0.1, -0.4,  //
+        0.0, 0.3, 1.0, 0.0,   //
+        0.1, 0.0, 0.0, 5.0;
+    t.information = a * a.transpose();
+    if (s.fix_height) t.information.row(2).setZero(), t.information.col(2).setZero();
+    return t;
+}
 
 // Readable (and stable) parameter names in ctest output.
 void PrintTo(const WindowCase& c, std::ostream* os) {
     *os << "poses [" << c.first << ", " << c.last << "]"
         << (c.fix_height ? " planar" : " free height") << ", seed " << c.seed
-        << (c.all_terms ? ", all terms" : "");
+        << (c.all_terms ? ", all terms" : "") << (c.boundary_prior ? ", boundary prior" : "");
 }
 
 class WindowDerivatives : public ::testing::TestWithParam<WindowCase> {
@@ -171,6 +190,14 @@ protected:
         field_ = Field(3.5);
         state_ = StateFrom(Curve(), model_, GetParam().fix_height);
     }
+    WindowProblem Problem() {
+        const WindowCase c = GetParam();
+        std::optional<PosePriorTerm> prior;
+        if (c.boundary_prior) prior = PriorOn(state_, c.first - 1);
+        return WindowProblem(state_, &field_, model_, c.first, c.last, EveryThird(c.first, c.last),
+                             WindowUse::kSolve, prior);
+    }
+    std::size_t VarFirst() const { return GetParam().first - (GetParam().boundary_prior ? 1 : 0); }
     ModelConfig model_;
     TraversableField field_;
     TrajectoryState state_;
@@ -178,12 +205,12 @@ protected:
 
 TEST_P(WindowDerivatives, CallbacksMatchCentralDifferences) {
     const WindowCase c = GetParam();
-    WindowProblem p(state_, &field_, model_, c.first, c.last, EveryThird(c.first, c.last));
+    WindowProblem p = Problem();
     const int n = p.NumVariables(), m = p.NumConstraints();
     const int biases = state_.bias_segment.empty()
                            ? 0
                            : state_.bias_segment[c.last] - state_.bias_segment[c.first] + 1;
-    ASSERT_EQ(n, 4 * int(c.last - c.first + 1) +
+    ASSERT_EQ(n, 4 * int(c.last - VarFirst() + 1) +
                      (state_.scale_segment[c.last] - state_.scale_segment[c.first] + 1) + biases);
     ASSERT_EQ(m, int((c.last - c.first) / 3 + 1));
     ASSERT_EQ(p.JacobianStructure().size(), std::size_t(3 * m));
@@ -247,13 +274,13 @@ TEST_P(WindowDerivatives, CallbacksMatchCentralDifferences) {
 
 TEST_P(WindowDerivatives, BoundsFixHeightsAndScales) {
     const WindowCase c = GetParam();
-    WindowProblem p(state_, &field_, model_, c.first, c.last, EveryThird(c.first, c.last));
+    WindowProblem p = Problem();
     const int n = p.NumVariables(), m = p.NumConstraints();
     std::vector<double> xl(n), xu(n), gl(m), gu(m), x0(n);
     p.Bounds(xl.data(), xu.data(), gl.data(), gu.data());
     p.InitialPoint(x0.data());
-    for (std::size_t i = c.first; i <= c.last; ++i) {
-        const int z = 4 * int(i - c.first) + 2;
+    for (std::size_t i = VarFirst(); i <= c.last; ++i) {
+        const int z = 4 * int(i - VarFirst()) + 2;
         EXPECT_EQ(x0[z], state_.poses[i].p.z());
         if (c.fix_height) {
             EXPECT_EQ(xl[z], x0[z]);
@@ -267,7 +294,7 @@ TEST_P(WindowDerivatives, BoundsFixHeightsAndScales) {
         EXPECT_LT(gl[k], -1e10);
         EXPECT_EQ(gu[k], model_.corridor_slack_m);
     }
-    for (int k = 4 * int(c.last - c.first + 1); k < n; ++k) {
+    for (int k = 4 * int(c.last - VarFirst() + 1); k < n; ++k) {
         EXPECT_LE(xl[k], x0[k]);
         EXPECT_GE(xu[k], x0[k]);
         EXPECT_LT(xl[k], 1.0);
@@ -281,7 +308,7 @@ TEST_P(WindowDerivatives, BoundsFixHeightsAndScales) {
 // gradient where the term is Gaussian (grad = information * r * J).
 TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
     const WindowCase c = GetParam();
-    WindowProblem p(state_, &field_, model_, c.first, c.last, EveryThird(c.first, c.last));
+    WindowProblem p = Problem();
     std::mt19937 rng(c.seed + 1000u);
     std::vector<double> x = Perturbed(p, rng);
     std::array<int, kTermFamilies> seen{};
@@ -325,6 +352,7 @@ TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kSpeedChange)] > 0, c.all_terms);
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kHeadingBiasWalk)] > 0, c.all_terms);
     EXPECT_GT(seen[static_cast<int>(TermFamily::kScaleRange)], 0);
+    EXPECT_EQ(seen[static_cast<int>(TermFamily::kBoundaryPrior)] > 0, c.boundary_prior);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -333,11 +361,15 @@ INSTANTIATE_TEST_SUITE_P(
                       WindowCase{12, 25, true, 103u}, WindowCase{12, 25, false, 104u},
                       WindowCase{14, 17, true, 105u},  // a short window around the stop
                       WindowCase{1, 29, true, 106u, true}, WindowCase{12, 25, false, 107u, true},
-                      WindowCase{2, 5, true, 108u, true}),
+                      WindowCase{2, 5, true, 108u, true},
+                      WindowCase{12, 25, true, 109u, false, true},
+                      WindowCase{12, 25, false, 110u, true, true},
+                      WindowCase{1, 29, true, 111u, false, true}),  // the prior on pose 0
     [](const ::testing::TestParamInfo<WindowCase>& param_info) {
         const WindowCase& c = param_info.param;
         return "poses_" + std::to_string(c.first) + "_" + std::to_string(c.last) +
-               (c.fix_height ? "_planar" : "_free_height") + (c.all_terms ? "_all_terms" : "");
+               (c.fix_height ? "_planar" : "_free_height") + (c.all_terms ? "_all_terms" : "") +
+               (c.boundary_prior ? "_boundary_prior" : "");
     });
 
 TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {
@@ -363,6 +395,44 @@ TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {
     s.scales[s.scale_segment[12] - 1] = 1.05;
     EXPECT_GT(objective(), f0 + 1.0);
     EXPECT_EQ(p.NumConstraints(), 0);
+}
+
+TEST(WindowProblem, BoundaryPriorMakesPoseFirstMinusOneAVariable) {
+    const ModelConfig model = Model();
+    TrajectoryState s = StateFrom(Curve(), model, true);
+    const PosePriorTerm prior = PriorOn(s, 11);
+    WindowProblem fixed(s, nullptr, model, 12, 25, std::vector<std::uint8_t>(14, 0));
+    WindowProblem p(s, nullptr, model, 12, 25, std::vector<std::uint8_t>(14, 0),
+                    WindowUse::kSolve, prior);
+    EXPECT_EQ(p.NumVariables(), fixed.NumVariables() + 4);
+    EXPECT_EQ(p.PoseVar(11, 0), 0);
+    EXPECT_EQ(p.PoseVar(10, 3), -1);
+    EXPECT_EQ(p.PoseVar(12, 0), 4);
+    std::vector<double> x(p.NumVariables()), xf(fixed.NumVariables());
+    p.InitialPoint(x.data());
+    fixed.InitialPoint(xf.data());
+    // At the state the objective is the fixed window's plus the prior's cost at pose 11.
+    const PoseState& b = s.poses[11];
+    const double prior_cost = prior.Evaluate(
+        PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad), nullptr, nullptr);
+    EXPECT_GT(prior_cost, 0.5);
+    EXPECT_NEAR(p.Objective(x.data()), fixed.Objective(xf.data()) + prior_cost, 1e-9);
+    // The Gauss-Newton Hessian carries the prior's information on pose 11's block (the step
+    // terms of step 12 add to it; without the prior that block comes from them alone).
+    WindowProblem zero(s, nullptr, model, 12, 25, std::vector<std::uint8_t>(14, 0),
+                       WindowUse::kSolve, PosePriorTerm{prior.mean, PoseMatrix::Zero()});
+    const Eigen::MatrixXd with = DenseGaussNewtonHessian(p, x.data());
+    const Eigen::MatrixXd without = DenseGaussNewtonHessian(zero, x.data());
+    EXPECT_LT(((with - without).topLeftCorner(4, 4) - prior.information).cwiseAbs().maxCoeff(),
+              1e-9);
+    EXPECT_LT((with - without).bottomRightCorner(with.rows() - 4, with.cols() - 4)
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12);
+    // Store moves pose 11 as well.
+    x[0] += 0.7;
+    p.Store(x.data());
+    EXPECT_EQ(s.poses[11].p.x(), x[0]);
 }
 
 TEST(WindowProblem, ObjectiveAtTheTruthIsOnlyThePreservationPrior) {

@@ -1,5 +1,6 @@
 #include "driftcorr/core/cost_terms.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -308,6 +309,27 @@ Linearisation<3> MapDistanceTerm::Linearise(double d, const Eigen::Vector3d& gra
     const double e = std::exp(-d * d / (2.0 * c2));
     const double rho_dd = k * e * (1.0 - d * d / c2);  // d2 rho / d d2
     return {d, grad_d, std::max(rho_dd, 0.0), k * e * d * d};
+}
+
+double PosePriorTerm::Evaluate(const PoseVector& x, PoseVector* grad, PoseMatrix* hess) const {
+    const PoseVector e = x - mean;
+    const PoseVector ie = information * e;
+    if (grad) *grad = ie;
+    if (hess) *hess = information;
+    return 0.5 * e.dot(ie);
+}
+
+std::array<Linearisation<4>, 4> PosePriorTerm::Linearise(const PoseVector& x) const {
+    const Eigen::SelfAdjointEigenSolver<PoseMatrix> eigen(information);
+    std::array<Linearisation<4>, 4> out;
+    for (int k = 0; k < 4; ++k) {
+        Linearisation<4>& l = out[k];
+        l.jacobian = eigen.eigenvectors().col(k);
+        l.residual = l.jacobian.dot(x - mean);
+        l.information = std::max(eigen.eigenvalues()[k], 0.0);
+        l.chi2 = l.information * l.residual * l.residual;
+    }
+    return out;
 }
 
 }  // namespace driftcorr

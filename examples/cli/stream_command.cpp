@@ -1,18 +1,23 @@
 // `driftcorr stream`: corrects poses read from standard input one line at a time and writes each
 // corrected pose to standard output as soon as it is computed (flushed per line).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "commands.h"
 #include "driftcorr/core/errors.h"
+#include "driftcorr/core/format.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/io/tum_line.h"
+#include "driftcorr/optim/verdict.h"
 #include "driftcorr/pipeline/online.h"
 
 namespace driftcorr::cli {
@@ -20,30 +25,49 @@ namespace {
 
 const char* kStreamUsage =
     "usage: driftcorr stream <scenario dir | scenario.yaml> [--config params.yaml]\n"
-    "                        [--replay] [--rate-hz R] [--smoothed-out smoothed.tum] [--sync] [-q]\n"
+    "                        [--replay] [--rate-hz R] [--max-lag N] [--status-column]\n"
+    "                        [--smoothed-out smoothed.tum] [--sync] [-q]\n"
     "\n"
     "Reads TUM pose lines (t x y z qx qy qz qw, in the scenario's trajectory frame) from standard\n"
     "input and writes each corrected pose as a TUM line to standard output as soon as it is\n"
-    "computed (a causal estimate). The scenario supplies the map, anchor and frame; its estimate\n"
-    "is only read with --replay, which feeds it through the same path instead of standard input,\n"
-    "at R poses per second (as fast as possible when R is 0 or absent).\n"
+    "computed (a causal estimate: the pose composed onto the newest solved window). The scenario\n"
+    "supplies the map, anchor and frame; its estimate is only read with --replay, which feeds it\n"
+    "through the same path instead of standard input, at R poses per second (as fast as possible\n"
+    "when R is 0 or absent).\n"
+    "--status-column appends to each line the age of the correction it used: epochs and seconds\n"
+    "(stream time) since the last pose of the solve it chains from, and 1 if that was the newest\n"
+    "solve requested before the pose (fresh), else 0.\n"
+    "--max-lag N waits (stops reading input) while the newest pose is more than N epochs past the\n"
+    "last solved pose and a solve is under way: for replays and bursts, accuracy instead of speed\n"
+    "(0, the default: never wait; online.max_lag_epochs in --config; --replay without --rate-hz:\n"
+    "1).\n"
     "Invalid lines (bad numbers, NaN, timestamps not increasing, a last line without newline) are\n"
-    "skipped with a warning on stderr naming the line; the stream goes on.\n"
-    "At the end of input the whole trajectory is smoothed; --smoothed-out writes it as TUM.\n"
+    "skipped with a warning on stderr naming the line; the stream goes on. A pause of the input\n"
+    "longer than online.gap_warn_s is reported once, when it resumes.\n"
+    "At the end of input: a summary on stderr (share of poses emitted without a fresh solve, "
+    "worst\n"
+    "age, solve time per window, output latency per line), then the whole trajectory is smoothed\n"
+    "(the batch result) and judged (the verdict); --smoothed-out writes it as TUM.\n"
     "--sync solves inside the pose loop (deterministic; slower per pose).\n"
     "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, 4 internal.\n";
 
 struct StreamArgs {
-    std::string scenario, config, smoothed_out;
-    bool replay = false, sync = false, quiet = false;
+    std::string scenario, config, smoothed_out, max_lag;
+    bool replay = false, sync = false, quiet = false, status_column = false;
     double rate_hz = 0.0;
 };
 
 bool ParseStreamArgs(int argc, char** argv, StreamArgs& a, std::string& err) {
     std::string rate;
-    const OptionTable table{
-        {{"--replay", &a.replay}, {"--sync", &a.sync}, {"--quiet", &a.quiet}, {"-q", &a.quiet}},
-        {{"--config", &a.config}, {"--smoothed-out", &a.smoothed_out}, {"--rate-hz", &rate}}};
+    const OptionTable table{{{"--replay", &a.replay},
+                             {"--sync", &a.sync},
+                             {"--quiet", &a.quiet},
+                             {"-q", &a.quiet},
+                             {"--status-column", &a.status_column}},
+                            {{"--config", &a.config},
+                             {"--smoothed-out", &a.smoothed_out},
+                             {"--rate-hz", &rate},
+                             {"--max-lag", &a.max_lag}}};
     auto positional = [&a](const std::string& arg) -> std::string {
         if (!a.scenario.empty()) return "unexpected argument " + arg;
         a.scenario = arg;
@@ -58,6 +82,11 @@ bool ParseStreamArgs(int argc, char** argv, StreamArgs& a, std::string& err) {
             return false;
         }
     }
+    if (!a.max_lag.empty() &&
+        (a.max_lag.size() > 9 || a.max_lag.find_first_not_of("0123456789") != std::string::npos)) {
+        err = "--max-lag needs a whole number of epochs >= 0";
+        return false;
+    }
     if (a.scenario.empty()) err = "missing scenario";
     return err.empty();
 }
@@ -66,14 +95,33 @@ void Warn(long line, const std::string& what) {
     std::fprintf(stderr, "driftcorr stream: line %ld: %s\n", line, what.c_str());
 }
 
+double Percentile(std::vector<double> v, double p) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, std::size_t(p * double(v.size())))];
+}
+
+std::string Milliseconds(const std::vector<double>& s) {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "p50 %.2f / p99 %.2f / max %.2f ms", 1e3 * Percentile(s, 0.5),
+                  1e3 * Percentile(s, 0.99),
+                  s.empty() ? 0.0 : 1e3 * *std::max_element(s.begin(), s.end()));
+    return buf;
+}
+
+using Clock = std::chrono::steady_clock;
+
 // The stream's state: the corrector and the accepted inputs (for the smoothed output).
 class StreamSession {
 public:
-    StreamSession(const pipeline::StreamSetup& setup, const OnlineConfig& cfg)
-        : setup_(setup), corrector_(&setup.field, cfg) {}
+    StreamSession(const pipeline::StreamSetup& setup, const OnlineConfig& cfg, bool status_column)
+        : setup_(setup), cfg_(cfg), corrector_(&setup.field, cfg), status_column_(status_column) {}
 
-    // One input line (without newline); `complete` is false for a last line without newline.
-    void HandleLine(long number, const std::string& text, bool complete) {
+    // One input line (without newline), read at `arrived` after waiting `pause_s` for it (the
+    // producer's pause, not this program's own work); `complete` is false for a last line without
+    // newline.
+    void HandleLine(long number, const std::string& text, bool complete, Clock::time_point arrived,
+                    double pause_s) {
         const io::TumLine line = io::ParseTumLine(text);
         if (line.kind == io::TumLine::Kind::kSkip) return;
         if (!complete) return Skip(number, "input ended mid-line (no newline); line ignored");
@@ -85,18 +133,39 @@ public:
         if (!r.Accepted()) return Skip(number, r.message);
         const auto [p, q] = pipeline::FromPlanarPose(r.corrected, in, line.p_frame,
                                                      line.q_frame_body, axes, setup_.anchor);
-        std::fputs(io::FormatTumLine(line.t_s, p, q).c_str(), stdout);
+        std::string out = io::FormatTumLine(line.t_s, p, q);
+        if (status_column_) {
+            char status[64];
+            std::snprintf(status, sizeof(status), " %zu %.3f %d\n", r.correction_age_epochs,
+                          r.correction_age_s, r.fresh ? 1 : 0);
+            out.pop_back();
+            out += status;
+        }
+        std::fputs(out.c_str(), stdout);
         std::fflush(stdout);
+        latency_s_.push_back(std::chrono::duration<double>(Clock::now() - arrived).count());
         Record(in, line);
-        ReportWarnings(number, r);
+        ReportWarnings(number, r, pause_s);
     }
 
     int Finish(const std::string& smoothed_out, bool quiet) {
+        const OnlineStatistics st = corrector_.Statistics();
+        if (!quiet) Summarise(st);
         const CorrectionResult result = corrector_.Finish();
+        std::optional<Verdict> verdict;
+        if (Usable(result.status)) {
+            verdict = JudgeCorrection(reference_, &setup_.field, cfg_.corrector.model, result,
+                                      nullptr, false, true, VerdictConfig{});
+        }
         if (!quiet) {
-            std::fprintf(stderr, "driftcorr stream: %zu poses corrected, %zu lines skipped; "
-                         "smoothing: %s (%s)\n", accepted_.size(), skipped_,
+            std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
+            if (verdict) {
+                std::string reasons;
+                for (const std::string& why : verdict->reasons) reasons += "; " + why;
+                std::fprintf(stderr, "driftcorr stream: verdict %s%s\n",
+                             ToString(verdict->level).c_str(), reasons.c_str());
+            }
         }
         if (smoothed_out.empty()) return 0;
         if (!Usable(result.status)) {
@@ -110,6 +179,33 @@ public:
     }
 
 private:
+    void Summarise(const OnlineStatistics& st) const {
+        std::fprintf(stderr, "driftcorr stream: %zu poses corrected, %zu lines skipped\n",
+                     accepted_.size(), skipped_);
+        const double stale = st.poses ? 100.0 * double(st.stale_poses) / double(st.poses) : 0.0;
+        std::fprintf(stderr,
+                     "driftcorr stream: freshness: %.1f %% of poses emitted without a fresh solve; "
+                     "worst age %zu epochs (%.2f s)%s\n",
+                     stale, st.max_age_epochs, st.max_age_s,
+                     st.stale_poses > 0 && cfg_.max_lag_epochs == 0
+                         ? " (the solver did not keep up; --max-lag N makes the input wait)"
+                         : "");
+        std::fprintf(stderr,
+                     "driftcorr stream: solves: %zu of %zu requested (%zu with a marginalised "
+                     "prior, %zu failed); solve time per window %s\n",
+                     st.solves, st.requests, st.prior_solves, st.failed_solves,
+                     Milliseconds(st.solve_s).c_str());
+        std::fprintf(stderr,
+                     "driftcorr stream: output latency per line %s; waited %zu times, "
+                     "%.2f s (--max-lag)\n",
+                     Milliseconds(latency_s_).c_str(), st.waits, st.wait_s);
+        if (!st.worker_error.empty()) {
+            std::fprintf(stderr,
+                         "driftcorr stream: warning: %s; later outputs were composed "
+                         "onto the last solve\n",
+                         st.worker_error.c_str());
+        }
+    }
     void Skip(long number, const std::string& why) {
         ++skipped_;
         Warn(number, "skipped: " + why);
@@ -123,9 +219,17 @@ private:
         reference_.up_m.push_back(in.up_m);
         reference_.yaw_rad.push_back(*in.yaw_rad);
     }
-    // Gaps every time; leaving and re-entering the map once per transition.
-    void ReportWarnings(long number, const PushResult& r) {
-        if (r.gap) Warn(number, "warning: " + r.message);
+    // A pause of the input (wall time) or a gap in the stream's time: one message per pause;
+    // leaving and re-entering the map once per transition.
+    void ReportWarnings(long number, const PushResult& r, double pause_s) {
+        const bool paused = pause_s > cfg_.gap_warn_s;
+        if (paused || r.gap) {
+            std::string msg = "warning: ";
+            if (paused) msg += "input resumed after a pause of " + FormatFixed(pause_s, 2) + " s";
+            if (paused && r.gap) msg += "; ";
+            if (r.gap) msg += r.message;
+            Warn(number, msg + "; the stream goes on");
+        }
         if (r.outside_map != outside_) {
             Warn(number, r.outside_map ? "warning: pose is outside the map; odometry only until "
                                          "it is back on the map"
@@ -135,19 +239,27 @@ private:
     }
 
     const pipeline::StreamSetup& setup_;
+    OnlineConfig cfg_;
     OnlineCorrector corrector_;
+    bool status_column_;
     Trajectory accepted_;
     PlanarTrajectory reference_;
     std::size_t skipped_ = 0;
     bool outside_ = false;
+    std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]
 };
 
 void ReadStdin(StreamSession& session) {
     std::string text;
     long number = 0;
+    Clock::time_point waiting_since = Clock::now();
     while (std::getline(std::cin, text)) {
         ++number;
-        session.HandleLine(number, text, !std::cin.eof());
+        const Clock::time_point arrived = Clock::now();
+        const double waited_s =
+            number > 1 ? std::chrono::duration<double>(arrived - waiting_since).count() : 0.0;
+        session.HandleLine(number, text, !std::cin.eof(), arrived, waited_s);
+        waiting_since = Clock::now();
     }
 }
 
@@ -161,11 +273,12 @@ void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
         }
         std::string text = io::FormatTumLine(est.t_s[i], est.p_frame[i], est.q_frame_body[i]);
         text.pop_back();  // the newline
-        session.HandleLine(long(i + 1), text, true);
+        session.HandleLine(long(i + 1), text, true, Clock::now(), 0.0);
     }
 }
 
 int RunStream(const StreamArgs& a) {
+    const auto start = Clock::now();
     if (!a.smoothed_out.empty()) CheckOutputPath(a.smoothed_out, "--smoothed-out");
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
@@ -173,10 +286,22 @@ int RunStream(const StreamArgs& a) {
     OnlineConfig online = cfg.online;
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = a.sync;
+    if (!a.max_lag.empty()) {
+        online.max_lag_epochs = std::stoul(a.max_lag);
+    } else if (a.replay && a.rate_hz == 0.0) {
+        online.max_lag_epochs = 1;  // our own replay as fast as possible: wait for the solver
+    }
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
-    StreamSession session(setup, online);
-    if (a.replay) Replay(setup.scenario, a.rate_hz, session);
-    else ReadStdin(session);
+    StreamSession session(setup, online, a.status_column);
+    if (!a.quiet) {
+        // Poses a producer writes before this line wait in the pipe and arrive as one burst.
+        std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",
+                     std::chrono::duration<double>(Clock::now() - start).count());
+    }
+    if (a.replay)
+        Replay(setup.scenario, a.rate_hz, session);
+    else
+        ReadStdin(session);
     return session.Finish(a.smoothed_out, a.quiet);
 }
 

@@ -1,5 +1,7 @@
 // The online corrector in a few lines: a scenario's map, its estimate fed pose by pose, each
-// corrected pose printed as TUM at once, the smoothed trajectory at the end.
+// corrected pose printed as TUM at once, how fresh the corrections were, the smoothed trajectory
+// at the end. A file is a replay: far faster than any sensor, so Push may wait for the solver
+// (max_lag_epochs) instead of emitting poses composed onto old solves.
 // Run: driftcorr_online_example <scenario dir>
 #include <cstdio>
 
@@ -19,7 +21,9 @@ int main(int argc, char** argv) {
         const Trajectory est = io::LoadTrajectory(setup.scenario.estimate);
         const FrameAxes axes = setup.scenario.frame;
 
-        OnlineCorrector online(&setup.field, OnlineConfig{});
+        OnlineConfig config;
+        config.max_lag_epochs = 1;  // a replay: wait for the solve the newest pose asked for
+        OnlineCorrector online(&setup.field, config);
         for (std::size_t i = 0; i < est.size(); ++i) {
             const PlanarPose in = pipeline::ToPlanarPose(est.t_s[i], est.p_frame[i],
                                                          est.q_frame_body[i], axes, setup.anchor);
@@ -32,6 +36,9 @@ int main(int argc, char** argv) {
                                                          est.q_frame_body[i], axes, setup.anchor);
             std::fputs(io::FormatTumLine(est.t_s[i], p, q).c_str(), stdout);
         }
+        const OnlineStatistics st = online.Statistics();
+        std::fprintf(stderr, "%zu of %zu poses without a fresh solve, worst age %zu epochs\n",
+                     st.stale_poses, st.poses, st.max_age_epochs);
         const CorrectionResult smoothed = online.Finish();  // the whole trajectory, refined
         std::fprintf(stderr, "smoothed: %s (%s), %zu poses\n", ToString(smoothed.status).c_str(),
                      smoothed.message.c_str(), smoothed.corrected.size());

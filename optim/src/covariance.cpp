@@ -275,7 +275,8 @@ bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
         const auto family = static_cast<TermFamily>(f);
         const bool prior =
             family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset ||
-            family == TermFamily::kScaleRange || family == TermFamily::kHeadingBiasWalk;
+            family == TermFamily::kScaleRange || family == TermFamily::kHeadingBiasWalk ||
+            family == TermFamily::kBoundaryPrior;
         const bool estimable = r.families[f].redundancy >= kMinRedundancy;
         factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
         changed = changed || factor[f] > 1.01;

@@ -18,26 +18,6 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1.
-void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
-    for (std::size_t i = from; i <= to; ++i) {
-        const double bias = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[i]];
-        s.poses[i] = ComposeStep(s.poses[i - 1], s.obs[i], s.scales[s.scale_segment[i]],
-                                 s.fix_height, s.poses[i].p.z(), bias);
-    }
-}
-
-// Scale segments first entered by steps [from, to] start from the latest scale estimate.
-void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
-    for (int g = s.scale_segment[from - 1] + 1; g <= s.scale_segment[to]; ++g) {
-        s.scales[g] = s.scales[g - 1];
-    }
-    if (s.bias_segment.empty()) return;
-    for (int g = s.bias_segment[from - 1] + 1; g <= s.bias_segment[to]; ++g) {
-        s.biases[g] = s.biases[g - 1];
-    }
-}
-
 // Share of poses [first, last] farther than limit_m from every traversable centre.
 double OffRoadShare(const TrajectoryState& s, const TraversableField& field, std::size_t first,
                     std::size_t last, double limit_m) {
@@ -68,64 +48,85 @@ std::vector<std::uint8_t> GateConstraints(const TrajectoryState& s, const Traver
 // constraint is imposed in the refinement, once the soft solution sits on its roads.
 SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
                         const CorrectorConfig& cfg, const IpoptOptions& opt, std::size_t first,
-                        std::size_t last, CorrectionResult& result, bool hard) {
+                        std::size_t last, CorrectionResult& result, bool hard,
+                        const std::optional<PosePriorTerm>& prior = std::nullopt) {
     std::vector<std::uint8_t> flags = hard ? GateConstraints(s, field, cfg.model, first, last)
                                            : std::vector<std::uint8_t>(last - first + 1, 0);
     if (hard) {
         result.constrained_poses = std::count(flags.begin(), flags.end(), std::uint8_t(1));
     }
-    WindowProblem problem(s, field, cfg.model, first, last, flags);
+    WindowProblem problem(s, field, cfg.model, first, last, flags, WindowUse::kSolve, prior);
     SolveReport rep = SolveWithIpopt(problem, opt);
     result.iterations += rep.iterations;
     if (Usable(rep.status) || !hard) return rep;
     ++result.window_retries;
     WindowProblem soft(s, field, cfg.model, first, last,
-                       std::vector<std::uint8_t>(last - first + 1, 0));
+                       std::vector<std::uint8_t>(last - first + 1, 0), WindowUse::kSolve, prior);
     SolveReport rep2 = SolveWithIpopt(soft, opt);
     result.iterations += rep2.iterations;
     rep2.message = rep.message + ", re-solved without hard constraints: " + rep2.message;
     return rep2;
 }
 
+// Poses [from, to] of a state, saved to be restored (a window's, not the whole trajectory's).
+struct SavedPoses {
+    std::size_t from;
+    std::vector<PoseState> poses;
+    SavedPoses(const TrajectoryState& s, std::size_t from_, std::size_t to)
+        : from(from_), poses(s.poses.begin() + from_, s.poses.begin() + to + 1) {}
+    void RestoreInto(TrajectoryState& s) const {
+        std::copy(poses.begin(), poses.end(), s.poses.begin() + from);
+    }
+};
+
+}  // namespace
+
 // One incremental window (soft terms). When its solution leaves many poses off the roads, or
 // explains the window poorly (a high NLL per pose), the window fell into a wrong basin (typically:
 // a turn before the junction is reached, with the scale collapsing to keep the poses on the road
 // they left), so it is re-solved from other step-length scale hypotheses, re-composed from the
-// window's fixed start, and the lowest NLL wins.
-SolveReport SolveIncrementalWindow(TrajectoryState& s, const TraversableField* field,
-                                   const CorrectorConfig& cfg, std::size_t first, std::size_t last,
-                                   CorrectionResult& result) {
-    const std::vector<PoseState> saved_poses = s.poses;
-    const std::vector<double> saved_scales = s.scales, saved_biases = s.biases;
-    SolveReport best = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+// window's start, and the lowest NLL wins. Saves and restores the window's poses only (pose
+// first-1 included: with a boundary prior it is a variable), so its cost does not grow with the
+// trajectory.
+SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
+                            const CorrectorConfig& cfg, std::size_t first, std::size_t last,
+                            const std::optional<PosePriorTerm>& prior, bool restarts,
+                            CorrectionResult& result) {
+    const SavedPoses saved(s, first - 1, last);
+    const std::vector<double> saved_scales = s.scales, saved_biases = s.biases;  // few
+    SolveReport best =
+        SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false, prior);
     const double nll_per_pose = best.objective / double(last - first + 1);
-    if (!field || cfg.restart_scale_factors.empty() ||
+    if (!restarts || !field || cfg.restart_scale_factors.empty() ||
         (Usable(best.status) && nll_per_pose <= cfg.restart_nll_per_pose &&
          OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <= cfg.restart_offroad_share)) {
         return best;
     }
-    std::vector<PoseState> best_poses = s.poses;
+    SavedPoses best_poses(s, first - 1, last);
     std::vector<double> best_scales = s.scales, best_biases = s.biases;
     for (double factor : cfg.restart_scale_factors) {
-        s.poses = saved_poses;
+        saved.RestoreInto(s);
         s.scales = saved_scales;
         s.biases = saved_biases;
         for (int g = s.scale_segment[first]; g <= s.scale_segment[last]; ++g) s.scales[g] *= factor;
         ComposeOdometry(s, first, last);
-        SolveReport rep = SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false);
+        SolveReport rep =
+            SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false, prior);
         ++result.window_restarts;
         if (Usable(rep.status) && (!Usable(best.status) || rep.objective < best.objective)) {
             best = rep;
-            best_poses = s.poses;
+            best_poses = SavedPoses(s, first - 1, last);
             best_scales = s.scales;
             best_biases = s.biases;
         }
     }
-    s.poses = std::move(best_poses);
+    best_poses.RestoreInto(s);
     s.scales = std::move(best_scales);
     s.biases = std::move(best_biases);
     return best;
 }
+
+namespace {
 
 PlanarTrajectory ToTrajectory(const std::vector<double>& t_s, const TrajectoryState& s) {
     PlanarTrajectory out;
@@ -140,6 +141,24 @@ PlanarTrajectory ToTrajectory(const std::vector<double>& t_s, const TrajectorySt
 
 }  // namespace
 
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i <= to; ++i) {
+        const double bias = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[i]];
+        s.poses[i] = ComposeStep(s.poses[i - 1], s.obs[i], s.scales[s.scale_segment[i]],
+                                 s.fix_height, s.poses[i].p.z(), bias);
+    }
+}
+
+void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
+    for (int g = s.scale_segment[from - 1] + 1; g <= s.scale_segment[to]; ++g) {
+        s.scales[g] = s.scales[g - 1];
+    }
+    if (s.bias_segment.empty()) return;  // likewise the heading-rate biases
+    for (int g = s.bias_segment[from - 1] + 1; g <= s.bias_segment[to]; ++g) {
+        s.biases[g] = s.biases[g - 1];
+    }
+}
+
 PoseState ComposeStep(const PoseState& a, const StepObservation& o, double scale, bool fix_height,
                       double up_fixed_m, double bias_rad_s) {
     const double phi = a.yaw_rad + o.direction_rad;
@@ -151,24 +170,32 @@ PoseState ComposeStep(const PoseState& a, const StepObservation& o, double scale
     return b;
 }
 
-TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig& cfg,
-                             bool fix_height) {
+TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseState> poses,
+                           const CorrectorConfig& cfg, bool fix_height) {
+    assert(obs.size() == poses.size() && !obs.empty() && "one observation per pose");
     TrajectoryState s;
-    s.obs = ComputeObservations(est, cfg.stationary_m);
+    s.obs = std::move(obs);
     RepairSpeedEpisodes(s.obs, cfg.model.outlier_accel_mps2, kOutlierWindowS, kOutlierEpisodeS,
                         kOutlierDeviation);
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
     s.bias_segment = BiasSegments(s.obs, cfg.model.heading_bias_segment_s);
     if (!s.bias_segment.empty()) s.biases.assign(s.bias_segment.back() + 1, 0.0);
-    s.poses.resize(est.size());
-    const std::vector<double> yaw = UnwrappedHeadings(est, cfg.stationary_m);
-    for (std::size_t i = 0; i < est.size(); ++i) {
-        s.poses[i].p = Eigen::Vector3d(est.p_en[i].x(), est.p_en[i].y(), est.up_m[i]);
-        s.poses[i].yaw_rad = yaw[i];
-    }
+    s.poses = std::move(poses);
     s.fix_height = fix_height;
     return s;
+}
+
+TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig& cfg,
+                             bool fix_height) {
+    std::vector<PoseState> poses(est.size());
+    const std::vector<double> yaw = UnwrappedHeadings(est, cfg.stationary_m);
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        poses[i].p = Eigen::Vector3d(est.p_en[i].x(), est.p_en[i].y(), est.up_m[i]);
+        poses[i].yaw_rad = yaw[i];
+    }
+    return BatchState(ComputeObservations(est, cfg.stationary_m), std::move(poses), cfg,
+                      fix_height);
 }
 
 IncrementalCorrector::IncrementalCorrector(TrajectoryState state, const TraversableField* field,
@@ -231,7 +258,7 @@ void IncrementalCorrector::SolveChunk(std::size_t end) {
     ComposeOdometry(state_, done_ + 1, end);
     const std::size_t first = WindowFirst(end);
     window_first_ = first;
-    SolveReport rep = SolveIncrementalWindow(state_, field_, cfg_, first, end, stats_);
+    SolveReport rep = SolveSoftWindow(state_, field_, cfg_, first, end, std::nullopt, true, stats_);
     ++stats_.windows;
     if (!Usable(rep.status)) ++stats_.window_failures;
     done_ = end;
@@ -245,51 +272,6 @@ std::size_t IncrementalCorrector::WindowFirst(std::size_t end) const {
         --first;
     }
     return first;
-}
-
-IncrementalCorrector::Preview IncrementalCorrector::SolvePreview(std::size_t end) {
-    assert(done_ < end && end < size() && "preview must add poses");
-    Preview p;
-    p.first = WindowFirst(end);
-    // A preview changes poses [lo, end] only (the window, and the poses after done() it
-    // initialises): those are saved and restored, not the whole trajectory.
-    const std::size_t lo = std::min(p.first, done_ + 1);
-    const std::vector<PoseState> saved_poses(state_.poses.begin() + lo,
-                                             state_.poses.begin() + end + 1);
-    const std::vector<double> saved_scales = state_.scales;  // one per scale segment: few
-    const std::vector<double> saved_biases = state_.biases;  // one per bias segment: few
-    SeedNewScales(state_, done_ + 1, end);
-    // Warm start from the previous preview while it still covers poses after done(): its poses
-    // (from the window's first on) and scales, and odometry only after its end.
-    std::size_t from = done_ + 1;
-    if (!last_preview_.poses.empty() && last_preview_end_ > done_ && last_preview_end_ <= end) {
-        for (std::size_t i = std::max(p.first, last_preview_.first); i <= last_preview_end_; ++i) {
-            state_.poses[i] = last_preview_.poses[i - last_preview_.first];
-        }
-        for (std::size_t g = 0; g < last_preview_.scales.size(); ++g) {
-            state_.scales[g] = last_preview_.scales[g];
-        }
-        SeedNewScales(state_, last_preview_end_ + 1, end);
-        from = last_preview_end_ + 1;
-    }
-    if (from <= end) ComposeOdometry(state_, from, end);
-    // One solve, no restarts: restarting from other scale hypotheses is the chunk solve's job.
-    // Measured on hcu_eight (causal ATE): restarted previews 3.17 m (one chose a wrong basin and
-    // put the output 11 m off for 12 steps), single-solve previews 1.54 m, no previews 1.73 m.
-    CorrectionResult preview_stats;  // not counted in the chunk statistics
-    const SolveReport rep =
-        SolveWindow(state_, field_, cfg_, cfg_.window_ipopt, p.first, end, preview_stats, false);
-    if (Usable(rep.status)) {
-        p.poses.assign(state_.poses.begin() + p.first, state_.poses.begin() + end + 1);
-    }
-    p.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
-    if (!state_.bias_segment.empty()) p.bias_rad_s = state_.biases[state_.bias_segment[end]];
-    std::copy(saved_poses.begin(), saved_poses.end(), state_.poses.begin() + lo);
-    state_.scales = saved_scales;
-    state_.biases = saved_biases;
-    last_preview_ = p;
-    last_preview_end_ = end;
-    return p;
 }
 
 void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {

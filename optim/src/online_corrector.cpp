@@ -1,12 +1,20 @@
 #include "driftcorr/optim/online_corrector.h"
 
-#include "driftcorr/core/format.h"
-
+#include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 #include <exception>
 
+#if defined(__linux__)
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/format.h"
+#include "driftcorr/optim/incremental_corrector.h"
 
 namespace driftcorr {
 namespace {
@@ -14,6 +22,22 @@ namespace {
 bool Finite(const PlanarPose& p) {
     return std::isfinite(p.t_s) && p.p_en.allFinite() && std::isfinite(p.up_m) &&
            (!p.yaw_rad || std::isfinite(*p.yaw_rad));
+}
+
+// The worker runs the solves at a lower scheduling priority than the thread that calls Push, so
+// that on a busy or single core an arriving pose pre-empts a running solve instead of waiting for
+// its time slice (the output latency is the Push path's, not the solver's). Best effort: where
+// the system refuses, the worker keeps the caller's priority.
+void LowerWorkerPriority() {
+#if defined(__linux__)
+    const auto tid = static_cast<id_t>(syscall(SYS_gettid));
+    const int nice = getpriority(PRIO_PROCESS, tid);
+    setpriority(PRIO_PROCESS, tid, std::min(nice + 10, 19));
+#endif
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
@@ -46,7 +70,6 @@ OnlineCorrector::~OnlineCorrector() {
     {
         std::lock_guard<std::mutex> lock(mutex_);
         stop_ = true;
-        jobs_.clear();  // queued solves are not needed any more
     }
     wake_.notify_all();
     if (worker_.joinable()) worker_.join();
@@ -66,9 +89,9 @@ std::optional<PushResult> OnlineCorrector::Validate(const PlanarPose& pose) cons
     if (finished_) return Reject(PushStatus::kRejectedFinished, "Push after Finish()");
     if (!Finite(pose)) return Reject(PushStatus::kRejectedNonFinite, "pose has a NaN or inf value");
     if (!t_s_.empty() && !(pose.t_s > last_t_s_)) {
-        return Reject(PushStatus::kRejectedTime,
-                      "timestamp " + FormatFixed(pose.t_s, 6) + " is not after the previous one (" +
-                          FormatFixed(last_t_s_, 6) + ")");
+        return Reject(PushStatus::kRejectedTime, "timestamp " + FormatFixed(pose.t_s, 6) +
+                                                     " is not after the previous one (" +
+                                                     FormatFixed(last_t_s_, 6) + ")");
     }
     if (has_yaw_ && *has_yaw_ != pose.yaw_rad.has_value()) {
         return Reject(PushStatus::kRejectedHeading,
@@ -98,7 +121,7 @@ OnlineCorrector::Entry OnlineCorrector::MakeEntry(const PlanarPose& pose, double
 
 double OnlineCorrector::FrontScale(int segment) const {
     return segment < static_cast<int>(front_scales_.size()) ? front_scales_[segment]
-                                                             : front_scales_.back();
+                                                            : front_scales_.back();
 }
 
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
@@ -124,38 +147,73 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     r.gap = !t_s_.empty() && entry.step.dt_s > cfg_.gap_warn_s;
     const int segment =
         r.index == 0 ? 0 : static_cast<int>(path_m_ / cfg_.corrector.model.scale_segment_m);
-    PoseState out;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         if (first_heading) {
             for (Entry& e : pending_) e.initial.yaw_rad = last_yaw_u_;
+            for (Entry& e : entries_) e.initial.yaw_rad = last_yaw_u_;
             for (PoseState& s : current_) s.yaw_rad = last_yaw_u_;
         }
-        out = r.index == 0 ? entry.initial
-                           : ComposeStep(current_.back(), entry.step, FrontScale(segment),
-                                         fix_height_, entry.initial.p.z(), front_bias_rad_s_);
+        current_.push_back(r.index == 0
+                               ? entry.initial
+                               : ComposeStep(current_.back(), entry.step, FrontScale(segment),
+                                             fix_height_, entry.initial.p.z(), 0.0));
         pending_.push_back(entry);
-        current_.push_back(out);
         steps_.push_back(entry.step);
         segment_.push_back(segment);
     }
+    entries_.push_back(entry);
     t_s_.push_back(pose.t_s);
     last_t_s_ = pose.t_s;
     last_p_ = entry.initial.p;
     last_yaw_u_ = yaw_u;
     path_m_ += entry.step.length_m;
-    UpdateChunks(r.index);
-    if (cfg_.synchronous) out = current_[r.index];  // solved if this pose completed a chunk
+    const std::size_t requested_before = last_request_end_;
+    UpdateSchedule(r.index);  // synchronous: solves here
+    WaitForSolver(r.index, r);
+    PoseState out;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        out = current_[r.index];
+        r.correction_age_epochs = r.index - std::min(solved_end_, r.index);
+        r.fresh = solved_end_ >= requested_before;
+        r.covariance = solved_covariance_;
+        r.covariance_ok = solved_covariance_ok_;
+        r.correction_age_s = pose.t_s - t_s_[r.index - r.correction_age_epochs];
+        ++stats_.poses;
+        if (!r.fresh) ++stats_.stale_poses;
+        stats_.max_age_epochs = std::max(stats_.max_age_epochs, r.correction_age_epochs);
+        stats_.max_age_s = std::max(stats_.max_age_s, r.correction_age_s);
+    }
     if (!ProjectOutput(out)) {
         r.outside_map = true;
         r.message = "pose is outside the map: corrected by odometry only";
     }
     r.corrected = ToPlanarPose(pose.t_s, out);
     if (r.gap) {
-        const std::string msg = "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
+        const std::string msg =
+            "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
         r.message = r.message.empty() ? msg : msg + "; " + r.message;
     }
     return r;
+}
+
+// Back-pressure: waits while pose `index` is more than max_lag_epochs past the last solved pose
+// and the worker has a solve to do (a request or a running solve); never waits for a solve that
+// nobody asked for (no path since the last one), nor after a worker failure.
+void OnlineCorrector::WaitForSolver(std::size_t index, PushResult& r) {
+    if (cfg_.synchronous || cfg_.max_lag_epochs == 0) return;
+    std::unique_lock<std::mutex> lock(mutex_);
+    auto caught_up = [&] {
+        return index - std::min(solved_end_, index) <= cfg_.max_lag_epochs ||
+               !(requested_ || busy_) || !stats_.worker_error.empty();
+    };
+    if (caught_up()) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    solved_.wait(lock, caught_up);
+    r.waited_s = SecondsSince(t0);
+    ++stats_.waits;
+    stats_.wait_s += r.waited_s;
 }
 
 bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
@@ -163,7 +221,8 @@ bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
     auto q = field_->Query(pose.p);
     if (!q) return false;
     const ModelConfig& m = cfg_.corrector.model;
-    if (!cfg_.project_output || !m.hard_corridor || q->corridor.value > m.corridor_gate_m) return true;
+    if (!cfg_.project_output || !m.hard_corridor || q->corridor.value > m.corridor_gate_m)
+        return true;
     // Only the horizontal position moves. Where the corridor distance falls mostly with height
     // (a pose between floors, on stairs) its horizontal slope is small and a Newton step along it
     // would be long: on a real walk one went 165 m. So a step is taken only where the slope is at
@@ -184,70 +243,75 @@ bool OnlineCorrector::ProjectOutput(PoseState& pose) const {
     return true;
 }
 
-// Completes a chunk at `index` by the batch rule and hands it to the solver; otherwise, every
-// update_fraction * chunk_m of path, asks for a preview ending at `index`. Without headings,
-// nothing is solved before the first moving step (the poses' heading is not known yet).
-void OnlineCorrector::UpdateChunks(std::size_t index) {
+// Requests a solve every update_fraction * chunk_m of path, with restarts where the batch rule
+// completes a chunk (chunk_m of path or max_chunk_poses poses). Without headings, nothing is
+// solved before the first moving step (the poses' heading is not known yet).
+void OnlineCorrector::UpdateSchedule(std::size_t index) {
     if (index == 0 || (has_yaw_ && !*has_yaw_ && !heading_known_)) return;
     if (path_m_ - chunk_start_path_m_ >= cfg_.corrector.chunk_m ||
         index - chunk_start_ >= cfg_.corrector.max_chunk_poses) {
         chunk_start_ = index;
         chunk_start_path_m_ = path_m_;
         update_path_m_ = path_m_;
-        Schedule({index, false});
+        Request(index, true);
     } else if (cfg_.update_fraction > 0.0 &&
                path_m_ - update_path_m_ >= cfg_.update_fraction * cfg_.corrector.chunk_m) {
         update_path_m_ = path_m_;
-        Schedule({index, true});
+        Request(index, false);
     }
 }
 
-void OnlineCorrector::Schedule(Job job) {
+void OnlineCorrector::Request(std::size_t end, bool restarts) {
+    last_request_end_ = end;
     if (cfg_.synchronous) {
-        RunJob(job);
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            ++stats_.requests;
+        }
+        RunSolve(end, restarts);
         return;
     }
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        jobs_.push_back(job);
+        ++stats_.requests;
+        requested_ = true;
+        request_restarts_ = request_restarts_ || restarts;
+        request_end_ = end;
     }
     wake_.notify_one();
 }
 
+// Takes the newest request: the window that ends at the newest accepted pose (requests made
+// while a solve was running are merged into it: skipped, not queued).
 void OnlineCorrector::WorkerLoop() {
+    LowerWorkerPriority();
     for (;;) {
-        Job job;
+        std::size_t end = 0;
+        bool restarts = false;
         {
             std::unique_lock<std::mutex> lock(mutex_);
-            wake_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
-            if (jobs_.empty()) return;  // stop_ and nothing queued
-            job = jobs_.front();
-            jobs_.pop_front();
-            // A preview is worth its solve only while nothing newer waits; at the end
-            // (stop_), only the chunks matter.
-            if (job.preview && (stop_ || !jobs_.empty())) continue;
+            wake_.wait(lock, [this] { return stop_ || requested_; });
+            if (stop_) return;  // Finish solves the whole trajectory itself
+            end = std::max(request_end_, pending_first_ + pending_.size() - 1);
+            restarts = request_restarts_;
+            requested_ = request_restarts_ = false;
+            busy_ = true;
         }
         try {
-            RunJob(job);
+            RunSolve(end, restarts);
         } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(mutex_);
-            worker_error_ = std::string("window solve failed: ") + e.what();
-            jobs_.clear();
+            stats_.worker_error = std::string("window solve failed: ") + e.what();
+            busy_ = false;
+            solved_.notify_all();
             return;
         }
     }
 }
 
-// Creates the solver from the first accepted pose (removed from `entries`).
-void OnlineCorrector::EnsureSolver(std::vector<Entry>& entries) {
-    if (solver_ || entries.empty()) return;
-    solver_ = std::make_unique<IncrementalCorrector>(entries.front().initial, fix_height_, field_,
-                                                     cfg_.corrector);
-    entries.erase(entries.begin());
-}
-
-// Hands the queued poses up to `end` to the solver (holding the mutex only to take them).
-void OnlineCorrector::AppendQueued(std::size_t end) {
+// Hands the queued poses up to `end` to the solver (holding the mutex only to take them), solves
+// the window ending at `end` and merges it. On the worker (or inside Push when synchronous).
+void OnlineCorrector::RunSolve(std::size_t end, bool restarts) {
     std::vector<Entry> entries;
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -257,80 +321,85 @@ void OnlineCorrector::AppendQueued(std::size_t end) {
             ++pending_first_;
         }
     }
-    EnsureSolver(entries);
-    for (const Entry& e : entries) solver_->Append(e.initial, e.step);
-}
-
-// Runs one solve and merges its solution. On the worker (or inside Push when synchronous); holds
-// the mutex only to take the poses and to merge, never while solving.
-void OnlineCorrector::RunJob(const Job& job) {
-    AppendQueued(job.end);
-    if (job.preview) {
-        const IncrementalCorrector::Preview p = solver_->SolvePreview(job.end);
+    std::size_t k = 0;
+    if (!solver_) {
+        solver_ = std::make_unique<FixedLagSmoother>(entries.front().initial, fix_height_, field_,
+                                                     cfg_.corrector, cfg_.boundary_prior);
+        k = 1;
+    }
+    for (; k < entries.size(); ++k) solver_->Append(entries[k].initial, entries[k].step);
+    if (end <= solver_->solved_end()) {  // nothing new to solve
         std::lock_guard<std::mutex> lock(mutex_);
-        MergePreview(job.end, p);
+        busy_ = false;
+        solved_.notify_all();
         return;
     }
-    solver_->SolveChunk(job.end);
+    const auto t0 = std::chrono::steady_clock::now();
+    const FixedLagSolution solution = solver_->Solve(end, restarts);
+    const double solve_s = SecondsSince(t0);
     std::lock_guard<std::mutex> lock(mutex_);
-    Merge();
+    Merge(solution, solve_s);
+    busy_ = false;
+    solved_.notify_all();
+}
+
+// Replaces the causal estimates of the solved window and re-composes the poses pushed since.
+// Caller holds mutex_.
+void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
+    ++stats_.solves;
+    stats_.solve_s.push_back(solve_s);
+    if (sol.boundary_prior) ++stats_.prior_solves;
+    if (!sol.usable) ++stats_.failed_solves;
+    for (std::size_t i = sol.first; i <= sol.end; ++i) current_[i] = sol.poses[i - sol.first];
+    front_scales_ = sol.scales;
+    solved_end_ = sol.end;
+    solved_covariance_ = sol.end_covariance;
+    solved_covariance_ok_ = sol.end_covariance_ok;
+    Recompose(sol.end);
 }
 
 // Re-composes the causal estimates after `end` onto the (newly solved) pose `end`.
 // Caller holds mutex_.
 void OnlineCorrector::Recompose(std::size_t end) {
     for (std::size_t i = end + 1; i < current_.size(); ++i) {
+        // The fixed-lag windows estimate no heading-rate bias (FixedLagSmoother's state).
         current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
-                                  current_[i].p.z(), front_bias_rad_s_);
+                                  current_[i].p.z(), 0.0);
     }
 }
 
-// Replaces the causal estimates of the solved window and re-composes the poses pushed since.
-// Caller holds mutex_.
-void OnlineCorrector::Merge() {
-    const TrajectoryState& s = solver_->state();
-    const std::size_t end = solver_->done();
-    for (std::size_t i = solver_->last_window_first(); i <= end; ++i) current_[i] = s.poses[i];
-    front_scales_.assign(s.scales.begin(), s.scales.begin() + s.scale_segment[end] + 1);
-    front_bias_rad_s_ = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[end]];
-    Recompose(end);
-}
-
-// The same for a preview (nothing to merge when its solve failed). Caller holds mutex_.
-void OnlineCorrector::MergePreview(std::size_t end, const IncrementalCorrector::Preview& p) {
-    if (p.poses.empty()) return;
-    for (std::size_t i = p.first; i <= end; ++i) current_[i] = p.poses[i - p.first];
-    front_scales_ = p.scales;
-    front_bias_rad_s_ = p.bias_rad_s;
-    Recompose(end);
+OnlineStatistics OnlineCorrector::Statistics() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stats_;
 }
 
 CorrectionResult OnlineCorrector::Finish() {
     if (worker_.joinable()) {
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            stop_ = true;  // the worker solves the queued chunks, then exits
+            stop_ = true;  // a running solve is finished; no further ones
         }
         wake_.notify_all();
         worker_.join();
     }
     finished_ = true;
     CorrectionResult result;
-    if (!worker_error_.empty()) {
-        result.message = worker_error_;
-        return result;
-    }
     if (t_s_.size() < 3) {
         result.message = "need at least 3 accepted poses, have " + std::to_string(t_s_.size());
         return result;
     }
-    std::vector<Entry> entries(pending_.begin(), pending_.end());
-    pending_.clear();
-    pending_first_ = t_s_.size();
-    EnsureSolver(entries);
-    for (const Entry& e : entries) solver_->Append(e.initial, e.step);
-    solver_->SolveRemaining();
-    return solver_->Finish(t_s_);
+    // The batch solve over the same observations (the online solves do not change it).
+    std::vector<StepObservation> obs(1);
+    std::vector<PoseState> poses(1, entries_.front().initial);
+    for (std::size_t i = 1; i < entries_.size(); ++i) {
+        obs.push_back(entries_[i].step);
+        poses.push_back(entries_[i].initial);
+    }
+    IncrementalCorrector batch(BatchState(std::move(obs), std::move(poses), cfg_.corrector,
+                                          fix_height_),
+                               field_, cfg_.corrector);
+    batch.SolveRemaining();
+    return batch.Finish(t_s_);
 }
 
 }  // namespace driftcorr

@@ -38,6 +38,8 @@ const char* ToString(TermFamily family) {
             return "scale range";
         case TermFamily::kHeadingBiasWalk:
             return "heading bias walk";
+        case TermFamily::kBoundaryPrior:
+            return "boundary prior";
         case TermFamily::kMapOffset:
             return "map offset";
     }
@@ -66,16 +68,12 @@ double MapDistanceBlock::Evaluate(const BlockContext& ctx, const BlockVector&, B
     return cost;
 }
 
-bool MapDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
-                                 LinearisedTerm& out) const {
+void MapDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
+                                 std::vector<LinearisedTerm>& out) const {
     const auto& s = Sample(ctx);
-    if (!s) return false;
+    if (!s) return;
     const Eigen::Vector3d j = MapJacobian(*ctx.field, x.head<3>(), s->centre);
-    const Linearisation<3> lin = term_.Linearise(s->centre.value, j);
-    out.size = 3;
-    for (int k = 0; k < 3; ++k) out.var[k] = k, out.jacobian[k] = lin.jacobian[k];
-    out.residual = lin.residual, out.information = lin.information, out.chi2 = lin.chi2;
-    return true;
+    out.push_back(FromLinearisation(term_.Linearise(s->centre.value, j)));
 }
 
 Eigen::Vector3d MapJacobian(const TraversableField& field, const Eigen::Vector3d& p,

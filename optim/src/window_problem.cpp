@@ -42,13 +42,20 @@ std::vector<int> BiasSegments(const std::vector<StepObservation>& obs, double se
 
 WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* field,
                              const ModelConfig& cfg, std::size_t first, std::size_t last,
-                             std::vector<std::uint8_t> constrained, WindowUse use)
-    : state_(state), field_(field), cfg_(cfg), first_(first), last_(last) {
+                             std::vector<std::uint8_t> constrained, WindowUse use,
+                             std::optional<PosePriorTerm> boundary_prior)
+    : state_(state),
+      field_(field),
+      cfg_(cfg),
+      first_(first),
+      last_(last),
+      prior_(std::move(boundary_prior)),
+      var_first_(prior_ ? first - 1 : first) {
     assert(first >= 1 && first <= last && last < state.poses.size() && "bad window");
     assert(constrained.size() == last - first + 1 && "one constraint flag per window pose");
     seg_first_ = state.scale_segment[first];
     seg_last_ = state.scale_segment[last];
-    n_vars_ = 4 * static_cast<int>(last - first + 1) + (seg_last_ - seg_first_ + 1);
+    n_vars_ = 4 * static_cast<int>(last - var_first_ + 1) + (seg_last_ - seg_first_ + 1);
     if (HasBias()) {
         assert(state.bias_segment.size() == state.poses.size() && "one bias segment per step");
         bias_first_ = state.bias_segment[first];
@@ -63,13 +70,13 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
 }
 
 int WindowProblem::PoseVar(std::size_t pose, int component) const {
-    if (pose < first_) return -1;
-    return 4 * static_cast<int>(pose - first_) + component;
+    if (pose < var_first_) return -1;
+    return 4 * static_cast<int>(pose - var_first_) + component;
 }
 
 int WindowProblem::ScaleVar(int segment) const {
     if (segment < seg_first_) return -1;
-    return 4 * static_cast<int>(last_ - first_ + 1) + (segment - seg_first_);
+    return 4 * static_cast<int>(last_ - var_first_ + 1) + (segment - seg_first_);
 }
 
 int WindowProblem::BiasVar(int segment) const {
@@ -205,6 +212,10 @@ void WindowProblem::BuildStructure(WindowUse use) {
     }
     AddScaleBlocks();
     if (HasBias()) AddBiasBlocks();
+    if (prior_) {
+        blocks_.push_back(std::make_unique<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
+        for (int c = 0; c < 4; ++c) blocks_.back()->Bind(c, PoseVar(first_ - 1, c), 0.0);
+    }
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
         for (int c = 0; c < 3; ++c) jac_.emplace_back(static_cast<int>(k), PoseVar(constraint_pose_[k], c));
     }
@@ -229,7 +240,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
 }
 
 void WindowProblem::InitialPoint(double* x) const {
-    for (std::size_t i = first_; i <= last_; ++i) {
+    for (std::size_t i = var_first_; i <= last_; ++i) {
         const PoseState& p = state_.poses[i];
         double* v = x + PoseVar(i, 0);
         v[0] = p.p.x(), v[1] = p.p.y(), v[2] = p.p.z(), v[3] = p.yaw_rad;
@@ -240,7 +251,7 @@ void WindowProblem::InitialPoint(double* x) const {
 
 void WindowProblem::Bounds(double* x_l, double* x_u, double* g_l, double* g_u) const {
     for (int k = 0; k < n_vars_; ++k) x_l[k] = -kInfBound, x_u[k] = kInfBound;
-    for (std::size_t i = first_; i <= last_; ++i) {
+    for (std::size_t i = var_first_; i <= last_; ++i) {
         if (state_.fix_height) x_l[PoseVar(i, 2)] = x_u[PoseVar(i, 2)] = state_.poses[i].p.z();
     }
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
@@ -336,25 +347,28 @@ void WindowProblem::HessianValues(const double* x, double obj_factor, const doub
 
 void WindowProblem::LineariseTerms(const double* x, std::vector<LinearisedTerm>& terms) const {
     const BlockContext ctx = Context(x);
-    LinearisedTerm local;
+    std::vector<LinearisedTerm> local;
     for (const auto& block : blocks_) {
-        if (!block->Linearise(ctx, block->Gather(x), local)) continue;
-        LinearisedTerm t;
-        t.family = block->family();
-        t.pose = block->pose();
-        for (int k = 0; k < local.size; ++k) {
-            const int var = block->var(local.var[k]);
-            if (var < 0 || local.jacobian[k] == 0.0) continue;
-            t.var[t.size] = var;
-            t.jacobian[t.size++] = local.jacobian[k];
+        local.clear();
+        block->Linearise(ctx, block->Gather(x), local);
+        for (const LinearisedTerm& l : local) {
+            LinearisedTerm t;
+            t.family = block->family();
+            t.pose = block->pose();
+            for (int k = 0; k < l.size; ++k) {
+                const int var = block->var(l.var[k]);
+                if (var < 0 || l.jacobian[k] == 0.0) continue;
+                t.var[t.size] = var;
+                t.jacobian[t.size++] = l.jacobian[k];
+            }
+            t.residual = l.residual, t.information = l.information, t.chi2 = l.chi2;
+            terms.push_back(t);
         }
-        t.residual = local.residual, t.information = local.information, t.chi2 = local.chi2;
-        terms.push_back(t);
     }
 }
 
 void WindowProblem::Store(const double* x) const {
-    for (std::size_t i = first_; i <= last_; ++i) {
+    for (std::size_t i = var_first_; i <= last_; ++i) {
         PoseState& p = state_.poses[i];
         const double* v = x + PoseVar(i, 0);
         p.p = Eigen::Vector3d(v[0], v[1], v[2]);

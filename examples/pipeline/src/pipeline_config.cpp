@@ -109,24 +109,28 @@ std::map<std::string, Setter> ModelSetters(const Context& c, ModelConfig& m) {
     return s;
 }
 
+// A whole-number key: negative, fractional or too large values are rejected.
+template <typename Count>
+void AddCountKey(std::map<std::string, Setter>& s, const Context& c, const char* name,
+                 Count* field) {
+    s[name] = [&c, field](const YAML::Node& n, const std::string& k) {
+        // 2^digits is the first whole number Count cannot hold; casting a double at or above
+        // it is undefined behaviour, so it is rejected before the cast (found by fuzzing).
+        const double limit = std::ldexp(1.0, std::numeric_limits<Count>::digits);
+        const double v = Number(c, n, k);
+        if (v < 0 || v != std::floor(v) || !(v < limit)) {
+            throw InputError(c.file, Line(n), k,
+                             "must be a whole number in [0, " +
+                                 std::to_string(std::numeric_limits<Count>::max()) + "]");
+        }
+        *field = static_cast<Count>(v);
+    };
+}
+
 std::map<std::string, Setter> CorrectorSetters(const Context& c, CorrectorConfig& cc) {
     std::map<std::string, Setter> s;
     const NumberKeys num{s, c};
-    auto count = [&](const char* name, auto* field) {
-        s[name] = [&c, field](const YAML::Node& n, const std::string& k) {
-            using Count = std::remove_pointer_t<decltype(field)>;
-            // 2^digits is the first whole number Count cannot hold; casting a double at or above
-            // it is undefined behaviour, so it is rejected before the cast (found by fuzzing).
-            const double limit = std::ldexp(1.0, std::numeric_limits<Count>::digits);
-            const double v = Number(c, n, k);
-            if (v < 0 || v != std::floor(v) || !(v < limit)) {
-                throw InputError(c.file, Line(n), k,
-                                 "must be a whole number in [0, " +
-                                     std::to_string(std::numeric_limits<Count>::max()) + "]");
-            }
-            *field = static_cast<Count>(v);
-        };
-    };
+    auto count = [&](const char* name, auto* field) { AddCountKey(s, c, name, field); };
     num("chunk_m", &cc.chunk_m);
     num("window_m", &cc.window_m);
     num("stationary_m", &cc.stationary_m);
@@ -145,8 +149,12 @@ std::map<std::string, Setter> OnlineSetters(const Context& c, OnlineConfig& o) {
     const NumberKeys num{s, c};
     num("update_fraction", &o.update_fraction);
     num("gap_warn_s", &o.gap_warn_s);
+    AddCountKey(s, c, "max_lag_epochs", &o.max_lag_epochs);
     s["project_output"] = [&c, &o](const YAML::Node& n, const std::string& k) {
         o.project_output = Bool(c, n, k);
+    };
+    s["boundary_prior"] = [&c, &o](const YAML::Node& n, const std::string& k) {
+        o.boundary_prior = Bool(c, n, k);
     };
     return s;
 }

@@ -11,6 +11,7 @@
 //   [x_a, y_a, z_a, yaw_a, x_b, y_b, z_b, yaw_b, s]
 // positions in the East-North-Up map frame [m], yaw CCW from East [rad], s the step-length scale.
 #include <Eigen/Core>
+#include <array>
 
 namespace driftcorr {
 
@@ -143,6 +144,24 @@ struct MapDistanceTerm {
                     Eigen::Vector3d* grad, Eigen::Matrix3d* hess) const;
     /// r = d, J = grad_d (see Linearisation; the field's Hessian of d is not needed).
     Linearisation<3> Linearise(double d, const Eigen::Vector3d& grad_d) const;
+};
+
+/// Gaussian prior on one pose, variables [x, y, z, yaw] (ENU [m], unwrapped yaw [rad]): what the
+/// poses before a fixed-lag window say about its boundary pose once they are marginalised (the
+/// Schur complement of their Gauss-Newton information onto that pose, optim/fixed_lag.h),
+///   cost = 0.5 (x - mean)^T I (x - mean),
+/// I symmetric positive semi-definite [1/m^2, 1/(m rad), 1/rad^2]; rows and columns of a variable
+/// the prior says nothing about (a fixed height) are zero. Quadratic: the Hessian is I everywhere.
+using PoseVector = Eigen::Matrix<double, 4, 1>;
+using PoseMatrix = Eigen::Matrix<double, 4, 4>;
+struct PosePriorTerm {
+    PoseVector mean = PoseVector::Zero();
+    PoseMatrix information = PoseMatrix::Zero();
+    double Evaluate(const PoseVector& x, PoseVector* grad, PoseMatrix* hess) const;
+    /// I = V diag(lambda) V^T: one residual per eigenvector, r_k = v_k . (x - mean), with
+    /// information max(lambda_k, 0); the sum of information_k J_k J_k^T is I (up to a negative
+    /// eigenvalue from round-off, dropped).
+    std::array<Linearisation<4>, 4> Linearise(const PoseVector& x) const;
 };
 
 }  // namespace driftcorr

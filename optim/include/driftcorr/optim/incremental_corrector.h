@@ -1,6 +1,7 @@
 #pragma once
-// The incremental machinery shared by the batch corrector (CorrectTrajectory) and the online
-// corrector (OnlineCorrector): a growing trajectory state, solved chunk by chunk.
+// The incremental machinery of the batch corrector (CorrectTrajectory; OnlineCorrector::Finish
+// runs it too): a growing trajectory state, solved chunk by chunk. SolveSoftWindow, the window
+// solve with restarts, is shared with the online corrector's fixed-lag windows (fixed_lag.h).
 //
 // One chunk step (SolveChunk): the scale segments first entered by the new poses start from the
 // latest scale estimate, the new poses are dead-reckoned by composing the odometry observations
@@ -11,11 +12,13 @@
 // What a window keeps of the poses before it (they are not re-solved): pose first-1 is held fixed
 // and anchors the window through the step and heading terms of step `first`; the step-length scale
 // of the segments before the window is held fixed and the scale random walk ties the window's first
-// scale segment to it. No marginalisation prior (covariance) is carried: the boundary pose is
-// treated as exact.
+// scale segment to it. No marginalisation prior (covariance) is carried here: the boundary pose is
+// treated as exact (the batch windows re-solve everything in the refinement; the online windows
+// carry one, fixed_lag.h).
 //
 // No I/O, no threads: the caller decides when to solve. Not thread-safe.
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "driftcorr/optim/corrector.h"
@@ -54,17 +57,6 @@ public:
     /// Initialises poses (done(), end] by odometry and solves the trailing window ending at `end`.
     /// Precondition: done() < end < size().
     void SolveChunk(std::size_t end);
-    /// A look-ahead solve for a causal output: the trailing window ending at `end` solved once
-    /// (no restarts) on a copy, warm-started from the previous preview; the state, done() and the
-    /// chunk sequence are unchanged. `poses` is empty when Ipopt did not converge.
-    struct Preview {
-        std::size_t first = 0;            ///< the window's first pose
-        std::vector<PoseState> poses;     ///< poses [first, end]; empty if the solve failed
-        std::vector<double> scales;       ///< scale segments [0, segment of end]
-        double bias_rad_s = 0.0;          ///< heading-rate bias of end's segment (0: none)
-    };
-    /// Precondition: done() < end < size().
-    Preview SolvePreview(std::size_t end);
     /// Solves chunks until every appended pose is corrected.
     void SolveRemaining(const ProgressCallback& progress = {});
     /// Final whole-trajectory solve with the hard corridor (if config.refine) and the outcome.
@@ -83,8 +75,6 @@ private:
     double elapsed_s_ = 0.0;  ///< time of the appended steps (heading-rate bias segments)
     std::size_t done_ = 0;
     std::size_t window_first_ = 1;
-    Preview last_preview_;              ///< warm start of the next preview
-    std::size_t last_preview_end_ = 0;
     /// First pose of the trailing window that ends at `end`.
     std::size_t WindowFirst(std::size_t end) const;
     CorrectionResult stats_;
@@ -96,7 +86,30 @@ private:
 PoseState ComposeStep(const PoseState& a, const StepObservation& step, double scale,
                       bool fix_height, double up_fixed_m, double bias_rad_s);
 
-/// The initial state of a whole estimate (observations, scale segments, poses at the estimate).
+/// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1 with
+/// each step's segment scale. Precondition: 1 <= from, to < s.poses.size().
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to);
+/// Scale (and heading-rate bias) segments first entered by steps [from, to] start from the
+/// latest estimate.
+void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to);
+
+/// One trailing-window solve with the soft terms (Ipopt; window_ipopt), written into `s`: poses
+/// [first, last] (and first-1 with a boundary prior) and the window's scales. With `restarts`,
+/// a solution that leaves many poses off the roads or explains the window poorly (a wrong basin)
+/// is re-solved from the restart_scale_factors hypotheses and the lowest NLL wins. Counts its
+/// iterations and restarts into `stats`. Time and memory bounded by the window, not by the
+/// trajectory. Precondition: 1 <= first <= last < s.poses.size().
+SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
+                            const CorrectorConfig& cfg, std::size_t first, std::size_t last,
+                            const std::optional<PosePriorTerm>& prior, bool restarts,
+                            CorrectionResult& stats);
+
+/// The state of a whole drive for the batch correction: its observations with the dropped-step
+/// episodes repaired (core RepairSpeedEpisodes, model.outlier_accel_mps2), scale and heading-rate
+/// bias segments, the given poses (pose 0: the start).
+TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseState> poses,
+                           const CorrectorConfig& config, bool fix_height);
+/// The initial state of a whole estimate (BatchState of its observations, poses at the estimate).
 TrajectoryState InitialState(const PlanarTrajectory& estimate, const CorrectorConfig& config,
                              bool fix_height);
 

@@ -5,25 +5,27 @@
 //
 // How a pose is estimated
 //  - Push computes the observation of the new step (from the previous accepted pose) and returns
-//    the pose dead-reckoned by composing that odometry onto the latest corrected pose with the
-//    latest step-length scale: O(1), no solve on the Push path (in the default, threaded mode).
-//  - When a chunk of chunk_m path (or max_chunk_poses poses) is complete, the trailing window of
-//    window_m is re-solved by IncrementalCorrector::SolveChunk, warm-started from the previous
-//    solution plus the dead-reckoned new poses. Its solution replaces the causal estimates of the
-//    window's poses, and the poses pushed meanwhile are re-composed onto it, so later outputs
-//    continue from the corrected state. Already returned outputs are not changed (causal).
-//  - Between chunk ends, every update_fraction * chunk_m of path, the trailing window ending at
-//    the newest pose is solved once more for the causal output only (a preview:
-//    IncrementalCorrector::SolvePreview, on a copy, one solve without restarts; the chunk sequence
-//    is unchanged). Its poses replace the causal estimates as a chunk solve's would, so the output
-//    follows the map between chunks instead of dead-reckoning up to chunk_m. In the threaded mode
-//    a preview that is no longer the newest queued job is skipped.
-//  - Poses leaving the window are summarised, not forgotten, in what the window keeps fixed: the
-//    boundary pose (treated as exact: no marginalisation prior/covariance is carried) and the
-//    step-length scale of earlier segments, tied to the window's scale by the scale random walk.
-//  - The chunk boundaries follow the batch rule exactly, so the sequence of window solves does not
-//    depend on timing: Finish() (last partial chunk + the hard-corridor refinement) gives the batch
-//    result when the input carries headings (up to Ipopt's own run-to-run variation).
+//    the pose composed onto the newest solved state: the corrected pose it chains from, with the
+//    heading and the step-length scale that solve found. Never raw dead reckoning from the
+//    start: O(1) on the Push path, no solve there (in the default, threaded mode).
+//  - Every update_fraction * chunk_m of path a solve is requested; at the batch chunk rule
+//    (chunk_m of path, or max_chunk_poses poses) the request also allows restarts from other
+//    step-length scale hypotheses. A solve is a fixed-lag window (optim/fixed_lag.h): the trailing
+//    window_m of path ending at the newest pose, so its cost does not grow with the trajectory;
+//    its boundary pose is a variable under the marginalised prior of the poses before it
+//    (boundary_prior; false: held at its last solution, as the batch windows do). Its solution
+//    replaces the causal estimates of the window's poses and the poses pushed since are
+//    re-composed onto it. Outputs already returned are not changed (causal).
+//  - The worker always works on the newest data: when it is free it solves the window that ends
+//    at the newest accepted pose, whatever was requested before (under a burst the requests in
+//    between are skipped, not queued).
+//  - Freshness: every PushResult says which solve its pose chains from (the age in epochs and in
+//    stream seconds) and whether that is the newest solve the schedule had asked for before the
+//    pose (fresh). max_lag_epochs > 0 makes Push wait (back-pressure) while the newest pose is
+//    more than that many epochs past the last solved one and a solve is under way.
+//  - Finish() solves the whole trajectory as the batch mode does (CorrectTrajectory's chunks,
+//    windows and hard-corridor refinement over the same observations): the batch result when the
+//    input carries headings (up to Ipopt's own run-to-run variation).
 //
 // Headings: with an orientation (PlanarPose::yaw_rad) the observation of a step is causal as in
 // the batch mode. Without one, the batch mode takes a pose's heading from the *next* step
@@ -31,15 +33,15 @@
 // across stops; the poses before the first moving step take its direction), so turns are seen
 // one step late. Do not mix poses with and without heading in one stream.
 //
-// Threading model (synchronous = false): one worker thread owns the IncrementalCorrector and runs
-// the window solves. Push (the caller's thread) and the worker share, under one mutex: the queue
-// of poses not yet handed to the solver, the queue of completed chunk ends, and the causal
-// estimates with the latest scales. Push holds the mutex for O(1) work; the worker holds it only
-// to take the queued poses of one chunk and to merge a solution (O(window) copies), never while
-// solving. If the worker falls behind, chunks queue up and are solved in order; outputs meanwhile
-// are dead-reckoned. Push and Finish must be called from one thread (or serialised by the caller).
-// With synchronous = true no thread is started and Push solves a completed chunk before it returns
-// (deterministic, but that Push takes as long as the solve).
+// Threading model (synchronous = false): one worker thread owns the FixedLagSmoother and runs the
+// window solves, at a lower scheduling priority than the caller (Linux: nice + 10), so that an
+// arriving pose pre-empts a running solve on a busy core. Push (the caller's thread) and the worker share, under one mutex: the poses not
+// yet handed to the solver, the request flag, and the causal estimates with the latest scales.
+// Push holds the mutex for O(1) work; the worker holds it only to take the queued poses and to
+// merge a solution (O(window + poses pushed during the solve)), never while solving. Push and
+// Finish must be called from one thread (or serialised by the caller). With synchronous = true
+// no thread is started and Push solves a requested window before it returns (deterministic, but
+// that Push takes as long as the solve).
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -51,7 +53,8 @@
 #include <vector>
 
 #include "driftcorr/optim/corrector.h"
-#include "driftcorr/optim/incremental_corrector.h"
+#include "driftcorr/optim/covariance.h"
+#include "driftcorr/optim/fixed_lag.h"
 
 namespace driftcorr {
 
@@ -65,9 +68,20 @@ struct OnlineConfig {
     /// steps, each taken only where the horizontal slope is >= 0.5 and kept only when it lowers
     /// the distance. Only the output is moved; the solver state is not.
     bool project_output = true;
-    /// Path between look-ahead solves for the causal output, as a share of corrector.chunk_m
-    /// (0.125: every 10 m with the road chunks of 80 m); 0: only the chunk solves.
+    /// Path between solves for the causal output, as a share of corrector.chunk_m (0.125: every
+    /// 10 m with the road chunks of 80 m); 0: only at the chunk rule.
     double update_fraction = 0.125;
+    /// Back-pressure (threaded mode): Push waits while its pose is more than this many epochs
+    /// past the last solved pose and a solve is requested or running; 0: never waits (under a
+    /// burst the outputs then chain from older solves, and say so in their age).
+    std::size_t max_lag_epochs = 0;
+    /// The online windows' boundary pose: true, a variable under the marginalised prior of the
+    /// poses before it (optim/fixed_lag.h); false, held fixed at its last solution. Measured
+    /// causal ATE (synchronous) with / without: synthetic road 3.05 / 3.06, synthetic building
+    /// 0.58 / 0.58, hcu_eight 1.77 / 1.72, kitti00 cvo 3.29 / 3.33, kitti00 gicp 17.33 / 17.05,
+    /// kitti00 orb2 2.35 / 2.35, kitti05 cvo 7.95 / 8.09, kitti07 cvo 3.64 / 3.63, kitti07 gicp
+    /// 9.62 / 9.65 m.
+    bool boundary_prior = true;
 
     /// Empty if valid, else a message naming the bad field.
     std::string Validate() const;
@@ -96,7 +110,34 @@ struct PushResult {
     PlanarPose corrected;     ///< causal estimate (valid when accepted); yaw_rad always set
     bool gap = false;         ///< the step took longer than gap_warn_s
     bool outside_map = false; ///< the corrected pose lies outside the map field (odometry only)
+    /// The solve the output chains from ended this many epochs (poses) before this one...
+    std::size_t correction_age_epochs = 0;
+    double correction_age_s = 0.0;  ///< ...and this much earlier in stream time [s]
+    /// The output chains from the newest solve the schedule had requested before this pose
+    /// (false: the solver was behind; the pose was composed onto an older solve).
+    bool fresh = true;
+    double waited_s = 0.0;  ///< time Push waited for the solver (max_lag_epochs) [s]
+    /// Marginal covariance of the solved pose the output chains from (its window's curvature);
+    /// the output adds the odometry of correction_age_epochs steps. Valid when covariance_ok.
+    PoseCovariance covariance;
+    bool covariance_ok = false;
     bool Accepted() const { return status == PushStatus::kAccepted; }
+};
+
+/// How the online corrector kept up (OnlineCorrector::Statistics).
+struct OnlineStatistics {
+    std::size_t poses = 0;             ///< accepted
+    std::size_t stale_poses = 0;       ///< returned without the newest requested solve (!fresh)
+    std::size_t max_age_epochs = 0;    ///< worst correction_age_epochs
+    double max_age_s = 0.0;            ///< worst correction_age_s [s]
+    std::size_t requests = 0;          ///< solves the schedule asked for
+    std::size_t solves = 0;            ///< solves run (requests - solves were skipped)
+    std::size_t failed_solves = 0;     ///< Ipopt gave no usable solution (state kept)
+    std::size_t prior_solves = 0;      ///< solves whose boundary carried a marginalised prior
+    std::vector<double> solve_s;       ///< wall time of every solve [s]
+    std::size_t waits = 0;             ///< Pushes that waited (max_lag_epochs)
+    double wait_s = 0.0;               ///< total wait [s]
+    std::string worker_error;          ///< a solve that threw (the worker then stopped)
 };
 
 class OnlineCorrector {
@@ -112,12 +153,13 @@ public:
     /// unchanged; the stream continues with the next valid pose.
     PushResult Push(const PlanarPose& pose);
 
-    /// Waits for queued solves, solves the last partial chunk and refines the whole trajectory
-    /// (if config.corrector.refine). Needs >= 3 accepted poses, else status kFailed with a
-    /// message. A worker failure is reported in the status and message. Call once.
+    /// Stops the worker (a running solve is finished first) and solves the whole trajectory as
+    /// the batch mode does (chunks, then the hard-corridor refinement if config.corrector.refine).
+    /// Needs >= 3 accepted poses, else status kFailed with a message. Call once.
     CorrectionResult Finish();
 
     std::size_t size() const;  ///< accepted poses
+    OnlineStatistics Statistics() const;
 
 private:
     struct Entry {  ///< one accepted pose, as handed to the solver
@@ -130,19 +172,13 @@ private:
     double FrontScale(int segment) const;
     /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
     bool ProjectOutput(PoseState& pose) const;
-    struct Job {  ///< a solve for the worker: a chunk end, or a preview ending at `end`
-        std::size_t end = 0;
-        bool preview = false;
-    };
-    void UpdateChunks(std::size_t index);
-    void Schedule(Job job);
+    void UpdateSchedule(std::size_t index);
+    void Request(std::size_t end, bool restarts);
+    void WaitForSolver(std::size_t index, PushResult& r);
     void WorkerLoop();
-    void RunJob(const Job& job);
-    void AppendQueued(std::size_t end);
-    void EnsureSolver(std::vector<Entry>& entries);
+    void RunSolve(std::size_t end, bool restarts);
+    void Merge(const FixedLagSolution& solution, double solve_s);
     void Recompose(std::size_t end);
-    void Merge();
-    void MergePreview(std::size_t end, const IncrementalCorrector::Preview& p);
 
     const TraversableField* field_;
     OnlineConfig cfg_;
@@ -157,23 +193,31 @@ private:
     Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
     std::size_t chunk_start_ = 0;
     std::vector<double> t_s_;
+    std::vector<Entry> entries_;  ///< every accepted pose, for Finish()
+    std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;
-    std::condition_variable wake_;
+    std::condition_variable wake_;    ///< a request, or stop
+    std::condition_variable solved_;  ///< a solve merged (back-pressure)
     std::deque<Entry> pending_;           ///< accepted poses not yet handed to the solver
     std::size_t pending_first_ = 0;       ///< stream index of pending_.front()
-    std::deque<Job> jobs_;                ///< solves not yet run, in order
+    bool requested_ = false;              ///< a solve is wanted (the newest pose's window)
+    bool request_restarts_ = false;       ///< ... with restarts (a chunk ended since the last)
+    std::size_t request_end_ = 0;         ///< the requested end (synchronous mode's window end)
+    bool busy_ = false;                   ///< the worker is solving
     std::vector<PoseState> current_;      ///< latest estimate of every accepted pose
     std::vector<StepObservation> steps_;  ///< observation of every accepted pose
     std::vector<int> segment_;            ///< scale segment of every accepted pose
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
-    double front_bias_rad_s_ = 0.0;          ///< the latest solved heading-rate bias
+    std::size_t solved_end_ = 0;          ///< last pose of the newest merged solve
+    PoseCovariance solved_covariance_;
+    bool solved_covariance_ok_ = false;
     bool stop_ = false;
-    std::string worker_error_;
+    OnlineStatistics stats_;              ///< worker's part (solves); Push's part below
 
-    // Worker-only (or Finish after the worker stopped).
-    std::unique_ptr<IncrementalCorrector> solver_;
+    // Worker-only.
+    std::unique_ptr<FixedLagSmoother> solver_;
     std::thread worker_;
 };
 

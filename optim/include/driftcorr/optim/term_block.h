@@ -28,11 +28,12 @@ enum class TermFamily : int {
     kScaleWalk,  ///< the random walk between scale segments and the prior on the first
     kScaleRange,  ///< the plausible range of the step-length scale (a prior, not a bound)
     kHeadingBiasWalk,  ///< the heading-rate bias's random walk and the prior on the first
+    kBoundaryPrior,    ///< the prior on a fixed-lag window's boundary pose (its marginalised past)
     /// The map's offset process of the covariance's model (optim/covariance.h); not a
     /// term of the objective.
     kMapOffset,
 };
-constexpr int kTermFamilies = 11;
+constexpr int kTermFamilies = 12;
 const char* ToString(TermFamily family);
 
 /// The most local variables a block has (the speed change term: three poses).
@@ -47,7 +48,7 @@ using BlockMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen:
 /// outside the window are left out, as are entries whose derivative is zero.
 struct LinearisedTerm {
     TermFamily family = TermFamily::kStepLength;
-    int pose = -1;  ///< the pose of a map distance term; -1 for the other families
+    int pose = -1;  ///< the pose of a map distance or boundary prior term; -1 for the others
     int size = 0;
     std::array<int, kMaxBlockVars> var{};
     std::array<double, kMaxBlockVars> jacobian{};
@@ -89,11 +90,12 @@ public:
     /// Cost at the local values x (size()), and on request its gradient and Hessian over them.
     virtual double Evaluate(const BlockContext& ctx, const BlockVector& x, BlockVector* grad,
                             BlockMatrix* hess) const = 0;
-    /// The term's Linearisation at x, over local variables (LinearisedTerm::var holds local
-    /// indices here; WindowProblem maps them to window variables and drops fixed ones).
-    /// Returns false when the term contributes nothing at x (a map term off the field).
-    virtual bool Linearise(const BlockContext& ctx, const BlockVector& x,
-                           LinearisedTerm& out) const = 0;
+    /// The term's linearisation at x appended to `out` (usually one residual; none when the
+    /// term contributes nothing at x, e.g. a map term off the field), over local variables:
+    /// LinearisedTerm::var holds local indices here; WindowProblem maps them to window
+    /// variables and drops fixed ones.
+    virtual void Linearise(const BlockContext& ctx, const BlockVector& x,
+                           std::vector<LinearisedTerm>& out) const = 0;
 
 private:
     TermFamily family_;
@@ -102,6 +104,16 @@ private:
     std::array<int, kMaxBlockVars> var_{};
     std::array<double, kMaxBlockVars> fixed_{};
 };
+
+/// A core Linearisation as a LinearisedTerm over local variables 0..N-1.
+template <int N>
+LinearisedTerm FromLinearisation(const Linearisation<N>& lin) {
+    LinearisedTerm t;
+    t.size = N;
+    for (int k = 0; k < N; ++k) t.var[k] = k, t.jacobian[k] = lin.jacobian[k];
+    t.residual = lin.residual, t.information = lin.information, t.chi2 = lin.chi2;
+    return t;
+}
 
 /// A core term (core/cost_terms.h) over N local variables whose Evaluate takes an N-vector and
 /// whose Linearise returns a Linearisation<N>.
@@ -122,12 +134,9 @@ public:
         if (hess) *hess = h;
         return cost;
     }
-    bool Linearise(const BlockContext&, const BlockVector& x, LinearisedTerm& out) const override {
-        const auto lin = term_.Linearise(Vector(x));
-        out.size = N;
-        for (int k = 0; k < N; ++k) out.var[k] = k, out.jacobian[k] = lin.jacobian[k];
-        out.residual = lin.residual, out.information = lin.information, out.chi2 = lin.chi2;
-        return true;
+    void Linearise(const BlockContext&, const BlockVector& x,
+                   std::vector<LinearisedTerm>& out) const override {
+        out.push_back(FromLinearisation(term_.Linearise(Vector(x))));
     }
     const Term& term() const { return term_; }
 
@@ -153,12 +162,40 @@ public:
     }
     double Evaluate(const BlockContext& ctx, const BlockVector& x, BlockVector* grad,
                     BlockMatrix* hess) const override;
-    bool Linearise(const BlockContext& ctx, const BlockVector& x,
-                   LinearisedTerm& out) const override;
+    void Linearise(const BlockContext& ctx, const BlockVector& x,
+                   std::vector<LinearisedTerm>& out) const override;
 
 private:
     const std::optional<TraversableSample>& Sample(const BlockContext& ctx) const;
     MapDistanceTerm term_;
+};
+
+/// The prior on a fixed-lag window's boundary pose (core PosePriorTerm) over its [x, y, z, yaw];
+/// linearised as one residual per eigenvector of its information.
+class BoundaryPriorBlock final : public TermBlock {
+public:
+    BoundaryPriorBlock(const PosePriorTerm& term, int pose)
+        : TermBlock(TermFamily::kBoundaryPrior, 4), term_(term) {
+        set_pose(pose);
+    }
+    double Evaluate(const BlockContext&, const BlockVector& x, BlockVector* grad,
+                    BlockMatrix* hess) const override {
+        PoseVector g;
+        PoseMatrix h;
+        const double cost = term_.Evaluate(PoseVector(x), grad ? &g : nullptr, hess ? &h : nullptr);
+        if (grad) *grad = g;
+        if (hess) *hess = h;
+        return cost;
+    }
+    void Linearise(const BlockContext&, const BlockVector& x,
+                   std::vector<LinearisedTerm>& out) const override {
+        for (const Linearisation<4>& l : term_.Linearise(PoseVector(x))) {
+            out.push_back(FromLinearisation(l));
+        }
+    }
+
+private:
+    PosePriorTerm term_;
 };
 
 /// The Jacobian of the map distance at p for the covariance (see MapDistanceBlock).

@@ -3,7 +3,9 @@
 // solver-independent: objective (the weighted NLL), its gradient and exact Hessian, and the
 // hard corridor constraints with their Jacobian and Hessians, in sparse triplet form.
 // Pose first-1 and everything before it is held fixed, at the values the state has when the
-// problem is built.
+// problem is built; with a boundary prior (a fixed-lag window whose earlier poses are
+// marginalised) pose first-1 is a variable too, tied to the window by the terms of step `first`
+// and to the past by the prior (core PosePriorTerm).
 //
 // Variables: per pose (x, y, z, yaw) in the ENU map frame, then one scale per scale segment
 // touched by the window's steps, then one heading-rate bias per bias segment they touch.
@@ -59,9 +61,12 @@ public:
     /// `constrained[k]` (k = pose - first) marks poses that carry the hard corridor constraint.
     /// Preconditions: 1 <= first <= last < poses.size(); field may be null (no map terms);
     /// HessianValues only with use == kSolve (with kLinearise HessianStructure() is empty).
+    /// `boundary_prior`: pose first-1 becomes a variable with this prior (its map term is not
+    /// added: the prior summarises it); none: pose first-1 is held fixed.
     WindowProblem(TrajectoryState& state, const TraversableField* field, const ModelConfig& cfg,
                   std::size_t first, std::size_t last, std::vector<std::uint8_t> constrained,
-                  WindowUse use = WindowUse::kSolve);
+                  WindowUse use = WindowUse::kSolve,
+                  std::optional<PosePriorTerm> boundary_prior = std::nullopt);
 
     int NumVariables() const { return n_vars_; }
     int NumConstraints() const { return static_cast<int>(constraint_pose_.size()); }
@@ -86,8 +91,9 @@ public:
     /// the map distance is exact (see MapDistanceBlock for the map term's Jacobian).
     void LineariseTerms(const double* x, std::vector<LinearisedTerm>& terms) const;
 
-    /// The variable of component c (0..3: x, y, z, yaw) of window pose `pose`, -1 before the
-    /// window. Precondition: pose <= last().
+    /// The variable of component c (0..3: x, y, z, yaw) of window pose `pose`, -1 when held
+    /// fixed (before first(), or before first()-1 with a boundary prior). Precondition:
+    /// pose <= last().
     int PoseVar(std::size_t pose, int component) const;
     /// The variable of scale segment `segment`, -1 before the window's first segment.
     /// Precondition: segment <= the segment of step last().
@@ -129,6 +135,8 @@ private:
     const TraversableField* field_;
     ModelConfig cfg_;
     std::size_t first_, last_;
+    std::optional<PosePriorTerm> prior_;
+    std::size_t var_first_;  ///< first pose with variables: first_, or first_-1 with a prior
     int seg_first_ = 0, seg_last_ = 0, n_vars_ = 0;
     int bias_first_ = 0, bias_last_ = -1, bias_var0_ = 0;  // bias segments in the window
     std::vector<std::size_t> constraint_pose_;

@@ -1,0 +1,225 @@
+#include "driftcorr/optim/fixed_lag.h"
+
+#include <Eigen/LU>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+
+#include "driftcorr/optim/incremental_corrector.h"
+
+namespace driftcorr {
+namespace {
+
+// The number of pose variables of `problem` (they come first; the scales follow).
+int PoseVariables(const WindowProblem& problem) { return problem.PoseVar(problem.last(), 3) + 1; }
+
+// The Gauss-Newton information of `problem` at its initial point over its pose variables, the
+// scales held at their values (conditioned on: the next window holds the earlier segments' scales
+// fixed, so a prior that had integrated them out would count their uncertainty twice, once in the
+// boundary's along-track spread and once in the window's free scale). A fixed height (planar
+// mode: no term sees it) gets a unit diagonal so that the matrix can be factored without coupling
+// it to anything.
+Eigen::SparseMatrix<double> Information(const WindowProblem& problem, bool fix_height) {
+    const int n = PoseVariables(problem);
+    std::vector<double> x(problem.NumVariables());
+    problem.InitialPoint(x.data());
+    std::vector<LinearisedTerm> terms;
+    problem.LineariseTerms(x.data(), terms);
+    std::vector<Eigen::Triplet<double>> entries;
+    for (const LinearisedTerm& t : terms) {
+        if (!(t.information > 0.0)) continue;
+        for (int a = 0; a < t.size; ++a) {
+            for (int b = 0; b < t.size; ++b) {
+                if (t.var[a] >= n || t.var[b] >= n) continue;
+                entries.emplace_back(t.var[a], t.var[b],
+                                     t.information * t.jacobian[a] * t.jacobian[b]);
+            }
+        }
+    }
+    if (fix_height) {
+        for (std::size_t i = problem.first(); i <= problem.last(); ++i) {
+            entries.emplace_back(problem.PoseVar(i, 2), problem.PoseVar(i, 2), 1.0);
+        }
+        if (problem.PoseVar(problem.first() - 1, 2) >= 0) {
+            const int z = problem.PoseVar(problem.first() - 1, 2);
+            entries.emplace_back(z, z, 1.0);
+        }
+    }
+    Eigen::SparseMatrix<double> h(n, n);
+    h.setFromTriplets(entries.begin(), entries.end());
+    return h;
+}
+
+// The marginal of pose `pose` under `problem`'s NLL given the scales, linearised at its initial
+// point x0 (the state): f(x0 + d) ~ f(x0) + g^T d + d^T H d / 2 (H Gauss-Newton, over the pose
+// variables). Its minimiser d* = -H^-1 g and covariance H^-1, read at the pose's variables: the
+// mean shift d*_pose and the 4x4 block.
+struct PoseMarginal {
+    PoseMatrix sigma;
+    PoseVector shift;
+};
+
+std::optional<PoseMarginal> Marginal(const WindowProblem& problem, std::size_t pose,
+                                     bool fix_height) {
+    const Eigen::SparseMatrix<double> h = Information(problem, fix_height);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
+    const int n = PoseVariables(problem);
+    PoseMarginal m;
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
+    for (int c = 0; c < 4; ++c) {
+        e.setZero();
+        e[problem.PoseVar(pose, c)] = 1.0;
+        const Eigen::VectorXd col = ldlt.solve(e);
+        for (int r = 0; r < 4; ++r) m.sigma(r, c) = col[problem.PoseVar(pose, r)];
+    }
+    std::vector<double> x0(problem.NumVariables()), g(problem.NumVariables());
+    problem.InitialPoint(x0.data());
+    problem.Gradient(x0.data(), g.data());
+    const Eigen::VectorXd step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(g.data(), n));
+    for (int c = 0; c < 4; ++c) m.shift[c] = step[problem.PoseVar(pose, c)];
+    if (!m.sigma.allFinite() || !m.shift.allFinite()) return std::nullopt;
+    m.sigma = 0.5 * (m.sigma + m.sigma.transpose());
+    if (fix_height) m.sigma.row(2).setZero(), m.sigma.col(2).setZero(), m.shift[2] = 0.0;
+    return m;
+}
+
+// Sigma's inverse on the variables that are not fixed (height excluded when fixed).
+std::optional<PoseMatrix> InformationOf(const PoseMatrix& sigma, bool fix_height) {
+    PoseMatrix info = PoseMatrix::Zero();
+    if (!fix_height) {
+        const Eigen::FullPivLU<PoseMatrix> lu(sigma);
+        if (!lu.isInvertible()) return std::nullopt;
+        info = lu.inverse();
+    } else {
+        const int idx[3] = {0, 1, 3};
+        Eigen::Matrix3d s3;
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) s3(r, c) = sigma(idx[r], idx[c]);
+        }
+        const Eigen::FullPivLU<Eigen::Matrix3d> lu(s3);
+        if (!lu.isInvertible()) return std::nullopt;
+        const Eigen::Matrix3d i3 = lu.inverse();
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) info(idx[r], idx[c]) = i3(r, c);
+        }
+    }
+    if (!info.allFinite()) return std::nullopt;
+    return PoseMatrix(0.5 * (info + info.transpose()));
+}
+
+PoseVector ToVector(const PoseState& p) { return PoseVector(p.p.x(), p.p.y(), p.p.z(), p.yaw_rad); }
+
+PoseCovariance ToPoseCovariance(const PoseMatrix& sigma) {
+    PoseCovariance c;
+    c.xy_m2 = sigma.topLeftCorner<2, 2>();
+    c.z_m2 = sigma(2, 2);
+    c.yaw_rad2 = sigma(3, 3);
+    c.xy_yaw_m_rad = Eigen::Vector2d(sigma(0, 3), sigma(1, 3));
+    return c;
+}
+
+}  // namespace
+
+std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const TraversableField* field,
+                                           const ModelConfig& model, std::size_t first,
+                                           std::size_t last,
+                                           const std::optional<PosePriorTerm>& prior) {
+    assert(first >= 1 && first <= last && last < s.poses.size() && "bad marginal window");
+    const WindowProblem problem(s, field, model, first, last,
+                                std::vector<std::uint8_t>(last - first + 1, 0),
+                                WindowUse::kLinearise, prior);
+    const std::optional<PoseMarginal> m = Marginal(problem, last, s.fix_height);
+    if (!m) return std::nullopt;
+    const std::optional<PoseMatrix> info = InformationOf(m->sigma, s.fix_height);
+    if (!info) return std::nullopt;
+    return PosePriorTerm{ToVector(s.poses[last]) + m->shift, *info};
+}
+
+FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
+                                   const TraversableField* field, const CorrectorConfig& config,
+                                   bool marginalise)
+    : field_(field), cfg_(config), marginalise_(marginalise) {
+    state_.obs.assign(1, StepObservation{});
+    state_.scale_segment.assign(1, 0);
+    state_.poses.assign(1, pose0);
+    state_.scales.assign(1, 1.0);
+    state_.fix_height = fix_height;
+    dist_.assign(1, 0.0);
+}
+
+// Same segment rule as ScaleSegments (and IncrementalCorrector::Append).
+void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& step) {
+    const int segment = static_cast<int>(dist_.back() / cfg_.model.scale_segment_m);
+    state_.obs.push_back(step);
+    state_.scale_segment.push_back(segment);
+    state_.poses.push_back(initial);
+    if (segment + 1 > static_cast<int>(state_.scales.size()))
+        state_.scales.resize(segment + 1, 1.0);
+    dist_.push_back(dist_.back() + step.length_m);
+}
+
+// The batch windows' rule: about window_m of path, at most max_window_poses poses.
+std::size_t FixedLagSmoother::WindowFirst(std::size_t end) const {
+    std::size_t first = end;
+    while (first > 1 && dist_[end] - dist_[first - 1] <= cfg_.window_m &&
+           end - first + 1 < cfg_.max_window_poses) {
+        --first;
+    }
+    return first;
+}
+
+// The marginalised past of pose `boundary` (see the header): the last window's terms up to the
+// boundary (or up to its end, then the odometry beyond it). nullopt: the boundary is pose 0 (the
+// known start), or the curvature was singular (the boundary is then held fixed).
+std::optional<PosePriorTerm> FixedLagSmoother::BoundaryPrior(std::size_t boundary) {
+    if (boundary == 0) return std::nullopt;
+    if (!marginalise_) return std::nullopt;
+    if (boundary + 1 == window_first_) return window_prior_;
+    std::optional<PosePriorTerm> prior = window_prior_;
+    std::size_t from = window_first_;
+    if (solved_end_ >= window_first_) {  // the solved part: with the map
+        const std::size_t to = std::min(boundary, solved_end_);
+        prior = MarginalPrior(state_, field_, cfg_.model, from, to, prior);
+        if (!prior) return std::nullopt;
+        from = to + 1;
+    }
+    if (boundary >= from) {  // never solved: odometry only
+        prior = MarginalPrior(state_, nullptr, cfg_.model, from, boundary, prior);
+    }
+    return prior;
+}
+
+FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
+    assert(solved_end_ < end && end < size() && "a solve must add poses");
+    SeedNewScales(state_, solved_end_ + 1, end);
+    ComposeOdometry(state_, solved_end_ + 1, end);
+    const std::size_t first = WindowFirst(end);
+    const std::optional<PosePriorTerm> prior = BoundaryPrior(first - 1);
+    FixedLagSolution out;
+    out.end = end;
+    out.first = prior ? first - 1 : first;
+    out.boundary_prior = prior.has_value();
+    const SolveReport rep =
+        SolveSoftWindow(state_, field_, cfg_, first, end, prior, restarts, stats_);
+    ++stats_.windows;
+    out.usable = Usable(rep.status);
+    if (!out.usable) ++stats_.window_failures;
+    out.poses.assign(state_.poses.begin() + out.first, state_.poses.begin() + end + 1);
+    out.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
+    // The covariance of the newest pose, for the output's uncertainty.
+    const WindowProblem problem(state_, field_, cfg_.model, first, end,
+                                std::vector<std::uint8_t>(end - first + 1, 0),
+                                WindowUse::kLinearise, prior);
+    if (const auto m = Marginal(problem, end, state_.fix_height)) {
+        out.end_covariance = ToPoseCovariance(m->sigma);
+        out.end_covariance_ok = true;
+    }
+    solved_end_ = end;
+    window_first_ = first;
+    window_prior_ = prior;
+    return out;
+}
+
+}  // namespace driftcorr

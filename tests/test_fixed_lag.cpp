@@ -1,0 +1,185 @@
+// Tests of the fixed-lag smoother (optim/src/fixed_lag.cpp): the marginalised boundary prior is
+// the Schur complement of the window's Gauss-Newton information (against a dense inverse), grows
+// along the odometry beyond the map, and the smoother's windows stay bounded and carry it.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <vector>
+
+#include "driftcorr/core/observables.h"
+#include "driftcorr/optim/covariance.h"
+#include "driftcorr/optim/fixed_lag.h"
+#include "test_state.h"
+
+namespace driftcorr {
+namespace {
+
+/// A 40-pose curve of 2 m steps turning 0.03 rad a step, climbing 5 cm a step.
+PlanarTrajectory Curve(int poses = 40) {
+    PlanarTrajectory t;
+    Eigen::Vector2d p(0.0, 0.0);
+    double yaw = 0.2;
+    for (int i = 0; i < poses; ++i) {
+        if (i > 0) {
+            p += 2.0 * Eigen::Vector2d(std::cos(yaw), std::sin(yaw));
+            yaw += 0.03;
+        }
+        t.t_s.push_back(0.5 * i);
+        t.p_en.push_back(p);
+        t.up_m.push_back(0.05 * i);
+        t.yaw_rad.push_back(yaw);
+    }
+    return t;
+}
+
+ModelConfig Model() {
+    ModelConfig m;
+    m.scale_segment_m = 20.0;
+    return m;
+}
+
+PosePriorTerm SomePrior(const TrajectoryState& s, std::size_t pose) {
+    PosePriorTerm t;
+    const PoseState& b = s.poses[pose];
+    t.mean << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad;
+    t.information = Eigen::Vector4d(4.0, 2.0, 9.0, 400.0).asDiagonal();
+    t.information(0, 1) = t.information(1, 0) = 0.5;
+    if (s.fix_height) t.information.row(2).setZero(), t.information.col(2).setZero();
+    return t;
+}
+
+// The dense reference: invert the Gauss-Newton information of window [first, last] (with the
+// prior on first-1) over its poses (the scales given) and read pose `last`'s block (x, y, yaw; z
+// too with free heights), and the same block of the Gauss-Newton step -H^-1 g.
+struct DenseMarginal {
+    Eigen::MatrixXd sigma;
+    Eigen::VectorXd shift;
+};
+DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std::size_t first,
+                              std::size_t last, const PosePriorTerm& prior) {
+    const WindowProblem p(s, nullptr, model, first, last,
+                          std::vector<std::uint8_t>(last - first + 1, 0), WindowUse::kLinearise,
+                          prior);
+    std::vector<double> x(p.NumVariables());
+    p.InitialPoint(x.data());
+    Eigen::MatrixXd h = DenseGaussNewtonHessian(p, x.data());
+    std::vector<double> g(p.NumVariables());
+    p.Gradient(x.data(), g.data());
+    std::vector<int> keep;
+    for (int k = 0; k < p.PoseVar(last, 3) + 1; ++k) {
+        if (!(s.fix_height && k % 4 == 2)) keep.push_back(k);
+    }
+    Eigen::MatrixXd hk(keep.size(), keep.size());
+    for (std::size_t r = 0; r < keep.size(); ++r) {
+        for (std::size_t c = 0; c < keep.size(); ++c) hk(r, c) = h(keep[r], keep[c]);
+    }
+    const Eigen::MatrixXd sigma = hk.inverse();
+    Eigen::VectorXd gk(keep.size());
+    for (std::size_t r = 0; r < keep.size(); ++r) gk[r] = g[keep[r]];
+    const Eigen::VectorXd step = -sigma * gk;
+    std::vector<int> block;
+    for (int c = 0; c < 4; ++c) {
+        if (s.fix_height && c == 2) continue;
+        for (std::size_t k = 0; k < keep.size(); ++k) {
+            if (keep[k] == p.PoseVar(last, c)) block.push_back(static_cast<int>(k));
+        }
+    }
+    DenseMarginal out{Eigen::MatrixXd(block.size(), block.size()), Eigen::VectorXd(block.size())};
+    for (std::size_t r = 0; r < block.size(); ++r) {
+        for (std::size_t c = 0; c < block.size(); ++c) out.sigma(r, c) = sigma(block[r], block[c]);
+        out.shift[r] = step[block[r]];
+    }
+    return out;
+}
+
+TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
+    const ModelConfig model = Model();
+    for (bool fix_height : {false, true}) {
+        SCOPED_TRACE(fix_height ? "planar" : "free height");
+        TrajectoryState s = test::StateFrom(Curve(), model, fix_height);
+        const PosePriorTerm prior = SomePrior(s, 4);
+        // Off the estimate (and the prior's mean) the old terms have a gradient: the mean moves.
+        for (std::size_t i = 5; i <= 17; ++i) s.poses[i].p.x() += 0.02 * double(i - 4);
+        const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior);
+        ASSERT_TRUE(marginal.has_value());
+        const PoseState& b = s.poses[17];
+        const PoseVector shift = marginal->mean - PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad);
+        const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior);
+        const Eigen::MatrixXd& dense = reference.sigma;
+        for (int r = 0, k = 0; r < 4; ++r) {
+            if (fix_height && r == 2) {
+                EXPECT_EQ(shift[r], 0.0);
+                continue;
+            }
+            EXPECT_NEAR(shift[r], reference.shift[k++], 1e-8) << "component " << r;
+        }
+        EXPECT_GT(shift.head<2>().norm(), 1e-3);
+        Eigen::MatrixXd info = marginal->information;
+        if (fix_height) {
+            EXPECT_EQ(info.row(2).norm() + info.col(2).norm(), 0.0);
+            const Eigen::Matrix3d i3 =
+                (Eigen::Matrix3d() << info(0, 0), info(0, 1), info(0, 3), info(1, 0), info(1, 1),
+                 info(1, 3), info(3, 0), info(3, 1), info(3, 3))
+                    .finished();
+            info = i3;
+        }
+        const Eigen::MatrixXd sigma = info.inverse();
+        EXPECT_LT((sigma - dense).cwiseAbs().maxCoeff(), 1e-8 * dense.cwiseAbs().maxCoeff())
+            << "marginal\n"
+            << sigma << "\ndense\n"
+            << dense;
+    }
+}
+
+// Without a map the marginal is the dead-reckoning covariance: it grows with every step.
+TEST(MarginalPrior, GrowsAlongTheOdometry) {
+    const ModelConfig model = Model();
+    TrajectoryState s = test::StateFrom(Curve(), model, true);
+    const PosePriorTerm prior = SomePrior(s, 4);
+    double previous = 0.0;
+    for (std::size_t last : {6u, 12u, 24u, 36u}) {
+        const auto m = MarginalPrior(s, nullptr, model, 5, last, prior);
+        ASSERT_TRUE(m.has_value());
+        const Eigen::Matrix2d xy =
+            (Eigen::Matrix3d() << m->information(0, 0), m->information(0, 1), m->information(0, 3),
+             m->information(1, 0), m->information(1, 1), m->information(1, 3), m->information(3, 0),
+             m->information(3, 1), m->information(3, 3))
+                .finished()
+                .inverse()
+                .topLeftCorner<2, 2>();
+        EXPECT_GT(xy.trace(), previous) << "pose " << last;
+        previous = xy.trace();
+    }
+}
+
+// The smoother's windows: bounded by window_m, the boundary carries the prior once the window has
+// left pose 0 (or is held fixed without marginalisation), and each solve reaches its end.
+TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
+    CorrectorConfig cfg;
+    cfg.model = Model();
+    cfg.window_m = 20.0;
+    const PlanarTrajectory est = Curve(60);
+    for (bool marginalise : {true, false}) {
+        SCOPED_TRACE(marginalise ? "marginalised" : "fixed boundary");
+        const TrajectoryState s = test::StateFrom(est, cfg.model, true);
+        FixedLagSmoother smoother(s.poses[0], true, nullptr, cfg, marginalise);
+        for (std::size_t i = 1; i < est.size(); ++i) smoother.Append(s.poses[i], s.obs[i]);
+        std::size_t priors = 0;
+        for (std::size_t end = 5; end < est.size(); end += 5) {
+            const FixedLagSolution sol = smoother.Solve(end, false);
+            EXPECT_TRUE(sol.usable);
+            EXPECT_EQ(smoother.solved_end(), end);
+            EXPECT_EQ(sol.poses.size(), sol.end - sol.first + 1);
+            EXPECT_LE(sol.end - sol.first, 12u) << "20 m of 2 m steps, plus the boundary";
+            EXPECT_TRUE(sol.end_covariance_ok);
+            priors += sol.boundary_prior;
+            // No map: the odometry alone, so the solution stays on the estimate.
+            EXPECT_LT((sol.poses.back().p - s.poses[end].p).norm(), 1e-3) << "end " << end;
+        }
+        EXPECT_EQ(priors > 0, marginalise);
+    }
+}
+
+}  // namespace
+}  // namespace driftcorr
