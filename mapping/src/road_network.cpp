@@ -195,7 +195,8 @@ TraversableField::Tile MakeTile(const RoadNetwork& network, const GridSpec& grid
     return tile;
 }
 
-// The tiles of `grid` (tile_cells a side) that `keep` selects, built one after the other.
+// The tiles `chosen` of `grid` (tile_cells a side), built one after the other; the cap counts
+// the samples they hold and one tile's work.
 TraversableField BuildTiles(const RoadNetwork& network, const GridSpec& grid,
                             const std::vector<std::pair<int, int>>& chosen, int tile_cells,
                             const RoadFieldConfig& config) {
