@@ -1179,6 +1179,26 @@ TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
     EXPECT_EQ(ReadFile(c.output), ReadFile(via_scenario));
 }
 
+// stream reads poses with orientation: a replayed positions-only estimate is bad input naming
+// the file (it crashed before the check).
+TEST_F(CliFormats, StreamRefusesAPositionsOnlyEstimate) {
+    const CaseDirs c = MakeCase("StreamPositionsOnly");
+    std::istringstream full(ReadFile(c.scenario / "estimate.tum"));
+    std::string positions;
+    for (std::string line; std::getline(full, line);) {
+        std::istringstream f(line);
+        std::string t, x, y, z;
+        f >> t >> x >> y >> z;
+        positions += t + " " + x + " " + y + " " + z + "\n";
+    }
+    WriteFile(c.scenario / "estimate.tum", positions);
+    const RunResult r =
+        RunProgram(kCli, {"stream", c.scenario.string(), "--replay"}, c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitBadInput);
+    EXPECT_NE(r.err.find("estimate.tum: the estimate has positions only"), std::string::npos);
+}
+
 TEST_F(CliFormats, PositionsOnlyTumSaysTheHeadingCameFromTheMotion) {
     const CaseDirs c = MakeCase("PositionsOnly");
     std::istringstream full(ReadFile(c.scenario / "estimate.tum"));

@@ -92,7 +92,7 @@ void PrintTo(const KittiCase& c, std::ostream* os) { *os << c.folder; }
 
 class KittiAcceptance : public ::testing::TestWithParam<KittiCase> {};
 
-TEST_P(KittiAcceptance, MeetsTheRoadIssueFigures) {
+TEST_P(KittiAcceptance, MeetsTheRoadAccuracyFigures) {
     const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/" + GetParam().folder;
     if (!fs::exists(dir + "/scenario.yaml")) {
         GTEST_SKIP() << "real data not present: " << dir;

@@ -678,7 +678,7 @@ TEST(GeoJson, NonFiniteCoordinateWritesNothing) {
 
 namespace {
 
-// A misspelt optional key is not fatal (FORMAT.md allows extensions) but must be reported.
+// A misspelt optional key is not fatal (docs/FORMAT.md allows extensions) but must be reported.
 TEST(ScenarioWarnings, UnknownKeysAreReportedWithLine) {
     namespace fs = std::filesystem;
     const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / ("warn_" + std::to_string(::getpid()));

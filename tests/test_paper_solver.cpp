@@ -26,7 +26,7 @@ TraversableField StraightRoadField(double half_width_m) {
 double MeanMapDistance(const PlanarTrajectory& t, const TraversableField& field) {
     double sum = 0.0;
     for (const auto& p : t.p_en) {
-        const auto s = field.centre().QueryBilinear(Eigen::Vector3d(p.x(), p.y(), 0.0));
+        const auto s = field.QueryCentreBilinear(Eigen::Vector3d(p.x(), p.y(), 0.0));
         EXPECT_TRUE(s.has_value());
         sum += s ? s->value : 0.0;
     }
@@ -50,10 +50,9 @@ PlanarTrajectory DriftedEstimate(std::size_t poses) {
 
 TEST(QueryBilinear, StraightRoadDistanceAndGradient) {
     const TraversableField field = StraightRoadField(4.0);
-    const InterpolatedField& centre = field.centre();
     for (double x : {20.1, 77.7, 150.3}) {
         for (double y : {-3.3, -1.1, 0.6, 2.9, 5.4}) {
-            const auto q = centre.QueryBilinear(Eigen::Vector3d(x, y, 0.0));
+            const auto q = field.QueryCentreBilinear(Eigen::Vector3d(x, y, 0.0));
             ASSERT_TRUE(q.has_value());
             // Linear interpolation of |y| is exact in any cell that does not straddle y = 0.
             EXPECT_NEAR(q->value, std::abs(y), 1e-3) << x << ", " << y;
@@ -62,16 +61,16 @@ TEST(QueryBilinear, StraightRoadDistanceAndGradient) {
             EXPECT_TRUE(q->hessian.isZero());
             // Gradient against central differences inside the cell (h well below a cell).
             const double h = 1e-4;
-            const auto xp = centre.QueryBilinear(Eigen::Vector3d(x + h, y, 0.0));
-            const auto xm = centre.QueryBilinear(Eigen::Vector3d(x - h, y, 0.0));
-            const auto yp = centre.QueryBilinear(Eigen::Vector3d(x, y + h, 0.0));
-            const auto ym = centre.QueryBilinear(Eigen::Vector3d(x, y - h, 0.0));
+            const auto xp = field.QueryCentreBilinear(Eigen::Vector3d(x + h, y, 0.0));
+            const auto xm = field.QueryCentreBilinear(Eigen::Vector3d(x - h, y, 0.0));
+            const auto yp = field.QueryCentreBilinear(Eigen::Vector3d(x, y + h, 0.0));
+            const auto ym = field.QueryCentreBilinear(Eigen::Vector3d(x, y - h, 0.0));
             EXPECT_NEAR(q->gradient.x(), (xp->value - xm->value) / (2 * h), 1e-6);
             EXPECT_NEAR(q->gradient.y(), (yp->value - ym->value) / (2 * h), 1e-6);
         }
     }
     // Outside the grid: no sample.
-    EXPECT_FALSE(centre.QueryBilinear(Eigen::Vector3d(-1e4, 0.0, 0.0)).has_value());
+    EXPECT_FALSE(field.QueryCentreBilinear(Eigen::Vector3d(-1e4, 0.0, 0.0)).has_value());
     EXPECT_FALSE(InterpolatedField().QueryBilinear(Eigen::Vector3d::Zero()).has_value());
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Builds a driftcorr scenario (../shared/datasets/FORMAT.md) from the IPIN 2021 "Zero2four" walk.
+"""Builds a driftcorr scenario (docs/FORMAT.md) from the IPIN 2021 "Zero2four" walk.
 
 The walk (Samsung S10, HCU building Hamburg) starts on the ground floor, climbs the stairs to the
 1st floor and takes the lift to the 4th floor. Its data is public but carries no licence, so it is

@@ -13,7 +13,7 @@
 
 namespace driftcorr::stress {
 
-/// WGS84 -> the anchor's East-North plane [m] (FORMAT.md): the local tangent plane at a
+/// WGS84 -> the anchor's East-North plane [m] (docs/FORMAT.md): the local tangent plane at a
 /// lat_deg/lon_deg anchor, or the CRS grid minus (easting_m, northing_m) for a crs anchor.
 class AnchorPlane {
 public:

@@ -1,6 +1,6 @@
 #pragma once
 // Writers of the generated scenario folder: OSM XML, TUM trajectories and scenario.yaml
-// (see ../shared/datasets/FORMAT.md). Every file is written to a temporary name and renamed when
+// (see docs/FORMAT.md). Every file is written to a temporary name and renamed when
 // complete, so a failed run leaves no half-written file.
 #include <string>
 #include <vector>

@@ -266,6 +266,11 @@ void ReadStdin(StreamSession& session) {
 // The scenario's estimate, formatted as TUM lines and fed through the same path, at rate_hz.
 void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
     const Trajectory est = io::LoadTrajectory(sc.estimate);
+    if (!est.HasOrientation()) {  // stream's lines carry one (t x y z qx qy qz qw)
+        throw InputError(sc.estimate.path, 0, "",
+                         "the estimate has positions only; stream reads poses with orientation "
+                         "(correct takes positions only, the heading from the motion)");
+    }
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < est.size(); ++i) {
         if (rate_hz > 0.0) {

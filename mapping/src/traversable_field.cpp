@@ -1,19 +1,99 @@
 #include "driftcorr/mapping/traversable_field.h"
 
 #include <cassert>
+#include <cmath>
 
 namespace driftcorr {
 
 TraversableField::TraversableField(InterpolatedField centre, InterpolatedField corridor,
                                    double truncation_m)
-    : centre_(std::move(centre)), corridor_(std::move(corridor)), truncation_m_(truncation_m) {
+    : grid_(centre.spec()),
+      centre_(std::move(centre)),
+      corridor_(std::move(corridor)),
+      truncation_m_(truncation_m) {
     assert(centre_.spec().size() == corridor_.spec().size() && "fields must share one grid");
+}
+
+TraversableField::TraversableField(const GridSpec& grid, int tile_cells, std::vector<Tile> tiles,
+                                   double truncation_m)
+    : grid_(grid), tile_cells_(tile_cells), tiles_(std::move(tiles)), truncation_m_(truncation_m) {
+    assert(grid_.planar() && tile_cells_ >= 4 && "a tiled field is planar, tiles >= 4 cells");
+    tiles_x_ = (grid_.nx + tile_cells_ - 1) / tile_cells_;
+    tiles_y_ = (grid_.ny + tile_cells_ - 1) / tile_cells_;
+    tile_index_.assign(std::size_t(tiles_x_) * std::size_t(tiles_y_), -1);
+    for (std::size_t k = 0; k < tiles_.size(); ++k) {
+        const Tile& t = tiles_[k];
+        assert(t.ti >= 0 && t.ti < tiles_x_ && t.tj >= 0 && t.tj < tiles_y_ && "tile off the grid");
+        int& slot = tile_index_[std::size_t(t.tj) * tiles_x_ + t.ti];
+        assert(slot < 0 && "a tile given twice");
+        slot = int(k);
+    }
+}
+
+std::size_t TraversableField::Samples() const {
+    if (!tiled()) return centre_.spec().size();
+    std::size_t n = 0;
+    for (const Tile& t : tiles_) n += t.centre.spec().size();
+    return n;
+}
+
+const InterpolatedField& TraversableField::centre() const {
+    assert(!tiled() && "centre() of a tiled field");
+    return centre_;
+}
+
+const InterpolatedField& TraversableField::corridor() const {
+    assert(!tiled() && "corridor() of a tiled field");
+    return corridor_;
+}
+
+int TraversableField::TileAt(const Eigen::Vector3d& p) const {
+    const double tile_m = tile_cells_ * grid_.resolution_m;
+    const double gx = std::floor((p.x() - grid_.origin_m.x()) / tile_m);
+    const double gy = std::floor((p.y() - grid_.origin_m.y()) / tile_m);
+    if (!(gx >= 0.0 && gx < tiles_x_ && gy >= 0.0 && gy < tiles_y_)) return -1;
+    return tile_index_[std::size_t(gy) * tiles_x_ + std::size_t(gx)];
 }
 
 std::optional<TraversableSample> TraversableField::Query(const Eigen::Vector3d& p_enu) const {
     thread_local std::vector<FieldSample> samples;
-    if (!InterpolatedField::QueryMany({&centre_, &corridor_}, p_enu, samples)) return std::nullopt;
+    const InterpolatedField *centre = &centre_, *corridor = &corridor_;
+    if (tiled()) {
+        const int k = TileAt(p_enu);
+        if (k < 0) return std::nullopt;
+        centre = &tiles_[k].centre;
+        corridor = &tiles_[k].corridor;
+    }
+    if (!InterpolatedField::QueryMany({centre, corridor}, p_enu, samples)) return std::nullopt;
     return TraversableSample{samples[0], samples[1]};
+}
+
+template <typename Fn>
+std::optional<FieldSample> TraversableField::QueryOne(const Eigen::Vector3d& p, bool centre,
+                                                      Fn query) const {
+    if (!tiled()) return query(centre ? centre_ : corridor_, p);
+    const int k = TileAt(p);
+    if (k < 0) return std::nullopt;
+    return query(centre ? tiles_[k].centre : tiles_[k].corridor, p);
+}
+
+std::optional<FieldSample> TraversableField::QueryCentre(const Eigen::Vector3d& p_enu) const {
+    return QueryOne(p_enu, true, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
+        return f.Query(p);
+    });
+}
+
+std::optional<FieldSample> TraversableField::QueryCentreBilinear(const Eigen::Vector3d& p_enu) const {
+    return QueryOne(p_enu, true, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
+        return f.QueryBilinear(p);
+    });
+}
+
+std::optional<FieldSample> TraversableField::QueryCorridorBilinear(
+    const Eigen::Vector3d& p_enu) const {
+    return QueryOne(p_enu, false, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
+        return f.QueryBilinear(p);
+    });
 }
 
 }  // namespace driftcorr

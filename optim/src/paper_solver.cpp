@@ -29,11 +29,11 @@ double MapCost(const TraversableField* field, const PaperSolverConfig& c, const 
     grad.setZero();
     if (field == nullptr || field->empty() || c.map_weight == 0.0) return 0.0;
     const Eigen::Vector3d q(p.x(), p.y(), up_m);
-    const std::optional<FieldSample> centre = field->centre().QueryBilinear(q);
+    const std::optional<FieldSample> centre = field->QueryCentreBilinear(q);
     if (!centre) return 0.0;
     double h = c.map_truncation_m;
     if (h <= 0.0) {
-        const std::optional<FieldSample> corridor = field->corridor().QueryBilinear(q);
+        const std::optional<FieldSample> corridor = field->QueryCorridorBilinear(q);
         if (!corridor) return 0.0;
         h = std::max(0.0, centre->value - corridor->value);
     }

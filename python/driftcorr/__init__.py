@@ -37,7 +37,7 @@ __all__ = ["InputError", "Scenario", "Correction", "StreamPose", "StreamResult",
 
 @dataclass(frozen=True)
 class Scenario:
-    """A scenario folder as read from its scenario.yaml (FORMAT.md). ``anchor`` and ``map`` have
+    """A scenario folder as read from its scenario.yaml (docs/FORMAT.md). ``anchor`` and ``map`` have
     the keys of the file's ``anchor:`` block and ``map:`` entries (paths resolved), so that
     ``correct(s.estimate, s.map, s.anchor, frame=s.frame, mode=s.mode)`` corrects it."""
     name: str
@@ -144,7 +144,7 @@ def correct(trajectory, map, anchor, *, frame: str, mode: str, ground_truth=None
 
 def metrics(trajectory_en, ground_truth_en) -> dict:
     """ATE, final, max, p90, mean error [m], KITTI drift [%], floor accuracy and path length of a
-    world-plane trajectory against ground truth, pose by pose (FORMAT.md, "Judging")."""
+    world-plane trajectory against ground truth, pose by pose (docs/FORMAT.md, "Judging")."""
     return _driftcorr.metrics(trajectory_en, ground_truth_en)
 
 

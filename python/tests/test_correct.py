@@ -27,7 +27,7 @@ def test_kitti07_cvo_same_figures_as_cli(cli, workdir):
     py = driftcorr.correct_scenario(scenario)
     assert py.usable and py.status in ("success", "acceptable")
     assert_matches_cli(py, cli_correct(cli, scenario, workdir / "kitti07_cvo"))
-    # Against FORMAT.md's judging, recomputed from the returned arrays.
+    # Against docs/FORMAT.md's judging, recomputed from the returned arrays.
     again = driftcorr.metrics(py.corrected_en, py.ground_truth_en)
     assert again["ate_m"] == pytest.approx(py.metrics_after["ate_m"], rel=1e-12)
 

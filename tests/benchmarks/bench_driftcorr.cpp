@@ -41,7 +41,7 @@ void BM_RoadFieldBuild(benchmark::State& state) {
     std::size_t cells = 0;
     for (auto _ : state) {
         TraversableField field = RasteriseRoads(net, net.Bounds(), cfg);
-        cells = field.spec().size();
+        cells = field.Samples();
         benchmark::DoNotOptimize(field);
     }
     state.counters["cells"] = double(cells);

@@ -32,7 +32,7 @@ std::optional<double> MeanMapDistance(const PlanarTrajectory& t, const Traversab
     double sum = 0.0;
     std::size_t count = 0;
     for (std::size_t i = 0; i < t.size(); ++i) {
-        const auto s = field.centre().Query(Eigen::Vector3d(t.p_en[i].x(), t.p_en[i].y(), t.up_m[i]));
+        const auto s = field.QueryCentre(Eigen::Vector3d(t.p_en[i].x(), t.p_en[i].y(), t.up_m[i]));
         if (!s) continue;
         sum += std::max(0.0, s->value);
         ++count;

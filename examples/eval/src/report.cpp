@@ -266,7 +266,7 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
     std::ostringstream out;
     out << "# driftcorr eval\n\n"
         << "Horizontal errors against the ground truth, pose by pose, in the world East-North plane "
-           "through the scenario's anchor, without re-alignment (FORMAT.md, \"Judging\"). ATE = RMS "
+           "through the scenario's anchor, without re-alignment (docs/FORMAT.md, \"Judging\"). ATE = RMS "
            "error, final = error of the last pose, p90 = 90th percentile, drift = KITTI translational "
            "drift over 100-800 m segments, right floor = share of poses within 1.5 m of the ground "
            "truth's height (indoor3d), map = mean distance of the poses to the nearest road "

@@ -80,7 +80,7 @@ public:
     bool Has(const std::string& key) const { return Find(key).has_value(); }
     const std::string& file() const { return file_; }
 
-    /// One warning per key not in `known` ("file:line: key: unknown key, ignored"): FORMAT.md
+    /// One warning per key not in `known` ("file:line: key: unknown key, ignored"): docs/FORMAT.md
     /// allows extensions, but a misspelt optional key (yaw_dge) must not pass unnoticed.
     void WarnUnknownKeys(std::initializer_list<const char*> known,
                          std::vector<std::string>& warnings) const {

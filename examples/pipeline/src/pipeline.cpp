@@ -142,6 +142,27 @@ AnchorFitConfig AnchorFitFor(const io::Scenario& sc, const PipelineConfig& confi
     return c;
 }
 
+// Where the corrected track can be: within field.margin_m (the drift the field allows for) of
+// every pose of the anchored estimate, and within reach of every start the anchor check scores
+// (the leading path turned about the start over the whole circle, moved by up to the check's
+// radius).
+std::vector<FieldDisc> FieldCorridor(const PlanarTrajectory& estimate,
+                                     const Eigen::Vector2d& origin_en, const AnchorFitConfig& fit,
+                                     const RoadFieldConfig& field) {
+    std::vector<FieldDisc> discs;
+    discs.reserve(estimate.size() + 1);
+    double lead_reach_m = 0.0, path_m = 0.0;
+    for (std::size_t i = 0; i < estimate.size(); ++i) {
+        discs.push_back({estimate.p_en[i], field.margin_m});
+        if (i > 0) path_m += (estimate.p_en[i] - estimate.p_en[i - 1]).norm();
+        if (path_m <= fit.lead_path_m) {
+            lead_reach_m = std::max(lead_reach_m, (estimate.p_en[i] - origin_en).norm());
+        }
+    }
+    discs.push_back({origin_en, lead_reach_m + fit.check_position_radius_m + fit.reach_m});
+    return discs;
+}
+
 // `yaw_deg: auto` / `position_search_m`: the leading path is matched against a field that covers
 // every heading and position searched, then the estimate is placed where it fits best and the
 // anchor takes that heading and position.
@@ -295,7 +316,10 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
     if (gt) ps.ground_truth = ToPlanar(*gt, sc.frame, ps.anchor);
     std::vector<double> up = ps.estimate.up_m;
     std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
-    ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network);
+    const std::vector<FieldDisc> corridor = FieldCorridor(ps.estimate, ps.anchor.origin_en,
+                                                          AnchorFitFor(sc, config), config.field);
+    ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
+                            &corridor);
     if (!ps.anchor_fit) {
         // The anchor check: the given start, scored against every other heading and against
         // nearby positions at the given heading; the better of the two searches is kept.
@@ -313,13 +337,17 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
 
 TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
-                              double up_m, RoadNetwork& network) {
+                              double up_m, RoadNetwork& network,
+                              const std::vector<FieldDisc>* corridor) {
     if (sc.mode == io::ScenarioMode::kIndoor3d) {
         if (IsSurfaceLayer(sc.map.front())) return LoadSurfaceField(sc, config.surface_field);
         return LoadIndoorField(sc, config.indoor_field, up_m, network);
     }
     network = LoadRoads(sc, world, config.roads);
     try {
+        if (corridor != nullptr && config.field.tile_m > 0.0) {
+            return RasteriseRoadCorridor(network, region_en, *corridor, config.field);
+        }
         return RasteriseRoads(network, region_en, config.field);
     } catch (const std::invalid_argument& e) {
         throw InputError(sc.yaml_path, 0, "map", e.what());
@@ -377,7 +405,7 @@ CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
                             const ProgressCallback& progress) {
     CorrectionRun run;
     run.timings = ps.timings;
-    run.map_grid_cells = ps.field.spec().size();
+    run.map_grid_cells = ps.field.Samples();
 
     const auto t0 = std::chrono::steady_clock::now();
     run.result = Correct(ps, config, progress);

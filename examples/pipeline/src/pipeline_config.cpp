@@ -167,6 +167,7 @@ std::map<std::string, Setter> FieldSetters(const Context& c, RoadFieldConfig& f)
     num("truncation_m", &f.truncation_m);
     num("exact_band_m", &f.exact_band_m);
     num("max_memory_mb", &f.max_memory_mb);
+    num("tile_m", &f.tile_m);
     return s;
 }
 

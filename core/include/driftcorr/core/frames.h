@@ -1,5 +1,5 @@
 #pragma once
-// The axes conventions of trajectory frames (FORMAT.md `frame:`) and the anchor that places a
+// The axes conventions of trajectory frames (docs/FORMAT.md `frame:`) and the anchor that places a
 // trajectory frame in the world's East-North-Up tangent plane.
 #include <optional>
 #include <string>

@@ -1,6 +1,6 @@
 #pragma once
 // Accuracy of a trajectory against ground truth, pose by pose (same index = same timestamp), in
-// the world's horizontal East-North plane, with no re-alignment (FORMAT.md, "Judging").
+// the world's horizontal East-North plane, with no re-alignment (docs/FORMAT.md, "Judging").
 #include <vector>
 
 #include "driftcorr/core/types.h"

@@ -54,11 +54,17 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
 
 struct RoadFieldConfig {
     double resolution_m = 0.5;      ///< grid spacing [m]
-    double margin_m = 300.0;        ///< grid extends this far around the region of interest [m]
+    /// The grid extends this far around the region of interest; the pipeline's corridor field
+    /// also keeps the tiles within this distance of every estimated pose: the drift (estimate
+    /// to corrected track) the field allows for [m]
+    double margin_m = 300.0;
     double truncation_m = 40.0;     ///< distances are capped at this value [m]
     double exact_band_m = 6.0;      ///< exact point-to-segment distances within this band
                                     ///< beyond the corridor edge; EDT beyond [m]
     double max_memory_mb = 1024.0;  ///< refuse fields larger than this
+    /// The field is built and held in square tiles of about this side, one tile at a time
+    /// (RasteriseRoadCorridor keeps only the tiles its corridor touches); 0: one grid [m]
+    double tile_m = 256.0;
 
     std::string Validate() const;
 };
@@ -69,5 +75,22 @@ struct RoadFieldConfig {
 /// max_memory_mb (the message says which resolution would fit) or the network is empty.
 TraversableField RasteriseRoads(const RoadNetwork& network, const Eigen::AlignedBox2d& region_en,
                                 const RoadFieldConfig& config);
+
+/// A disc of the world plane: centre [m, East-North] and radius [m].
+struct FieldDisc {
+    Eigen::Vector2d centre_en;
+    double radius_m = 0.0;
+};
+
+/// The field of RasteriseRoads over `region_en`, held only in the tiles of config.tile_m that
+/// come within a disc of `corridor` (e.g. a disc about every pose of a dead-reckoned track):
+/// equal to RasteriseRoads' field wherever a tile is held (to float rounding), std::nullopt
+/// (outside the map) elsewhere. When the tiles would hold more than half of the box's samples
+/// and the box fits max_memory_mb, the box is built as one grid instead. Throws std::invalid_argument when the tiles would exceed max_memory_mb or the
+/// network is empty. Precondition: config.tile_m > 0.
+TraversableField RasteriseRoadCorridor(const RoadNetwork& network,
+                                       const Eigen::AlignedBox2d& region_en,
+                                       const std::vector<FieldDisc>& corridor,
+                                       const RoadFieldConfig& config);
 
 }  // namespace driftcorr

@@ -2,6 +2,7 @@
 // The map prior as a field: where a platform can be. One interface serves the planar road mode
 // (a one-slice grid) and the 3D indoor mode.
 #include <optional>
+#include <vector>
 
 #include "driftcorr/mapping/interpolated_field.h"
 
@@ -18,23 +19,57 @@ struct TraversableSample {
 
 class TraversableField {
 public:
+    /// One square tile of a tiled field: tile (ti, tj) covers the samples
+    /// [ti * tile_cells, (ti + 1) * tile_cells) x [tj * tile_cells, (tj + 1) * tile_cells) of the
+    /// field's grid; its own grid holds them plus two samples on every side (clipped to the
+    /// field's grid), so that the B-spline support of any point of the tile fits.
+    struct Tile {
+        int ti = 0, tj = 0;
+        InterpolatedField centre, corridor;
+    };
+
     TraversableField() = default;
-    /// Precondition: both fields share one GridSpec.
+    /// One grid. Precondition: both fields share one GridSpec.
     TraversableField(InterpolatedField centre, InterpolatedField corridor, double truncation_m);
+    /// A planar field held as tiles of `grid` (tile_cells samples a side); a tile that is absent
+    /// is outside the map. Preconditions: grid.planar(), tile_cells >= 4, each tile's fields
+    /// share one GridSpec aligned with `grid`, no tile twice.
+    TraversableField(const GridSpec& grid, int tile_cells, std::vector<Tile> tiles,
+                     double truncation_m);
 
-    /// std::nullopt outside the grid (closer than one cell to its border).
+    /// std::nullopt outside the grid (closer than one cell to its border) or in an absent tile.
     std::optional<TraversableSample> Query(const Eigen::Vector3d& p_enu) const;
+    /// The centre distance alone (B-spline), std::nullopt where Query has none.
+    std::optional<FieldSample> QueryCentre(const Eigen::Vector3d& p_enu) const;
+    /// InterpolatedField::QueryBilinear of the centre / corridor distance (the paper's method).
+    std::optional<FieldSample> QueryCentreBilinear(const Eigen::Vector3d& p_enu) const;
+    std::optional<FieldSample> QueryCorridorBilinear(const Eigen::Vector3d& p_enu) const;
 
-    const GridSpec& spec() const { return centre_.spec(); }
+    /// The grid the field's samples lie on (for a tiled field: the grid its tiles are cut from).
+    const GridSpec& spec() const { return grid_; }
     bool planar() const { return spec().planar(); }
-    bool empty() const { return spec().size() == 0; }
+    bool empty() const { return Samples() == 0; }
+    bool tiled() const { return tile_cells_ > 0; }
+    /// Samples held (a tiled field: in its tiles, including their borders).
+    std::size_t Samples() const;
     double truncation_m() const { return truncation_m_; }
-    const InterpolatedField& centre() const { return centre_; }
-    const InterpolatedField& corridor() const { return corridor_; }
+    /// The fields of a field held as one grid. Precondition: !tiled().
+    const InterpolatedField& centre() const;
+    const InterpolatedField& corridor() const;
 
 private:
+    /// The tile's index in tiles_ for p, or -1 (outside the grid or absent).
+    int TileAt(const Eigen::Vector3d& p) const;
+    template <typename Fn>
+    std::optional<FieldSample> QueryOne(const Eigen::Vector3d& p, bool centre, Fn query) const;
+
+    GridSpec grid_;
     InterpolatedField centre_;
     InterpolatedField corridor_;
+    int tile_cells_ = 0;            ///< 0: one grid (centre_, corridor_)
+    int tiles_x_ = 0, tiles_y_ = 0;
+    std::vector<int> tile_index_;   ///< tiles_x_ * tiles_y_, index into tiles_ or -1
+    std::vector<Tile> tiles_;
     double truncation_m_ = 0.0;
 };
 

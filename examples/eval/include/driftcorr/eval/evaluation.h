@@ -1,6 +1,6 @@
 #pragma once
 // `driftcorr eval`: runs several correction methods on each scenario and measures them against
-// the ground truth (FORMAT.md "Judging": horizontal, no re-alignment). The methods share one
+// the ground truth (docs/FORMAT.md "Judging": horizontal, no re-alignment). The methods share one
 // loaded scenario and one map field per scenario. No printing: progress goes through a callback,
 // every outcome (including a scenario that could not be loaded) into the result structs.
 #include <functional>

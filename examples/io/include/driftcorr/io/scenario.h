@@ -1,5 +1,5 @@
 #pragma once
-// The scenario format of ../shared/datasets/FORMAT.md (scenario.yaml and the files it names).
+// The scenario format of docs/FORMAT.md (scenario.yaml and the files it names).
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,7 +35,7 @@ struct AnchorSpec {
     std::optional<double> lat_deg, lon_deg, alt_m;
     std::optional<std::string> crs;         ///< e.g. "EPSG:32632", as written
     std::optional<double> easting_m, northing_m;
-    /// Heading of the trajectory frame in East-North (FORMAT.md); std::nullopt when the file says
+    /// Heading of the trajectory frame in East-North (docs/FORMAT.md); std::nullopt when the file says
     /// `yaw_deg: auto`: the start is then estimated from the map (the key itself is required).
     std::optional<double> yaw_deg;
     /// `position_search_m` (optional): radius around the given position within which the start
