@@ -145,6 +145,12 @@ TEST(FuzzCorpusSeeds, RegressionsWithSilentWrongResults) {
     ASSERT_EQ(tum.size(), 3u);
     EXPECT_NEAR(tum.q_frame_body[1].x(), std::sqrt(0.5), 1e-12);
     EXPECT_NEAR(tum.q_frame_body[1].y(), std::sqrt(0.5), 1e-12);
+    // Positions-only TUM lines (t x y z): three poses and no orientations at all (the harness's
+    // length invariant predated the format and called it a broken promise).
+    const driftcorr::Trajectory positions =
+        driftcorr::io::ReadTum((corpus / "tum/regression-positions-only.txt").string());
+    EXPECT_EQ(positions.size(), 3u);
+    EXPECT_FALSE(positions.HasOrientation());
     // A subnormal rate_hz made every timestamp after the first inf.
     EXPECT_THROW(
         driftcorr::io::ReadKitti((corpus / "kitti/valid_rate.txt").string(), std::nullopt, 1e-320),

@@ -68,15 +68,18 @@ inline std::string_view AsText(const std::uint8_t* data, std::size_t size) {
     return {reinterpret_cast<const char*>(data), size};
 }
 
-/// ReadTum/ReadKitti promise: equal lengths, finite values, unit quaternions, increasing time.
+/// ReadTum/ReadKitti promise: equal lengths (no orientations at all for a positions-only TUM
+/// file, core/types.h), finite values, unit quaternions, increasing time.
 inline void CheckTrajectory(const Trajectory& traj, std::size_t min_poses) {
     Require(traj.size() >= min_poses, "fewer poses than min_poses");
-    Require(traj.p_frame.size() == traj.size() && traj.q_frame_body.size() == traj.size(),
+    Require(traj.p_frame.size() == traj.size() &&
+                (!traj.HasOrientation() || traj.q_frame_body.size() == traj.size()),
             "trajectory arrays differ in length");
     for (std::size_t i = 0; i < traj.size(); ++i) {
         Require(std::isfinite(traj.t_s[i]), "timestamp not finite");
         Require(i == 0 || traj.t_s[i] > traj.t_s[i - 1], "timestamps do not increase");
         Require(traj.p_frame[i].allFinite(), "position not finite");
+        if (!traj.HasOrientation()) continue;
         Require(traj.q_frame_body[i].coeffs().allFinite(), "quaternion not finite");
         Require(std::abs(traj.q_frame_body[i].norm() - 1.0) < 1e-6, "quaternion not unit");
     }
