@@ -1179,11 +1179,9 @@ TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
     EXPECT_EQ(ReadFile(c.output), ReadFile(via_scenario));
 }
 
-// stream reads poses with orientation: a replayed positions-only estimate is bad input naming
-// the file (it crashed before the check).
-TEST_F(CliFormats, StreamRefusesAPositionsOnlyEstimate) {
-    const CaseDirs c = MakeCase("StreamPositionsOnly");
-    std::istringstream full(ReadFile(c.scenario / "estimate.tum"));
+/// The TUM lines `t x y z qx qy qz qw` of `tum` as positions only, `t x y z`.
+std::string PositionsOnly(const std::string& tum) {
+    std::istringstream full(tum);
     std::string positions;
     for (std::string line; std::getline(full, line);) {
         std::istringstream f(line);
@@ -1191,6 +1189,14 @@ TEST_F(CliFormats, StreamRefusesAPositionsOnlyEstimate) {
         f >> t >> x >> y >> z;
         positions += t + " " + x + " " + y + " " + z + "\n";
     }
+    return positions;
+}
+
+// stream reads poses with orientation: a replayed positions-only estimate is bad input naming
+// the file (it crashed before the check).
+TEST_F(CliFormats, StreamRefusesAPositionsOnlyEstimate) {
+    const CaseDirs c = MakeCase("StreamPositionsOnly");
+    const std::string positions = PositionsOnly(ReadFile(c.scenario / "estimate.tum"));
     WriteFile(c.scenario / "estimate.tum", positions);
     const RunResult r =
         RunProgram(kCli, {"stream", c.scenario.string(), "--replay"}, c.out_dir.parent_path());
@@ -1201,14 +1207,7 @@ TEST_F(CliFormats, StreamRefusesAPositionsOnlyEstimate) {
 
 TEST_F(CliFormats, PositionsOnlyTumSaysTheHeadingCameFromTheMotion) {
     const CaseDirs c = MakeCase("PositionsOnly");
-    std::istringstream full(ReadFile(c.scenario / "estimate.tum"));
-    std::string positions;
-    for (std::string line; std::getline(full, line);) {
-        std::istringstream f(line);
-        std::string t, x, y, z;
-        f >> t >> x >> y >> z;
-        positions += t + " " + x + " " + y + " " + z + "\n";
-    }
+    const std::string positions = PositionsOnly(ReadFile(c.scenario / "estimate.tum"));
     const fs::path traj = c.out_dir.parent_path() / "positions.tum";
     WriteFile(traj, positions);
     const fs::path geojson = c.out_dir / "tracks.geojson";
