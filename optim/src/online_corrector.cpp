@@ -126,6 +126,10 @@ double OnlineCorrector::FrontScale(int segment) const {
 
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     if (auto rejected = Validate(pose)) return *rejected;
+    PushResult r;
+    if (!t_s_.empty()) outside_s_ += SecondsSince(push_returned_);
+    r.ahead_of_real_time = AheadOfRealTime(pose.t_s);
+    WaitForSolver(r);
     if (!has_yaw_) has_yaw_ = pose.yaw_rad.has_value();
     double yaw_u = last_yaw_u_;
     bool first_heading = false;
@@ -142,7 +146,6 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         }
     }
     const Entry entry = MakeEntry(pose, yaw_u);
-    PushResult r;
     r.index = t_s_.size();
     r.gap = !t_s_.empty() && entry.step.dt_s > cfg_.gap_warn_s;
     const int segment =
@@ -170,7 +173,6 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     path_m_ += entry.step.length_m;
     const std::size_t requested_before = last_request_end_;
     UpdateSchedule(r.index);  // synchronous: solves here
-    WaitForSolver(r.index, r);
     PoseState out;
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -182,6 +184,7 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         r.correction_age_s = pose.t_s - t_s_[r.index - r.correction_age_epochs];
         ++stats_.poses;
         if (!r.fresh) ++stats_.stale_poses;
+        if (r.ahead_of_real_time) ++stats_.ahead_poses;
         stats_.max_age_epochs = std::max(stats_.max_age_epochs, r.correction_age_epochs);
         stats_.max_age_s = std::max(stats_.max_age_s, r.correction_age_s);
     }
@@ -195,14 +198,27 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
             "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
         r.message = r.message.empty() ? msg : msg + "; " + r.message;
     }
+    push_returned_ = std::chrono::steady_clock::now();
     return r;
 }
 
-// Back-pressure: waits while pose `index` is more than max_lag_epochs past the last solved pose
-// and the worker has a solve to do (a request or a running solve); never waits for a solve that
-// nobody asked for (no path since the last one), nor after a worker failure.
-void OnlineCorrector::WaitForSolver(std::size_t index, PushResult& r) {
-    if (cfg_.synchronous || cfg_.max_lag_epochs == 0) return;
+// The input's pace over the last kPaceWindow poses (stream time against wall time outside Push).
+bool OnlineCorrector::AheadOfRealTime(double t_s) {
+    pace_.emplace_back(t_s, outside_s_);
+    if (pace_.size() > kPaceWindow + 1) pace_.pop_front();
+    if (pace_.size() < 3) return false;  // two intervals at least
+    return t_s - pace_.front().first > kAheadFactor * (outside_s_ - pace_.front().second);
+}
+
+// Back-pressure, before a pose is taken: waits while the previous pose is more than
+// max_lag_epochs past the last solved pose and the worker has a solve to do (a request or a
+// running solve); only while the input runs ahead of real time unless hold_live_input; never
+// waits for a solve that nobody asked for (no path since the last one), nor after a worker
+// failure.
+void OnlineCorrector::WaitForSolver(PushResult& r) {
+    if (cfg_.synchronous || cfg_.max_lag_epochs == 0 || t_s_.empty()) return;
+    if (!cfg_.hold_live_input && !r.ahead_of_real_time) return;
+    const std::size_t index = t_s_.size() - 1;
     std::unique_lock<std::mutex> lock(mutex_);
     auto caught_up = [&] {
         return index - std::min(solved_end_, index) <= cfg_.max_lag_epochs ||

@@ -156,6 +156,9 @@ std::map<std::string, Setter> OnlineSetters(const Context& c, OnlineConfig& o) {
     s["boundary_prior"] = [&c, &o](const YAML::Node& n, const std::string& k) {
         o.boundary_prior = Bool(c, n, k);
     };
+    s["hold_live_input"] = [&c, &o](const YAML::Node& n, const std::string& k) {
+        o.hold_live_input = Bool(c, n, k);
+    };
     return s;
 }
 
