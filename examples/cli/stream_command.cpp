@@ -51,7 +51,10 @@ const char* kStreamUsage =
     "age, solve time per window, output latency per line), then the whole trajectory is smoothed\n"
     "(the batch result) and judged (the verdict); --smoothed-out writes it as TUM.\n"
     "--sync solves inside the pose loop (deterministic; slower per pose).\n"
-    "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, 4 internal.\n";
+    "The causal outputs are then compared with the smoothed trajectory: when they lie farther from\n"
+    "it than the uncorrected input, they are reported as failed.\n"
+    "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, the verdict\n"
+    "failed or the causal outputs failed (everything was still written), 4 internal.\n";
 
 struct StreamArgs {
     std::string scenario, config, smoothed_out, max_lag;
@@ -150,6 +153,9 @@ public:
         latency_s_.push_back(std::chrono::duration<double>(Clock::now() - arrived).count() -
                              r.waited_s);
         Record(in, line);
+        causal_.t_s.push_back(r.corrected.t_s);
+        causal_.p_en.push_back(r.corrected.p_en);
+        causal_.up_m.push_back(r.corrected.up_m);
         ReportWarnings(number, r, pause_s);
     }
 
@@ -162,6 +168,8 @@ public:
             verdict = JudgeCorrection(reference_, &setup_.field, cfg_.corrector.model, result,
                                       nullptr, false, true, VerdictConfig{});
         }
+        std::optional<CausalCheck> causal;
+        if (Usable(result.status)) causal = CheckCausalOutput(reference_, causal_, result.corrected);
         if (!quiet) {
             std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
@@ -171,8 +179,13 @@ public:
                 std::fprintf(stderr, "driftcorr stream: verdict %s%s\n",
                              ToString(verdict->level).c_str(), reasons.c_str());
             }
+            if (causal) ReportCausal(*causal);
         }
-        if (smoothed_out.empty()) return 0;
+        // Outputs already written cannot be taken back: what the program cannot vouch for is
+        // said, and the exit code says it too.
+        const bool vouched = verdict && verdict->level != VerdictLevel::kFailed && causal &&
+                             !causal->worse_than_input;
+        if (smoothed_out.empty()) return vouched ? 0 : kExitSolver;
         if (!Usable(result.status)) {
             std::fprintf(stderr, "driftcorr stream: no smoothed trajectory (%s); nothing written\n",
                          result.message.c_str());
@@ -180,7 +193,7 @@ public:
         }
         io::WriteTum(smoothed_out, FromPlanar(result.corrected, reference_, accepted_,
                                               setup_.scenario.frame, setup_.anchor));
-        return 0;
+        return vouched ? 0 : kExitSolver;
     }
 
 private:
@@ -217,6 +230,18 @@ private:
                          "driftcorr stream: warning: %s; later outputs were composed "
                          "onto the last solve\n",
                          st.worker_error.c_str());
+        }
+    }
+    static void ReportCausal(const CausalCheck& c) {
+        std::fprintf(stderr,
+                     "driftcorr stream: causal outputs against the smoothed trajectory: RMS %.2f m, "
+                     "max %.2f m (the input: RMS %.2f m)\n",
+                     c.causal_rms_m, c.causal_max_m, c.input_rms_m);
+        if (c.worse_than_input) {
+            std::fprintf(stderr,
+                         "driftcorr stream: failed: the causal outputs lie farther from the smoothed "
+                         "trajectory than the uncorrected input; do not use them (the smoothed "
+                         "trajectory is judged by the verdict above)\n");
         }
     }
     void Skip(long number, const std::string& why) {
@@ -257,6 +282,7 @@ private:
     bool status_column_;
     Trajectory accepted_;
     PlanarTrajectory reference_;
+    PlanarTrajectory causal_;  ///< every output, in the world plane
     std::size_t skipped_ = 0;
     bool outside_ = false;
     std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]

@@ -124,6 +124,12 @@ double OnlineCorrector::FrontScale(int segment) const {
                                                             : front_scales_.back();
 }
 
+double OnlineCorrector::FrontBias(int segment) const {
+    if (front_biases_.empty()) return 0.0;
+    return segment < static_cast<int>(front_biases_.size()) ? front_biases_[segment]
+                                                            : front_biases_.back();
+}
+
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     if (auto rejected = Validate(pose)) return *rejected;
     PushResult r;
@@ -150,6 +156,10 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     r.gap = !t_s_.empty() && entry.step.dt_s > cfg_.gap_warn_s;
     const int segment =
         r.index == 0 ? 0 : static_cast<int>(path_m_ / cfg_.corrector.model.scale_segment_m);
+    const double bias_segment_s = cfg_.corrector.model.heading_bias_segment_s;
+    const int bias_segment = r.index == 0 || !(bias_segment_s > 0.0)
+                                 ? 0
+                                 : static_cast<int>((last_t_s_ - t_s_.front()) / bias_segment_s);
     {
         std::lock_guard<std::mutex> lock(mutex_);
         if (first_heading) {
@@ -160,10 +170,12 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         current_.push_back(r.index == 0
                                ? entry.initial
                                : ComposeStep(current_.back(), entry.step, FrontScale(segment),
-                                             fix_height_, entry.initial.p.z(), 0.0));
+                                             fix_height_, entry.initial.p.z(),
+                                             FrontBias(bias_segment)));
         pending_.push_back(entry);
         steps_.push_back(entry.step);
         segment_.push_back(segment);
+        bias_segment_.push_back(bias_segment);
     }
     entries_.push_back(entry);
     t_s_.push_back(pose.t_s);
@@ -368,6 +380,7 @@ void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
     if (!sol.usable) ++stats_.failed_solves;
     for (std::size_t i = sol.first; i <= sol.end; ++i) current_[i] = sol.poses[i - sol.first];
     front_scales_ = sol.scales;
+    front_biases_ = sol.biases;
     solved_end_ = sol.end;
     solved_covariance_ = sol.end_covariance;
     solved_covariance_ok_ = sol.end_covariance_ok;
@@ -378,9 +391,8 @@ void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
 // Caller holds mutex_.
 void OnlineCorrector::Recompose(std::size_t end) {
     for (std::size_t i = end + 1; i < current_.size(); ++i) {
-        // The fixed-lag windows estimate no heading-rate bias (FixedLagSmoother's state).
         current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
-                                  current_[i].p.z(), 0.0);
+                                  current_[i].p.z(), FrontBias(bias_segment_[i]));
     }
 }
 

@@ -192,6 +192,7 @@ private:
     std::optional<PushResult> Validate(const PlanarPose& pose) const;
     Entry MakeEntry(const PlanarPose& pose, double yaw_unwrapped);
     double FrontScale(int segment) const;
+    double FrontBias(int segment) const;  ///< solved heading-rate bias (0: none solved)
     /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
     bool ProjectOutput(PoseState& pose) const;
     void UpdateSchedule(std::size_t index);
@@ -237,7 +238,9 @@ private:
     std::vector<PoseState> current_;      ///< latest estimate of every accepted pose
     std::vector<StepObservation> steps_;  ///< observation of every accepted pose
     std::vector<int> segment_;            ///< scale segment of every accepted pose
+    std::vector<int> bias_segment_;       ///< heading-rate bias segment of every accepted pose
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
+    std::vector<double> front_biases_;    ///< solved biases, up to the last solved segment
     std::size_t solved_end_ = 0;          ///< last pose of the newest merged solve
     PoseCovariance solved_covariance_;
     bool solved_covariance_ok_ = false;

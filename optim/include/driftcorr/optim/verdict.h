@@ -92,4 +92,18 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
                         const AnchorFitResult* anchor_fit, bool start_estimated,
                         bool scale_estimated, const VerdictConfig& config);
 
+/// How far a causal (online) output strayed from the smoothed trajectory of the same poses, and
+/// how far the uncorrected input lies from it: with no ground truth, the smoothed result (judged
+/// by JudgeCorrection) is the reference. The causal output is not vouched for when it lies
+/// farther from the smoothed trajectory than the input it corrected (RMS over the poses).
+struct CausalCheck {
+    double causal_rms_m = 0.0, causal_max_m = 0.0;  ///< causal output to smoothed [m]
+    double input_rms_m = 0.0;                       ///< input to smoothed [m]
+    bool worse_than_input = false;
+};
+
+/// Precondition: the three trajectories have the same poses (same size, > 0).
+CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
+                              const PlanarTrajectory& smoothed);
+
 }  // namespace driftcorr
