@@ -51,8 +51,8 @@ const char* kStreamUsage =
     "age, solve time per window, output latency per line), then the whole trajectory is smoothed\n"
     "(the batch result) and judged (the verdict); --smoothed-out writes it as TUM.\n"
     "--sync solves inside the pose loop (deterministic; slower per pose).\n"
-    "The causal outputs are then compared with the smoothed trajectory: when they lie farther from\n"
-    "it than the uncorrected input, they are reported as failed.\n"
+    "The causal outputs are then compared with the smoothed trajectory: when the two lie farther\n"
+    "apart than the input lies from the smoothed trajectory, both are reported as failed.\n"
     "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, the verdict\n"
     "failed or the causal outputs failed (everything was still written), 4 internal.\n";
 
@@ -169,7 +169,10 @@ public:
                                       nullptr, false, true, VerdictConfig{});
         }
         std::optional<CausalCheck> causal;
-        if (Usable(result.status)) causal = CheckCausalOutput(reference_, causal_, result.corrected);
+        if (Usable(result.status)) {
+            causal = CheckCausalOutput(reference_, causal_, result.corrected);
+            verdict = JudgeOnline(*verdict, *causal);
+        }
         if (!quiet) {
             std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
@@ -183,8 +186,7 @@ public:
         }
         // Outputs already written cannot be taken back: what the program cannot vouch for is
         // said, and the exit code says it too.
-        const bool vouched = verdict && verdict->level != VerdictLevel::kFailed && causal &&
-                             !causal->worse_than_input;
+        const bool vouched = verdict && verdict->level != VerdictLevel::kFailed;
         if (smoothed_out.empty()) return vouched ? 0 : kExitSolver;
         if (!Usable(result.status)) {
             std::fprintf(stderr, "driftcorr stream: no smoothed trajectory (%s); nothing written\n",
@@ -237,12 +239,6 @@ private:
                      "driftcorr stream: causal outputs against the smoothed trajectory: RMS %.2f m, "
                      "max %.2f m (the input: RMS %.2f m)\n",
                      c.causal_rms_m, c.causal_max_m, c.input_rms_m);
-        if (c.worse_than_input) {
-            std::fprintf(stderr,
-                         "driftcorr stream: failed: the causal outputs lie farther from the smoothed "
-                         "trajectory than the uncorrected input; do not use them (the smoothed "
-                         "trajectory is judged by the verdict above)\n");
-        }
     }
     void Skip(long number, const std::string& why) {
         ++skipped_;

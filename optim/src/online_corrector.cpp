@@ -231,13 +231,13 @@ void OnlineCorrector::WaitForSolver(PushResult& r) {
     if (cfg_.synchronous || cfg_.max_lag_epochs == 0 || t_s_.empty()) return;
     if (!cfg_.hold_live_input && !r.ahead_of_real_time) return;
     const std::size_t index = t_s_.size() - 1;
+    const auto t0 = std::chrono::steady_clock::now();  // the lock is part of the wait
     std::unique_lock<std::mutex> lock(mutex_);
     auto caught_up = [&] {
         return index - std::min(solved_end_, index) <= cfg_.max_lag_epochs ||
                !(requested_ || busy_) || !stats_.worker_error.empty();
     };
     if (caught_up()) return;
-    const auto t0 = std::chrono::steady_clock::now();
     solved_.wait(lock, caught_up);
     r.waited_s = SecondsSince(t0);
     ++stats_.waits;

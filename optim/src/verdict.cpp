@@ -243,8 +243,20 @@ CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTraject
     const double n = double(smoothed.size());
     c.causal_rms_m = std::sqrt(causal_sq / n);
     c.input_rms_m = std::sqrt(input_sq / n);
-    c.worse_than_input = c.causal_rms_m > c.input_rms_m;
+    c.disagree = c.causal_rms_m > c.input_rms_m;
     return c;
+}
+
+Verdict JudgeOnline(Verdict v, const CausalCheck& c) {
+    if (!c.disagree) return v;
+    v.level = VerdictLevel::kFailed;
+    v.reasons.push_back("failed: the causal outputs and the smoothed trajectory lie " +
+                        FormatFixed(c.causal_rms_m, 2) +
+                        " m apart (RMS), farther than the input lies from the smoothed "
+                        "trajectory (" +
+                        FormatFixed(c.input_rms_m, 2) +
+                        " m): one of them followed a wrong branch of the map");
+    return v;
 }
 
 }  // namespace driftcorr
