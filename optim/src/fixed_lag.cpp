@@ -111,14 +111,6 @@ std::optional<PoseMatrix> InformationOf(const PoseMatrix& sigma, bool fix_height
 
 PoseVector ToVector(const PoseState& p) { return PoseVector(p.p.x(), p.p.y(), p.p.z(), p.yaw_rad); }
 
-PoseCovariance ToPoseCovariance(const PoseMatrix& sigma) {
-    PoseCovariance c;
-    c.xy_m2 = sigma.topLeftCorner<2, 2>();
-    c.z_m2 = sigma(2, 2);
-    c.yaw_rad2 = sigma(3, 3);
-    c.xy_yaw_m_rad = Eigen::Vector2d(sigma(0, 3), sigma(1, 3));
-    return c;
-}
 
 }  // namespace
 
