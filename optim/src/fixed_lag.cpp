@@ -112,7 +112,6 @@ std::optional<PoseMatrix> InverseOnFree(const PoseMatrix& sigma, bool fix_height
 
 PoseVector ToVector(const PoseState& p) { return PoseVector(p.p.x(), p.p.y(), p.p.z(), p.yaw_rad); }
 
-
 }  // namespace
 
 std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const TraversableField* field,

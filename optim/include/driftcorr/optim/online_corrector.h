@@ -26,10 +26,10 @@
 //    max_lag_epochs past the last solved one and a solve is under way, but (hold_live_input
 //    false, the default) only while the input arrives faster than real time: its stream time
 //    over the last kPaceWindow poses (at least two steps) advanced more than kAheadFactor times
-//    as fast as the wall clock outside Push (a replay from a file, a burst). A producer running at its own pace is
-//    never held back: when the solver does not keep up with it, outputs chain from older solves
-//    and say so (correction_age, fresh). The wait comes before the pose is taken, so it delays
-//    reading the next input, not the output of a pose already taken.
+//    as fast as the wall clock outside Push (a replay from a file, a burst). A producer running
+//    at its own pace is never held back: when the solver does not keep up with it, outputs chain
+//    from older solves and say so (correction_age, fresh). The wait comes before the pose is
+//    taken, so it delays reading the next input, not the output of a pose already taken.
 //  - Finish() solves the whole trajectory as the batch mode does (CorrectTrajectory's chunks,
 //    windows and hard-corridor refinement over the same observations): the batch result when the
 //    input carries headings (up to Ipopt's own run-to-run variation).
@@ -133,10 +133,11 @@ struct PushResult {
     double waited_s = 0.0;
     /// The input arrived faster than real time when this pose was pushed (see above).
     bool ahead_of_real_time = false;
-    /// Covariance of the output pose: the marginal of the solved pose it chains from (its
-    /// window's curvature) carried through the odometry of the correction_age_epochs steps since
-    /// (PropagateStep); before the first solve, the known start's (zero) so carried. Valid when
-    /// covariance_ok (false after a solve whose curvature could not be factored, until the next).
+    /// Covariance of the output pose: the solved pose's it chains from (FixedLagSolution::
+    /// end_covariance, the batch's covariance model) carried through the odometry of the
+    /// correction_age_epochs steps since (PropagateStep); before the first solve, the known
+    /// start's (zero) so carried. Valid when covariance_ok (false after a solve whose matrices
+    /// could not be factored, until the next).
     PoseCovariance covariance;
     bool covariance_ok = false;
     bool Accepted() const { return status == PushStatus::kAccepted; }
