@@ -10,16 +10,22 @@
 
 namespace driftcorr {
 
+std::optional<ParamIssue> CorrectorConfig::FindIssue() const {
+    if (auto issue = CheckRows(kCorrectorParams, *this)) return issue;
+    if (!(window_m >= chunk_m)) {
+        return RelationIssue("window_m", window_m, ">=", "chunk_m", chunk_m);
+    }
+    if (max_window_poses < max_chunk_poses) {
+        return RelationIssue("max_window_poses", double(max_window_poses), ">=", "max_chunk_poses",
+                             double(max_chunk_poses));
+    }
+    return std::nullopt;
+}
+
 std::string CorrectorConfig::Validate() const {
     if (std::string m = model.Validate(); !m.empty()) return m;
-    if (!(chunk_m > 0.0)) return "corrector.chunk_m: must be > 0";
-    if (!(window_m >= chunk_m)) return "corrector.window_m: must be >= chunk_m";
-    if (max_chunk_poses < 1) return "corrector.max_chunk_poses: must be >= 1";
-    if (max_window_poses < max_chunk_poses)
-        return "corrector.max_window_poses: must be >= max_chunk_poses";
-    if (!(stationary_m >= 0.0)) return "corrector.stationary_m: must be >= 0";
-    if (std::string m = covariance.Validate(); !m.empty()) return m;
-    return "";
+    if (std::string m = ToMessage(kCorrectorParams.section, FindIssue()); !m.empty()) return m;
+    return covariance.Validate();
 }
 
 namespace {

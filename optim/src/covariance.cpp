@@ -304,13 +304,12 @@ CovarianceSystem System(const SparseMatrix& h_lower, const Ordering& o, const Wi
 
 }  // namespace
 
+std::optional<ParamIssue> CovarianceConfig::FindIssue() const {
+    return CheckRows(kCovarianceParams, *this);
+}
+
 std::string CovarianceConfig::Validate() const {
-    if (!(map_offset_share >= 0.0 && map_offset_share < 1.0)) {
-        return "covariance.map_offset_share: must be in [0, 1)";
-    }
-    if (!(map_offset_correlation_m > 0.0))
-        return "covariance.map_offset_correlation_m: must be > 0";
-    return "";
+    return ToMessage(kCovarianceParams.section, FindIssue());
 }
 
 const char* ToString(CovarianceStatus status) {

@@ -51,13 +51,11 @@ PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
 
 }  // namespace
 
+std::optional<ParamIssue> OnlineConfig::FindIssue() const { return CheckRows(kOnlineParams, *this); }
+
 std::string OnlineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;
-    if (!(gap_warn_s > 0.0)) return "online.gap_warn_s: must be > 0";
-    if (!(update_fraction >= 0.0 && update_fraction <= 1.0)) {
-        return "online.update_fraction: must be in [0, 1]";
-    }
-    return "";
+    return ToMessage(kOnlineParams.section, FindIssue());
 }
 
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config)
