@@ -45,19 +45,27 @@ struct PipelineConfig {
     /// driftcorr stream and the online method of eval (section `online`); its `corrector` is
     /// not read from the file: the mode's corrector above is used.
     OnlineConfig online;
-    /// The anchor check and `yaw_deg: auto` (section `anchor_fit`; reach_m is the mode's
-    /// map_giveup_m and is not read from the file).
+    /// The anchor check and `yaw_deg: auto` (not read from the file; reach_m is the mode's
+    /// map_giveup_m).
     AnchorFitConfig anchor_fit;
-    /// The verdict's thresholds (optim/verdict.h).
+    /// The verdict's thresholds (optim/verdict.h; not read from the file).
     VerdictConfig verdict;
 
+    /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
 
 /// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`, `indoor_model`,
-/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`). Unknown keys are errors
-/// (a misspelt parameter must not be ignored). Throws InputError naming file, line and key.
+/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`; their keys are the rows of the
+/// parameter tables, e.g. kModelParams). Unknown keys are errors (a misspelt parameter must not be
+/// ignored). Throws InputError naming the file, the line and the key as written
+/// ("params.yaml:3: indoor_field.resolution_m: must be > 0 (got -1)"), one bad key at a time.
 PipelineConfig LoadPipelineConfig(const std::string& path);
+
+/// Every section and key of params.yaml with its value in `config`, and a comment with what it
+/// may be and what it does: a complete params.yaml (LoadPipelineConfig reads it back to `config`).
+/// `driftcorr params` prints it for the defaults; it is the parameter list of README.md.
+std::string ParameterReference(const PipelineConfig& config = PipelineConfig{});
 
 /// Converts between the world plane (ENU at the anchor) and WGS84, for maps and GeoJSON output.
 class WorldFrame {
