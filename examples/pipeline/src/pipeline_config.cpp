@@ -13,32 +13,6 @@
 namespace driftcorr::pipeline {
 namespace {
 
-/// Calls f(section, table, part, about) for every params.yaml section, in the order the
-/// reference lists them: `part` is the member of `config` the section sets.
-template <class Pipeline, class F>
-void ForEachSection(Pipeline& config, F&& f) {
-    f("model", kModelParams, config.corrector.model,
-      "road2d: sigmas and weights of the NLL (optim/include/driftcorr/optim/model_config.h)");
-    f("corrector", kCorrectorParams, config.corrector,
-      "road2d: chunks, windows, restarts (optim/include/driftcorr/optim/corrector_config.h)");
-    f("paper", kPaperSolverParams, config.paper,
-      "--solver paper: the published method (optim/include/driftcorr/optim/paper_solver.h)");
-    f("roads", kRoadClassParams, config.roads,
-      "road2d: traversable OSM classes (mapping/include/driftcorr/mapping/road_network.h)");
-    f("field", kRoadFieldParams, config.field,
-      "road2d: the road distance field (mapping/include/driftcorr/mapping/road_network.h)");
-    f("indoor_model", kModelParams, config.indoor_corrector.model,
-      "indoor3d: the keys of model, pedestrian defaults (pipeline.h)");
-    f("indoor_corrector", kCorrectorParams, config.indoor_corrector,
-      "indoor3d: the keys of corrector, pedestrian defaults (pipeline.h)");
-    f("indoor_field", kIndoorFieldParams, config.indoor_field,
-      "indoor3d GeoJSON floor plans (mapping/include/driftcorr/mapping/indoor_field.h)");
-    f("surface_field", kSurfaceFieldParams, config.surface_field,
-      "indoor3d point-cloud / OctoMap maps (mapping/include/driftcorr/mapping/surface_field.h)");
-    f("online", kOnlineParams, config.online,
-      "driftcorr stream, eval's online method (optim/include/driftcorr/optim/online_corrector.h)");
-}
-
 /// The file being read and the line of every key read so far ("model.step_sigma_m"; a section
 /// under its own name), for the messages of rules between two keys.
 struct Reader {
@@ -166,7 +140,7 @@ void ReadSection(Reader& r, const YAML::Node& key_node, const YAML::Node& body,
 std::string SectionNames() {
     std::string names;
     PipelineConfig defaults;
-    ForEachSection(defaults, [&](const char* section, const auto&, const auto&, const char*) {
+    ForEachParamSection(defaults, [&](const char* section, const auto&, const auto&, const char*) {
         names += (names.empty() ? "" : ", ") + std::string(section);
     });
     return names;
@@ -181,14 +155,14 @@ PipelineConfig ParseConfig(Reader& r, const YAML::Node& root) {
         const std::string section = KeyText(r, kv.first, "");
         CheckOnce(r, seen, kv.first, section);
         bool known = false;
-        ForEachSection(cfg, [&](const char* name, const auto& table, auto& part, const char*) {
+        ForEachParamSection(cfg, [&](const char* name, const auto& table, auto& part, const char*) {
             if (section != name) return;
             ReadSection(r, kv.first, kv.second, section, table, part);
             known = true;
         });
         if (!known) r.Fail(kv.first, section, "unknown section (" + SectionNames() + ")");
     }
-    ForEachSection(cfg, [&](const char* section, const auto&, const auto& part, const char*) {
+    ForEachParamSection(cfg, [&](const char* section, const auto&, const auto& part, const char*) {
         if (auto issue = part.FindIssue()) FailIssue(r, section, *issue);
     });
     if (std::string m = cfg.Validate(); !m.empty()) throw InputError(r.file, 0, "", m);
@@ -209,7 +183,7 @@ std::string ReferenceLine(const Param<Config>& p, const Config& part) {
 
 std::string PipelineConfig::Validate() const {
     std::string m;
-    ForEachSection(*this, [&](const char* section, const auto&, const auto& part, const char*) {
+    ForEachParamSection(*this, [&](const char* section, const auto&, const auto& part, const char*) {
         if (m.empty()) m = ToMessage(section, part.FindIssue());
     });
     // Parts that are no params.yaml section: their defaults, or what the caller set.
@@ -223,7 +197,7 @@ std::string PipelineConfig::Validate() const {
 
 std::string ParameterReference(const PipelineConfig& config) {
     std::string out;
-    ForEachSection(config, [&](const char* section, const auto& table, const auto& part,
+    ForEachParamSection(config, [&](const char* section, const auto& table, const auto& part,
                                const char* about) {
         out += std::string(section) + ":  # " + about + "\n";
         for (const auto& p : table) out += ReferenceLine(p, part) + "\n";

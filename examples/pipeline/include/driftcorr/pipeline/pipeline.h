@@ -55,6 +55,33 @@ struct PipelineConfig {
     std::string Validate() const;
 };
 
+/// Calls f(section, table, part, about) for every params.yaml section, in the order
+/// ParameterReference lists them: `table` is the ParamTable of the section's keys, `part` the
+/// member of `config` (a PipelineConfig, const or not) the section sets, `about` one line on it.
+template <class Pipeline, class F>
+void ForEachParamSection(Pipeline&& config, F&& f) {
+    f("model", kModelParams, config.corrector.model,
+      "road2d: sigmas and weights of the NLL (optim/include/driftcorr/optim/model_config.h)");
+    f("corrector", kCorrectorParams, config.corrector,
+      "road2d: chunks, windows, restarts (optim/include/driftcorr/optim/corrector_config.h)");
+    f("paper", kPaperSolverParams, config.paper,
+      "--solver paper: the published method (optim/include/driftcorr/optim/paper_solver.h)");
+    f("roads", kRoadClassParams, config.roads,
+      "road2d: traversable OSM classes (mapping/include/driftcorr/mapping/road_network.h)");
+    f("field", kRoadFieldParams, config.field,
+      "road2d: the road distance field (mapping/include/driftcorr/mapping/road_network.h)");
+    f("indoor_model", kModelParams, config.indoor_corrector.model,
+      "indoor3d: the keys of model, pedestrian defaults (pipeline.h)");
+    f("indoor_corrector", kCorrectorParams, config.indoor_corrector,
+      "indoor3d: the keys of corrector, pedestrian defaults (pipeline.h)");
+    f("indoor_field", kIndoorFieldParams, config.indoor_field,
+      "indoor3d GeoJSON floor plans (mapping/include/driftcorr/mapping/indoor_field.h)");
+    f("surface_field", kSurfaceFieldParams, config.surface_field,
+      "indoor3d point-cloud / OctoMap maps (mapping/include/driftcorr/mapping/surface_field.h)");
+    f("online", kOnlineParams, config.online,
+      "driftcorr stream, eval's online method (optim/include/driftcorr/optim/online_corrector.h)");
+}
+
 /// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`, `indoor_model`,
 /// `indoor_corrector`, `indoor_field`, `surface_field`, `online`; their keys are the rows of the
 /// parameter tables, e.g. kModelParams). Unknown keys are errors (a misspelt parameter must not be
