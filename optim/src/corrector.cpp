@@ -1,9 +1,9 @@
 #include "driftcorr/optim/corrector.h"
 
-#include <cassert>
 #include <cmath>
 #include <string>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/window_problem.h"
@@ -90,7 +90,7 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 // corrector); the batch case hands it the whole estimate at once.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
-    assert(estimate.size() >= 3 && "CorrectTrajectory needs at least 3 poses");
+    DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectTrajectory needs at least 3 poses");
     const bool planar = !field || field->planar();
     IncrementalCorrector inc(InitialState(estimate, cfg, planar), field, cfg);
     inc.SolveRemaining(progress);

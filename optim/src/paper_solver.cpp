@@ -1,11 +1,11 @@
 #include "driftcorr/optim/paper_solver.h"
 
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/cost_terms.h"
 
 namespace driftcorr {
@@ -133,8 +133,8 @@ CorrectionResult CorrectWithPaperMethod(const PlanarTrajectory& estimate,
                                         const TraversableField* field,
                                         const PaperSolverConfig& config,
                                         const ProgressCallback& progress) {
-    assert(estimate.size() >= 3 && "the paper solver needs at least 3 poses");
-    assert(config.Validate().empty() && "invalid PaperSolverConfig");
+    DRIFTCORR_CHECK(estimate.size() >= 3, "the paper solver needs at least 3 poses");
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid PaperSolverConfig");
     const auto t0 = std::chrono::steady_clock::now();
     const std::size_t n = estimate.size();
     CorrectionResult res;
