@@ -1,7 +1,6 @@
 #include "driftcorr/optim/online_corrector.h"
 
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -13,6 +12,7 @@
 #endif
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
@@ -60,7 +60,7 @@ std::string OnlineConfig::Validate() const {
 
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config)
     : field_(field), cfg_(config), fix_height_(!field || field->planar()) {
-    assert(config.Validate().empty() && "invalid OnlineConfig");
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");
     if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
 }
 
