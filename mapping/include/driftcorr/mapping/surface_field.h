@@ -2,7 +2,7 @@
 // The map prior from a sampled walkable surface (a point cloud of floors, stairs and lift cabin
 // floors, or the floor voxels of an OctoMap): a 3D TraversableField, the same interface as the
 // floor-plan field of indoor_field.h. Needs no PCL: the points come from any reader (see
-// driftcorr_mapping_pcl, surface_io.h).
+// driftcorr_surface_io, surface_io.h).
 #include <Eigen/Core>
 #include <cstddef>
 #include <optional>
