@@ -25,9 +25,7 @@ fs::path TempFile(const std::string& name) {
     return dir / name;
 }
 
-void WriteFile(const fs::path& path, const std::string& text) {
-    std::ofstream(path) << text;
-}
+void WriteFile(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
 
 /// One bad params.yaml: what the file says and the key the message must name.
 struct BadCase {
@@ -86,7 +84,8 @@ std::vector<BadCase> CasesFor(const std::string& section, const Param<Config>& p
             cases.push_back({key + ".x a word", head + p.key + ": {x: abc}\n", key + ".x"});
             cases.push_back({key + ".x a map", head + p.key + ": {x: {b: 1}}\n", key + ".x"});
             for (const std::string& v : OutOfRange(p)) {
-                cases.push_back({key + ".x = " + v, head + p.key + ": {x: " + v + "}\n", key + ".x"});
+                cases.push_back(
+                    {key + ".x = " + v, head + p.key + ": {x: " + v + "}\n", key + ".x"});
             }
             break;
     }
@@ -96,12 +95,12 @@ std::vector<BadCase> CasesFor(const std::string& section, const Param<Config>& p
 std::vector<BadCase> EveryBadCase() {
     std::vector<BadCase> cases;
     const pipeline::PipelineConfig defaults;
-    pipeline::ForEachParamSection(defaults, [&](const char* section, const auto& table,
-                                                const auto&, const char*) {
-        for (const auto& p : table) {
-            for (BadCase& c : CasesFor(section, p)) cases.push_back(std::move(c));
-        }
-    });
+    pipeline::ForEachParamSection(
+        defaults, [&](const char* section, const auto& table, const auto&, const char*) {
+            for (const auto& p : table) {
+                for (BadCase& c : CasesFor(section, p)) cases.push_back(std::move(c));
+            }
+        });
     return cases;
 }
 
@@ -109,10 +108,9 @@ TEST(ParamsYaml, EveryBadKeyOfEveryTableNamesFileLineAndKey) {
     const fs::path path = TempFile("params.yaml");
     const std::vector<BadCase> cases = EveryBadCase();
     std::size_t rows = 0;
-    pipeline::ForEachParamSection(pipeline::PipelineConfig{},
-                                  [&](const char*, const auto& table, const auto&, const char*) {
-                                      rows += table.count;
-                                  });
+    pipeline::ForEachParamSection(
+        pipeline::PipelineConfig{},
+        [&](const char*, const auto& table, const auto&, const char*) { rows += table.count; });
     EXPECT_GE(cases.size(), 4 * rows);  // every row: mistyped, a list, a map and one more
     for (const BadCase& c : cases) {
         WriteFile(path, c.yaml);
@@ -220,8 +218,8 @@ std::string Between(const std::string& text, const std::string& begin, const std
 
 TEST(ParameterReference, ReadmeListsEveryParameter) {
     const std::string readme = ReadText(DRIFTCORR_README);
-    const std::string listed =
-        Between(readme, "<!-- BEGIN driftcorr params -->\n```yaml\n", "```\n<!-- END driftcorr params -->");
+    const std::string listed = Between(readme, "<!-- BEGIN driftcorr params -->\n```yaml\n",
+                                       "```\n<!-- END driftcorr params -->");
     EXPECT_EQ(listed, pipeline::ParameterReference())
         << "README.md's parameter list differs from the tables: replace the block between the "
            "BEGIN/END driftcorr params markers with the output of `driftcorr params`";
@@ -229,7 +227,8 @@ TEST(ParameterReference, ReadmeListsEveryParameter) {
 
 TEST(ParameterReference, ReadmeExampleIsAValidParameterFile) {
     const std::string readme = ReadText(DRIFTCORR_README);
-    const std::string example = Between(readme, "A file sets only the keys it names, e.g.\n\n```yaml\n", "```");
+    const std::string example =
+        Between(readme, "A file sets only the keys it names, e.g.\n\n```yaml\n", "```");
     ASSERT_FALSE(example.empty());
     const fs::path path = TempFile("example.yaml");
     WriteFile(path, example);

@@ -15,9 +15,9 @@ int RunParamsCommand(int argc, char** argv) {
         "Prints every params.yaml section and key at its default, with the allowed values and\n"
         "what it does: a complete parameter file to copy and edit (--config params.yaml).\n";
     std::string err;
-    const bool ok = ParseOptions(argc, argv, 1, {}, [](const std::string& arg) {
-        return "unexpected argument '" + arg + "'";
-    }, err);
+    const bool ok = ParseOptions(
+        argc, argv, 1, {},
+        [](const std::string& arg) { return "unexpected argument '" + arg + "'"; }, err);
     if (!ok) {
         if (err.empty()) {
             std::fputs(usage, stdout);

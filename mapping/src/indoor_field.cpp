@@ -148,18 +148,12 @@ GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
 
 std::optional<ParamIssue> IndoorFieldConfig::FindIssue() const {
     if (auto issue = CheckRows(kIndoorFieldParams, *this)) return issue;
-    if (!(vertical_tolerance_m >= resolution_z_m)) {
-        return ParamIssue{"vertical_tolerance_m",
-                          "must be >= resolution_z_m (got " + FormatParamNumber(vertical_tolerance_m) +
-                              " < " + FormatParamNumber(resolution_z_m) +
-                              "; a thinner layer is one voxel thick and the B-spline would mix the "
-                              "outside samples above and below into the value at the surface)",
-                          "resolution_z_m"};
-    }
-    return std::nullopt;
+    return internal::ThinLayerIssue(vertical_tolerance_m, resolution_z_m);
 }
 
-std::string IndoorFieldConfig::Validate() const { return ToMessage(kIndoorFieldParams.section, FindIssue()); }
+std::string IndoorFieldConfig::Validate() const {
+    return ToMessage(kIndoorFieldParams.section, FindIssue());
+}
 
 TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
                                   const IndoorFieldConfig& config, IndoorFieldStats* stats) {

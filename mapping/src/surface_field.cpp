@@ -37,18 +37,12 @@ Eigen::AlignedBox3d LiftedBounds(const std::vector<Eigen::Vector3d>& points, dou
 
 std::optional<ParamIssue> SurfaceFieldConfig::FindIssue() const {
     if (auto issue = CheckRows(kSurfaceFieldParams, *this)) return issue;
-    if (!(vertical_tolerance_m >= resolution_z_m)) {
-        return ParamIssue{"vertical_tolerance_m",
-                          "must be >= resolution_z_m (got " + FormatParamNumber(vertical_tolerance_m) +
-                              " < " + FormatParamNumber(resolution_z_m) +
-                              "; a thinner layer is one voxel thick and the B-spline would mix the "
-                              "outside samples above and below into the value at the surface)",
-                          "resolution_z_m"};
-    }
-    return std::nullopt;
+    return internal::ThinLayerIssue(vertical_tolerance_m, resolution_z_m);
 }
 
-std::string SurfaceFieldConfig::Validate() const { return ToMessage(kSurfaceFieldParams.section, FindIssue()); }
+std::string SurfaceFieldConfig::Validate() const {
+    return ToMessage(kSurfaceFieldParams.section, FindIssue());
+}
 
 TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_points_enu,
                                    const SurfaceFieldConfig& config, SurfaceFieldStats* stats) {

@@ -51,7 +51,9 @@ PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
 
 }  // namespace
 
-std::optional<ParamIssue> OnlineConfig::FindIssue() const { return CheckRows(kOnlineParams, *this); }
+std::optional<ParamIssue> OnlineConfig::FindIssue() const {
+    return CheckRows(kOnlineParams, *this);
+}
 
 std::string OnlineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;

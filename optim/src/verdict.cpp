@@ -190,13 +190,15 @@ std::optional<ParamIssue> VerdictConfig::FindIssue() const {
                              scale_plausible_max);
     }
     if (!(off_map_degraded_share <= off_map_failed_share)) {
-        return RelationIssue("off_map_degraded_share", off_map_degraded_share, "<=",
-                             "off_map_failed_share", off_map_failed_share);
+        return RelationIssue("off_map_degraded_share", off_map_degraded_share,
+                             "<=", "off_map_failed_share", off_map_failed_share);
     }
     return std::nullopt;
 }
 
-std::string VerdictConfig::Validate() const { return ToMessage(kVerdictParams.section, FindIssue()); }
+std::string VerdictConfig::Validate() const {
+    return ToMessage(kVerdictParams.section, FindIssue());
+}
 
 Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
                         const ModelConfig& model, const CorrectionResult& result,

@@ -70,11 +70,15 @@ template <class Config>
 void ReadValue(Reader& r, const Param<Config>& p, const YAML::Node& n, const std::string& key,
                Config& config) {
     switch (p.kind()) {
-        case ParamKind::kReal: p.template Ref<double>(config) = CheckedNumber(r, p, n, key); break;
+        case ParamKind::kReal:
+            p.template Ref<double>(config) = CheckedNumber(r, p, n, key);
+            break;
         case ParamKind::kSize:
             p.template Ref<std::size_t>(config) = std::size_t(CheckedNumber(r, p, n, key));
             break;
-        case ParamKind::kInt: p.template Ref<int>(config) = int(CheckedNumber(r, p, n, key)); break;
+        case ParamKind::kInt:
+            p.template Ref<int>(config) = int(CheckedNumber(r, p, n, key));
+            break;
         case ParamKind::kFlag:
             try {
                 if (n.IsScalar()) {
@@ -91,7 +95,8 @@ void ReadValue(Reader& r, const Param<Config>& p, const YAML::Node& n, const std
             p.template Ref<std::string>(config) = n.Scalar();
             break;
         case ParamKind::kRealByName: {
-            if (!n.IsMap()) r.Fail(n, key, "must be a map of name to number (got " + Shown(n) + ")");
+            if (!n.IsMap())
+                r.Fail(n, key, "must be a map of name to number (got " + Shown(n) + ")");
             std::set<std::string> seen;
             for (const auto& kv : n) {
                 const std::string entry = key + "." + KeyText(r, kv.first, key);
@@ -183,9 +188,10 @@ std::string ReferenceLine(const Param<Config>& p, const Config& part) {
 
 std::string PipelineConfig::Validate() const {
     std::string m;
-    ForEachParamSection(*this, [&](const char* section, const auto&, const auto& part, const char*) {
-        if (m.empty()) m = ToMessage(section, part.FindIssue());
-    });
+    ForEachParamSection(*this,
+                        [&](const char* section, const auto&, const auto& part, const char*) {
+                            if (m.empty()) m = ToMessage(section, part.FindIssue());
+                        });
     // Parts that are no params.yaml section: their defaults, or what the caller set.
     for (const std::string& rest :
          {corrector.covariance.Validate(), indoor_corrector.covariance.Validate(),
@@ -197,11 +203,11 @@ std::string PipelineConfig::Validate() const {
 
 std::string ParameterReference(const PipelineConfig& config) {
     std::string out;
-    ForEachParamSection(config, [&](const char* section, const auto& table, const auto& part,
-                               const char* about) {
-        out += std::string(section) + ":  # " + about + "\n";
-        for (const auto& p : table) out += ReferenceLine(p, part) + "\n";
-    });
+    ForEachParamSection(
+        config, [&](const char* section, const auto& table, const auto& part, const char* about) {
+            out += std::string(section) + ":  # " + about + "\n";
+            for (const auto& p : table) out += ReferenceLine(p, part) + "\n";
+        });
     return out;
 }
 

@@ -48,11 +48,13 @@ struct ParamRange {
 };
 
 inline constexpr double kParamInf = std::numeric_limits<double>::infinity();
-inline constexpr ParamRange kFinite{};                       ///< any finite number
-inline constexpr ParamRange kPositive{0.0, kParamInf, true, false};     ///< > 0
-inline constexpr ParamRange kNonNegative{0.0, kParamInf, false, false}; ///< >= 0
-inline constexpr ParamRange kWeight{0.0, 1.0, true, false};    ///< in (0, 1]
-inline constexpr ParamRange kShare{0.0, 1.0, false, false};    ///< in [0, 1]
+inline constexpr ParamRange kFinite{};  ///< any finite number
+/// The range of a kFlag or kChoice row: its kind says what is allowed.
+inline constexpr ParamRange kNoRange{};
+inline constexpr ParamRange kPositive{0.0, kParamInf, true, false};      ///< > 0
+inline constexpr ParamRange kNonNegative{0.0, kParamInf, false, false};  ///< >= 0
+inline constexpr ParamRange kWeight{0.0, 1.0, true, false};              ///< in (0, 1]
+inline constexpr ParamRange kShare{0.0, 1.0, false, false};              ///< in [0, 1]
 /// >= lo
 constexpr ParamRange AtLeast(double lo) { return {lo, kParamInf, false, false}; }
 /// in [lo, hi]
@@ -91,23 +93,36 @@ struct ParamAccess {
 
 namespace params_detail {
 
-template <class T> struct ClassOf;
-template <class C, class M> struct ClassOf<M C::*> { using type = C; };
+template <class T>
+struct ClassOf;
+template <class C, class M>
+struct ClassOf<M C::*> {
+    using type = C;
+};
 
 template <class T>
 constexpr ParamKind KindOf() {
-    if constexpr (std::is_same_v<T, double>) return ParamKind::kReal;
-    else if constexpr (std::is_same_v<T, std::size_t>) return ParamKind::kSize;
-    else if constexpr (std::is_same_v<T, int>) return ParamKind::kInt;
-    else if constexpr (std::is_same_v<T, bool>) return ParamKind::kFlag;
-    else if constexpr (std::is_same_v<T, std::string>) return ParamKind::kChoice;
-    else if constexpr (std::is_same_v<T, std::map<std::string, double>>) return ParamKind::kRealByName;
-    else static_assert(sizeof(T) == 0, "no ParamKind for this member type");
+    if constexpr (std::is_same_v<T, double>)
+        return ParamKind::kReal;
+    else if constexpr (std::is_same_v<T, std::size_t>)
+        return ParamKind::kSize;
+    else if constexpr (std::is_same_v<T, int>)
+        return ParamKind::kInt;
+    else if constexpr (std::is_same_v<T, bool>)
+        return ParamKind::kFlag;
+    else if constexpr (std::is_same_v<T, std::string>)
+        return ParamKind::kChoice;
+    else if constexpr (std::is_same_v<T, std::map<std::string, double>>)
+        return ParamKind::kRealByName;
+    else
+        static_assert(sizeof(T) == 0, "no ParamKind for this member type");
 }
 
 template <class Config, auto... Path>
 auto& Follow(Config& c) {
-    return (c .* ... .* Path);
+    // clang-format off
+    return (c .* ... .* Path);  // c.*first.*second...: the member, through nested members
+    // clang-format on
 }
 
 template <class Config, auto... Path>
@@ -120,8 +135,8 @@ void* Address(Config& c) {
 template <auto First, auto... Rest>
 constexpr auto Field() {
     using Config = typename params_detail::ClassOf<decltype(First)>::type;
-    using Member = std::remove_reference_t<
-        decltype(params_detail::Follow<Config, First, Rest...>(std::declval<Config&>()))>;
+    using Member = std::remove_reference_t<decltype(params_detail::Follow<Config, First, Rest...>(
+        std::declval<Config&>()))>;
     return ParamAccess<Config>{params_detail::KindOf<Member>(),
                                &params_detail::Address<Config, First, Rest...>};
 }
@@ -134,11 +149,15 @@ struct Param {
     ParamAccess<Config> access;
     ParamRange range = kFinite;  ///< kReal, kSize, kInt, kRealByName (each value)
     const char* doc = "";
-    const char* choices = "";    ///< kChoice: the allowed values, separated by '|' 
+    const char* choices = "";  ///< kChoice: the allowed values, separated by '|'
 
     ParamKind kind() const { return access.kind; }
-    template <class T> T& Ref(Config& c) const { return *static_cast<T*>(access.address(c)); }
-    template <class T> const T& Ref(const Config& c) const {
+    template <class T>
+    T& Ref(Config& c) const {
+        return *static_cast<T*>(access.address(c));
+    }
+    template <class T>
+    const T& Ref(const Config& c) const {
         return *static_cast<const T*>(access.address(const_cast<Config&>(c)));
     }
 };
@@ -211,8 +230,10 @@ bool FitsMember(const Param<Config>& p, double v) {
 inline std::vector<std::string> ChoiceWords(const char* choices) {
     std::vector<std::string> words(1);
     for (const char* ch = choices; *ch; ++ch) {
-        if (*ch == '|') words.emplace_back();
-        else words.back() += *ch;
+        if (*ch == '|')
+            words.emplace_back();
+        else
+            words.back() += *ch;
     }
     return words;
 }
@@ -263,25 +284,29 @@ std::optional<ParamIssue> CheckRows(const ParamTable<Config>& table, const Confi
     for (const Param<Config>& p : table) {
         switch (p.kind()) {
             case ParamKind::kReal:
-                if (auto m = NumberIssue(p, p.template Ref<double>(c))) return ParamIssue{p.key, *m, ""};
+                if (auto m = NumberIssue(p, p.template Ref<double>(c)))
+                    return ParamIssue{p.key, *m, ""};
                 break;
             case ParamKind::kSize:
                 if (auto m = NumberIssue(p, double(p.template Ref<std::size_t>(c))))
                     return ParamIssue{p.key, *m, ""};
                 break;
             case ParamKind::kInt:
-                if (auto m = NumberIssue(p, double(p.template Ref<int>(c)))) return ParamIssue{p.key, *m, ""};
+                if (auto m = NumberIssue(p, double(p.template Ref<int>(c))))
+                    return ParamIssue{p.key, *m, ""};
                 break;
             case ParamKind::kFlag:
                 break;
             case ParamKind::kChoice: {
                 const std::string& v = p.template Ref<std::string>(c);
-                if (!IsChoice(p, v)) return ParamIssue{p.key, RuleText(p) + " (got '" + v + "')", ""};
+                if (!IsChoice(p, v))
+                    return ParamIssue{p.key, RuleText(p) + " (got '" + v + "')", ""};
                 break;
             }
             case ParamKind::kRealByName:
                 for (const auto& [name, v] : p.template Ref<std::map<std::string, double>>(c)) {
-                    if (auto m = NumberIssue(p, v)) return ParamIssue{std::string(p.key) + "." + name, *m, ""};
+                    if (auto m = NumberIssue(p, v))
+                        return ParamIssue{std::string(p.key) + "." + name, *m, ""};
                 }
                 break;
         }
@@ -293,11 +318,16 @@ std::optional<ParamIssue> CheckRows(const ParamTable<Config>& table, const Confi
 template <class Config>
 std::string FormatParamValue(const Param<Config>& p, const Config& c) {
     switch (p.kind()) {
-        case ParamKind::kReal: return FormatParamNumber(p.template Ref<double>(c));
-        case ParamKind::kSize: return std::to_string(p.template Ref<std::size_t>(c));
-        case ParamKind::kInt: return std::to_string(p.template Ref<int>(c));
-        case ParamKind::kFlag: return p.template Ref<bool>(c) ? "true" : "false";
-        case ParamKind::kChoice: return p.template Ref<std::string>(c);
+        case ParamKind::kReal:
+            return FormatParamNumber(p.template Ref<double>(c));
+        case ParamKind::kSize:
+            return std::to_string(p.template Ref<std::size_t>(c));
+        case ParamKind::kInt:
+            return std::to_string(p.template Ref<int>(c));
+        case ParamKind::kFlag:
+            return p.template Ref<bool>(c) ? "true" : "false";
+        case ParamKind::kChoice:
+            return p.template Ref<std::string>(c);
         case ParamKind::kRealByName: {
             std::string out;
             for (const auto& [name, v] : p.template Ref<std::map<std::string, double>>(c)) {

@@ -1,13 +1,12 @@
 #pragma once
 // The road network in the local East-North plane, and its rasterisation into a TraversableField.
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "driftcorr/core/params.h"
 #include "driftcorr/mapping/osm_reader.h"
@@ -37,7 +36,7 @@ struct RoadClassConfig {
 
 /// Params.yaml section `roads`.
 inline constexpr Param<RoadClassConfig> kRoadClassParamRows[] = {
-    {"profile", Field<&RoadClassConfig::profile>(), kFinite,
+    {"profile", Field<&RoadClassConfig::profile>(), kNoRange,
      "traversable OSM highway classes and their half-widths", "vehicle|pedestrian|all"},
     {"half_width_m", Field<&RoadClassConfig::half_width_overrides_m>(), kNonNegative,
      "per-class half-widths that override or extend the profile's; 0 removes a class"},

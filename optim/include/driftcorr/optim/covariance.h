@@ -88,13 +88,14 @@ struct CovarianceConfig {
 
 /// The covariance settings of a CorrectorConfig (not a params.yaml section).
 inline constexpr Param<CovarianceConfig> kCovarianceParamRows[] = {
-    {"map_offset_share", Field<&CovarianceConfig::map_offset_share>(), ParamRange{0.0, 1.0, false, true},
+    {"map_offset_share", Field<&CovarianceConfig::map_offset_share>(),
+     ParamRange{0.0, 1.0, false, true},
      "share of the map variance that is an offset common along a street"},
     {"map_offset_correlation_m", Field<&CovarianceConfig::map_offset_correlation_m>(), kPositive,
      "correlation length of that offset along the path"},
-    {"family_variance_components", Field<&CovarianceConfig::family_variance_components>(), kFinite,
+    {"family_variance_components", Field<&CovarianceConfig::family_variance_components>(), kNoRange,
      "variance components of the observation families"},
-    {"apply_variance_factor", Field<&CovarianceConfig::apply_variance_factor>(), kFinite,
+    {"apply_variance_factor", Field<&CovarianceConfig::apply_variance_factor>(), kNoRange,
      "multiply the covariances by the a posteriori variance factor"},
 };
 inline constexpr ParamTable<CovarianceConfig> kCovarianceParams{"covariance", kCovarianceParamRows};

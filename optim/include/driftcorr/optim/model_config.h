@@ -101,7 +101,8 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "speed continuity between steps, sigma = accel_sigma_mps2 * dt; 0: off"},
     {"speed_weight", Field<&ModelConfig::speed_weight>(), kWeight, "weight of the speed term"},
     {"outlier_accel_mps2", Field<&ModelConfig::outlier_accel_mps2>(), kNonNegative,
-     "dropped-step episodes (speed falls and recovers faster) observed at the speed around them; 0: off"},
+     "dropped-step episodes (speed falls and recovers faster) observed at the speed around them; "
+     "0: off"},
     {"outlier_sigma_rel", Field<&ModelConfig::outlier_sigma_rel>(), kNonNegative,
      "step sigma share of a repaired step"},
     {"max_speed_mps", Field<&ModelConfig::max_speed_mps>(), kPositive,
@@ -150,7 +151,7 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
     {"map_weight", Field<&ModelConfig::map_weight>(), kWeight, "weight of the map terms"},
     {"height_weight", Field<&ModelConfig::height_weight>(), kWeight,
      "weight of the height-change terms"},
-    {"hard_corridor", Field<&ModelConfig::hard_corridor>(), kFinite,
+    {"hard_corridor", Field<&ModelConfig::hard_corridor>(), kNoRange,
      "final solve: every pose near the map ends inside its corridor"},
     {"corridor_gate_m", Field<&ModelConfig::corridor_gate_m>(), kNonNegative,
      "poses starting within this distance of the corridor are held inside it"},

@@ -96,11 +96,11 @@ inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
      "a window solve for the causal output every this share of chunk_m; 0: at the chunk rule"},
     {"gap_warn_s", Field<&OnlineConfig::gap_warn_s>(), kPositive,
      "a longer input pause or timestamp gap is reported"},
-    {"project_output", Field<&OnlineConfig::project_output>(), kFinite,
+    {"project_output", Field<&OnlineConfig::project_output>(), kNoRange,
      "the causal pose is moved into the corridor when within corridor_gate_m"},
     {"max_lag_epochs", Field<&OnlineConfig::max_lag_epochs>(), kNonNegative,
      "back-pressure: Push waits while this many epochs past the last solve; 0: never waits"},
-    {"boundary_prior", Field<&OnlineConfig::boundary_prior>(), kFinite,
+    {"boundary_prior", Field<&OnlineConfig::boundary_prior>(), kNoRange,
      "online windows: the past marginalised onto the boundary pose"},
 };
 inline constexpr ParamTable<OnlineConfig> kOnlineParams{"online", kOnlineParamRows};

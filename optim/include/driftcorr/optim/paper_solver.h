@@ -1,14 +1,15 @@
 #pragma once
-// The baseline: the paper's solver, kept as a reference mode (`driftcorr correct --solver paper`, and a column
-// of `driftcorr eval`): an epoch-by-epoch filter. Per epoch i the previous poses stay fixed, the
-// new position starts at the previous corrected pose composed with the observed step, and plain
-// fixed-step gradient descent (learning rate 0.01, as published, no line search) minimises four
-// weighted terms of that one position:
+// The baseline: the paper's solver, kept as a reference mode (`driftcorr correct --solver paper`,
+// and a column of `driftcorr eval`): an epoch-by-epoch filter. Per epoch i the previous poses stay
+// fixed, the new position starts at the previous corrected pose composed with the observed step,
+// and plain fixed-step gradient descent (learning rate 0.01, as published, no line search)
+// minimises four weighted terms of that one position:
 //
 //   E_i(p) = w_t (c_i - c_{i-1} - dc_i)^2 / 2 sigma_t^2     turn angle        (HeadingChangeTerm)
 //          + w_s (|p - p_{i-1}| - L_i)^2 / 2 sigma_s^2      step length       (StepLengthTerm)
 //          + w_m min(d(p), h(p))^2 / 2 sigma_m^2            truncated distance
-//          + w_p (c_i - c_{i-1})^2 / 2 sigma_p^2            heading preservation (HeadingPreservationTerm)
+//          + w_p (c_i - c_{i-1})^2 / 2 sigma_p^2            heading preservation
+//          (HeadingPreservationTerm)
 //
 // c_i = atan2(p - p_{i-1}) is the course (heading derived from the step direction), dc_i and L_i
 // the estimate's course change and step length, d the distance to the nearest road centre line

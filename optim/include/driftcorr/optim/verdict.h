@@ -77,8 +77,8 @@ struct VerdictConfig {
 
 /// The verdict's thresholds (not a params.yaml section).
 inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
-    {"scale_plausible_min", Field<&VerdictConfig::scale_plausible_min>(), ParamRange{0.0, 1.0, true, false},
-     "a scale below is degraded"},
+    {"scale_plausible_min", Field<&VerdictConfig::scale_plausible_min>(),
+     ParamRange{0.0, 1.0, true, false}, "a scale below is degraded"},
     {"scale_plausible_max", Field<&VerdictConfig::scale_plausible_max>(), AtLeast(1.0),
      "a scale above is degraded"},
     {"scale_failed_min", Field<&VerdictConfig::scale_failed_min>(), kPositive,
@@ -97,7 +97,8 @@ inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
      "another start at least this far in heading..."},
     {"anchor_other_position_m", Field<&VerdictConfig::anchor_other_position_m>(), kPositive,
      "...or position..."},
-    {"anchor_rms_ratio", Field<&VerdictConfig::anchor_rms_ratio>(), ParamRange{0.0, 1.0, true, true},
+    {"anchor_rms_ratio", Field<&VerdictConfig::anchor_rms_ratio>(),
+     ParamRange{0.0, 1.0, true, true},
      "...that fits the map with less than this share of the RMS: the start does not fit"},
     {"anchor_ambiguous_ratio", Field<&VerdictConfig::anchor_ambiguous_ratio>(), AtLeast(1.0),
      "an estimated start is ambiguous when the next one's RMS is within this factor"},
