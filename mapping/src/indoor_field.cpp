@@ -146,13 +146,13 @@ GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
 
 }  // namespace
 
-std::optional<ParamIssue> IndoorFieldConfig::FindIssue() const {
-    if (auto issue = CheckRows(kIndoorFieldParams, *this)) return issue;
-    return internal::ThinLayerIssue(vertical_tolerance_m, resolution_z_m);
+std::optional<ParamProblem> IndoorFieldConfig::FindProblem() const {
+    if (auto problem = CheckRows(kIndoorFieldParams, *this)) return problem;
+    return internal::ThinLayerProblem(vertical_tolerance_m, resolution_z_m);
 }
 
 std::string IndoorFieldConfig::Validate() const {
-    return ToMessage(kIndoorFieldParams.section, FindIssue());
+    return ToMessage(kIndoorFieldParams.section, FindProblem());
 }
 
 TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,

@@ -223,12 +223,12 @@ int TileCells(const RoadFieldConfig& config) {
 
 }  // namespace
 
-std::optional<ParamIssue> RoadClassConfig::FindIssue() const {
+std::optional<ParamProblem> RoadClassConfig::FindProblem() const {
     return CheckRows(kRoadClassParams, *this);
 }
 
 std::string RoadClassConfig::Validate() const {
-    return ToMessage(kRoadClassParams.section, FindIssue());
+    return ToMessage(kRoadClassParams.section, FindProblem());
 }
 
 std::map<std::string, double> RoadClassConfig::Table() const {
@@ -275,12 +275,12 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
     return net;
 }
 
-std::optional<ParamIssue> RoadFieldConfig::FindIssue() const {
+std::optional<ParamProblem> RoadFieldConfig::FindProblem() const {
     return CheckRows(kRoadFieldParams, *this);
 }
 
 std::string RoadFieldConfig::Validate() const {
-    return ToMessage(kRoadFieldParams.section, FindIssue());
+    return ToMessage(kRoadFieldParams.section, FindProblem());
 }
 
 TraversableField RasteriseRoads(const RoadNetwork& network, const Eigen::AlignedBox2d& region_en,

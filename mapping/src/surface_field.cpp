@@ -35,13 +35,13 @@ Eigen::AlignedBox3d LiftedBounds(const std::vector<Eigen::Vector3d>& points, dou
 
 }  // namespace
 
-std::optional<ParamIssue> SurfaceFieldConfig::FindIssue() const {
-    if (auto issue = CheckRows(kSurfaceFieldParams, *this)) return issue;
-    return internal::ThinLayerIssue(vertical_tolerance_m, resolution_z_m);
+std::optional<ParamProblem> SurfaceFieldConfig::FindProblem() const {
+    if (auto problem = CheckRows(kSurfaceFieldParams, *this)) return problem;
+    return internal::ThinLayerProblem(vertical_tolerance_m, resolution_z_m);
 }
 
 std::string SurfaceFieldConfig::Validate() const {
-    return ToMessage(kSurfaceFieldParams.section, FindIssue());
+    return ToMessage(kSurfaceFieldParams.section, FindProblem());
 }
 
 TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_points_enu,

@@ -9,14 +9,14 @@
 
 namespace driftcorr::internal {
 
-std::optional<ParamIssue> ThinLayerIssue(double vertical_tolerance_m, double resolution_z_m) {
+std::optional<ParamProblem> ThinLayerProblem(double vertical_tolerance_m, double resolution_z_m) {
     if (vertical_tolerance_m >= resolution_z_m) return std::nullopt;
-    ParamIssue issue = RelationIssue("vertical_tolerance_m", vertical_tolerance_m,
-                                     ">=", "resolution_z_m", resolution_z_m);
-    issue.message +=
+    ParamProblem problem = RelationProblem("vertical_tolerance_m", vertical_tolerance_m,
+                                           ">=", "resolution_z_m", resolution_z_m);
+    problem.message +=
         ": a thinner layer is one voxel thick and the B-spline would mix the outside samples "
         "above and below into the value at the surface";
-    return issue;
+    return problem;
 }
 namespace {
 

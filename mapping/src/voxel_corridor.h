@@ -27,7 +27,7 @@ struct VoxelGridSize {
 GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what);
 
 /// The rule both voxel fields share: vertical_tolerance_m >= resolution_z_m, with why.
-std::optional<ParamIssue> ThinLayerIssue(double vertical_tolerance_m, double resolution_z_m);
+std::optional<ParamProblem> ThinLayerProblem(double vertical_tolerance_m, double resolution_z_m);
 
 std::vector<float> CorridorField(const GridSpec& s, const std::vector<std::uint8_t>& inside,
                                  float trunc);

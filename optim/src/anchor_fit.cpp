@@ -87,12 +87,12 @@ void Refine(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableFie
 
 }  // namespace
 
-std::optional<ParamIssue> AnchorFitConfig::FindIssue() const {
+std::optional<ParamProblem> AnchorFitConfig::FindProblem() const {
     return CheckRows(kAnchorFitParams, *this);
 }
 
 std::string AnchorFitConfig::Validate() const {
-    return ToMessage(kAnchorFitParams.section, FindIssue());
+    return ToMessage(kAnchorFitParams.section, FindProblem());
 }
 
 AnchorFitResult FitAnchor(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,

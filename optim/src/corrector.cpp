@@ -10,21 +10,21 @@
 
 namespace driftcorr {
 
-std::optional<ParamIssue> CorrectorConfig::FindIssue() const {
-    if (auto issue = CheckRows(kCorrectorParams, *this)) return issue;
+std::optional<ParamProblem> CorrectorConfig::FindProblem() const {
+    if (auto problem = CheckRows(kCorrectorParams, *this)) return problem;
     if (!(window_m >= chunk_m)) {
-        return RelationIssue("window_m", window_m, ">=", "chunk_m", chunk_m);
+        return RelationProblem("window_m", window_m, ">=", "chunk_m", chunk_m);
     }
     if (max_window_poses < max_chunk_poses) {
-        return RelationIssue("max_window_poses", double(max_window_poses), ">=", "max_chunk_poses",
-                             double(max_chunk_poses));
+        return RelationProblem("max_window_poses", double(max_window_poses),
+                               ">=", "max_chunk_poses", double(max_chunk_poses));
     }
     return std::nullopt;
 }
 
 std::string CorrectorConfig::Validate() const {
     if (std::string m = model.Validate(); !m.empty()) return m;
-    if (std::string m = ToMessage(kCorrectorParams.section, FindIssue()); !m.empty()) return m;
+    if (std::string m = ToMessage(kCorrectorParams.section, FindProblem()); !m.empty()) return m;
     return covariance.Validate();
 }
 

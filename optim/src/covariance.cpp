@@ -305,12 +305,12 @@ CovarianceSystem System(const SparseMatrix& h_lower, const Ordering& o, const Wi
 
 }  // namespace
 
-std::optional<ParamIssue> CovarianceConfig::FindIssue() const {
+std::optional<ParamProblem> CovarianceConfig::FindProblem() const {
     return CheckRows(kCovarianceParams, *this);
 }
 
 std::string CovarianceConfig::Validate() const {
-    return ToMessage(kCovarianceParams.section, FindIssue());
+    return ToMessage(kCovarianceParams.section, FindProblem());
 }
 
 const char* ToString(CovarianceStatus status) {

@@ -2,15 +2,15 @@
 
 namespace driftcorr {
 
-std::optional<ParamIssue> ModelConfig::FindIssue() const {
-    if (auto issue = CheckRows(kModelParams, *this)) return issue;
+std::optional<ParamProblem> ModelConfig::FindProblem() const {
+    if (auto problem = CheckRows(kModelParams, *this)) return problem;
     if (!(scale_range_min <= scale_range_max)) {
-        return RelationIssue("scale_range_min", scale_range_min, "<=", "scale_range_max",
-                             scale_range_max);
+        return RelationProblem("scale_range_min", scale_range_min, "<=", "scale_range_max",
+                               scale_range_max);
     }
     return std::nullopt;
 }
 
-std::string ModelConfig::Validate() const { return ToMessage(kModelParams.section, FindIssue()); }
+std::string ModelConfig::Validate() const { return ToMessage(kModelParams.section, FindProblem()); }
 
 }  // namespace driftcorr

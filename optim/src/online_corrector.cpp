@@ -51,13 +51,13 @@ PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
 
 }  // namespace
 
-std::optional<ParamIssue> OnlineConfig::FindIssue() const {
+std::optional<ParamProblem> OnlineConfig::FindProblem() const {
     return CheckRows(kOnlineParams, *this);
 }
 
 std::string OnlineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;
-    return ToMessage(kOnlineParams.section, FindIssue());
+    return ToMessage(kOnlineParams.section, FindProblem());
 }
 
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config)

@@ -101,32 +101,32 @@ std::vector<double> EstimateCourses(const PlanarTrajectory& est, double stationa
 
 }  // namespace
 
-std::optional<ParamIssue> PaperSolverConfig::FindIssue() const {
-    if (auto issue = CheckRows(kPaperSolverParams, *this)) return issue;
+std::optional<ParamProblem> PaperSolverConfig::FindProblem() const {
+    if (auto problem = CheckRows(kPaperSolverParams, *this)) return problem;
     if (!(min_step_m >= stationary_m)) {
-        return RelationIssue("min_step_m", min_step_m, ">=", "stationary_m", stationary_m);
+        return RelationProblem("min_step_m", min_step_m, ">=", "stationary_m", stationary_m);
     }
     // Fixed-step descent on a quadratic of curvature k is stable only for learning_rate * k < 2.
     if (learning_rate * step_weight / (step_sigma_m * step_sigma_m) >= 2.0) {
-        return ParamIssue{"step_sigma_m",
-                          "too small for learning_rate (learning_rate * step_weight / "
-                          "step_sigma_m^2 must be < 2)",
-                          "learning_rate"};
+        return ParamProblem{"step_sigma_m",
+                            "too small for learning_rate (learning_rate * step_weight / "
+                            "step_sigma_m^2 must be < 2)",
+                            "learning_rate"};
     }
     const double turn_k = (turn_weight / (turn_sigma_rad * turn_sigma_rad) +
                            preservation_weight / (preservation_sigma_rad * preservation_sigma_rad)) /
                           (min_step_m * min_step_m);
     if (learning_rate * turn_k >= 2.0) {
-        return ParamIssue{"min_step_m",
-                          "too small for learning_rate and turn_sigma_rad (learning_rate * turn "
-                          "curvature at min_step_m must be < 2)",
-                          "learning_rate"};
+        return ParamProblem{"min_step_m",
+                            "too small for learning_rate and turn_sigma_rad (learning_rate * turn "
+                            "curvature at min_step_m must be < 2)",
+                            "learning_rate"};
     }
     return std::nullopt;
 }
 
 std::string PaperSolverConfig::Validate() const {
-    return ToMessage(kPaperSolverParams.section, FindIssue());
+    return ToMessage(kPaperSolverParams.section, FindProblem());
 }
 
 CorrectionResult CorrectWithPaperMethod(const PlanarTrajectory& estimate,

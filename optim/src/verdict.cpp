@@ -179,25 +179,25 @@ std::string ToString(VerdictLevel level) {
     return "?";
 }
 
-std::optional<ParamIssue> VerdictConfig::FindIssue() const {
-    if (auto issue = CheckRows(kVerdictParams, *this)) return issue;
+std::optional<ParamProblem> VerdictConfig::FindProblem() const {
+    if (auto problem = CheckRows(kVerdictParams, *this)) return problem;
     if (!(scale_failed_min <= scale_plausible_min)) {
-        return RelationIssue("scale_failed_min", scale_failed_min, "<=", "scale_plausible_min",
-                             scale_plausible_min);
+        return RelationProblem("scale_failed_min", scale_failed_min, "<=", "scale_plausible_min",
+                               scale_plausible_min);
     }
     if (!(scale_failed_max >= scale_plausible_max)) {
-        return RelationIssue("scale_failed_max", scale_failed_max, ">=", "scale_plausible_max",
-                             scale_plausible_max);
+        return RelationProblem("scale_failed_max", scale_failed_max, ">=", "scale_plausible_max",
+                               scale_plausible_max);
     }
     if (!(off_map_degraded_share <= off_map_failed_share)) {
-        return RelationIssue("off_map_degraded_share", off_map_degraded_share,
-                             "<=", "off_map_failed_share", off_map_failed_share);
+        return RelationProblem("off_map_degraded_share", off_map_degraded_share,
+                               "<=", "off_map_failed_share", off_map_failed_share);
     }
     return std::nullopt;
 }
 
 std::string VerdictConfig::Validate() const {
-    return ToMessage(kVerdictParams.section, FindIssue());
+    return ToMessage(kVerdictParams.section, FindProblem());
 }
 
 Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField* field,

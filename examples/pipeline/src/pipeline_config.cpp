@@ -57,12 +57,12 @@ double Number(const Reader& r, const YAML::Node& n, const std::string& key) {
     r.Fail(n, key, "must be a number (got " + Shown(n) + ")");
 }
 
-/// A number for row `p`, in its range (NumberIssue also rejects non-finite values).
+/// A number for row `p`, in its range (NumberProblem also rejects non-finite values).
 template <class Config>
 double CheckedNumber(const Reader& r, const Param<Config>& p, const YAML::Node& n,
                      const std::string& key) {
     const double v = Number(r, n, key);
-    if (auto issue = NumberIssue(p, v)) r.Fail(n, key, *issue);
+    if (auto problem = NumberProblem(p, v)) r.Fail(n, key, *problem);
     return v;
 }
 
@@ -127,19 +127,20 @@ void ReadSection(Reader& r, const YAML::Node& key_node, const YAML::Node& body,
     }
 }
 
-/// An issue of a rule between two keys (or of a value the file did not set), at the line of the
+/// A broken rule between two keys (or of a value the file did not set), at the line of the
 /// key it names when the file has it, else of the other key, else of the section.
-[[noreturn]] void FailIssue(const Reader& r, const std::string& section, const ParamIssue& issue) {
-    const std::string key = section + "." + issue.key;
-    const std::string related = section + "." + issue.related_key;
+[[noreturn]] void FailProblem(const Reader& r, const std::string& section,
+                              const ParamProblem& problem) {
+    const std::string key = section + "." + problem.key;
+    const std::string related = section + "." + problem.related_key;
     if (auto it = r.lines.find(key); it != r.lines.end()) {
-        throw InputError(r.file, it->second, key, issue.message);
+        throw InputError(r.file, it->second, key, problem.message);
     }
-    if (auto it = r.lines.find(related); !issue.related_key.empty() && it != r.lines.end()) {
-        throw InputError(r.file, it->second, related, key + " " + issue.message);
+    if (auto it = r.lines.find(related); !problem.related_key.empty() && it != r.lines.end()) {
+        throw InputError(r.file, it->second, related, key + " " + problem.message);
     }
     const auto it = r.lines.find(section);
-    throw InputError(r.file, it == r.lines.end() ? 0 : it->second, key, issue.message);
+    throw InputError(r.file, it == r.lines.end() ? 0 : it->second, key, problem.message);
 }
 
 std::string SectionNames() {
@@ -168,7 +169,7 @@ PipelineConfig ParseConfig(Reader& r, const YAML::Node& root) {
         if (!known) r.Fail(kv.first, section, "unknown section (" + SectionNames() + ")");
     }
     ForEachParamSection(cfg, [&](const char* section, const auto&, const auto& part, const char*) {
-        if (auto issue = part.FindIssue()) FailIssue(r, section, *issue);
+        if (auto problem = part.FindProblem()) FailProblem(r, section, *problem);
     });
     if (std::string m = cfg.Validate(); !m.empty()) throw InputError(r.file, 0, "", m);
     return cfg;
@@ -190,7 +191,7 @@ std::string PipelineConfig::Validate() const {
     std::string m;
     ForEachParamSection(*this,
                         [&](const char* section, const auto&, const auto& part, const char*) {
-                            if (m.empty()) m = ToMessage(section, part.FindIssue());
+                            if (m.empty()) m = ToMessage(section, part.FindProblem());
                         });
     // Parts that are no params.yaml section: their defaults, or what the caller set.
     for (const std::string& rest :

@@ -186,7 +186,7 @@ struct ParamTable {
 /// A value that breaks a rule. `key` is relative to the struct's table ("resolution_m"; a value
 /// of a kRealByName row: "half_width_m.track"); `related_key` names the other key of a rule
 /// between two values ("chunk_m" for "window_m: must be >= chunk_m"), empty otherwise.
-struct ParamIssue {
+struct ParamProblem {
     std::string key;
     std::string message;  ///< "must be > 0 (got -1)"
     std::string related_key;
@@ -194,8 +194,8 @@ struct ParamIssue {
 
 /// A rule between two values that `key` = v breaks: `key` must be `op` (">=" or "<=") `other`
 /// = w; the message reads "must be >= chunk_m (got 200 < 240)".
-inline ParamIssue RelationIssue(const std::string& key, double v, const std::string& op,
-                                const std::string& other, double w) {
+inline ParamProblem RelationProblem(const std::string& key, double v, const std::string& op,
+                                    const std::string& other, double w) {
     const std::string negated = op == ">=" ? "<" : op == "<=" ? ">" : "not " + op;
     return {key,
             "must be " + op + " " + other + " (got " + FormatParamNumber(v) + " " + negated + " " +
@@ -203,10 +203,11 @@ inline ParamIssue RelationIssue(const std::string& key, double v, const std::str
             other};
 }
 
-/// "<section>.<key>: <message>", the form Validate() returns; empty without an issue.
-inline std::string ToMessage(const std::string& section, const std::optional<ParamIssue>& issue) {
-    if (!issue) return "";
-    return (section.empty() ? "" : section + ".") + issue->key + ": " + issue->message;
+/// "<section>.<key>: <message>", the form Validate() returns; empty without a problem.
+inline std::string ToMessage(const std::string& section,
+                             const std::optional<ParamProblem>& problem) {
+    if (!problem) return "";
+    return (section.empty() ? "" : section + ".") + problem->key + ": " + problem->message;
 }
 
 /// The allowed range of a whole-number row: the row's range, at least 0.
@@ -259,9 +260,9 @@ std::string RuleText(const Param<Config>& p) {
     return "must be " + RangeText(r);
 }
 
-/// The issue with number `v` for row `p` (kReal, kSize, kInt, a kRealByName value), if any.
+/// The problem with number `v` for row `p` (kReal, kSize, kInt, a kRealByName value), if any.
 template <class Config>
-std::optional<std::string> NumberIssue(const Param<Config>& p, double v) {
+std::optional<std::string> NumberProblem(const Param<Config>& p, double v) {
     const bool whole = p.kind() == ParamKind::kSize || p.kind() == ParamKind::kInt;
     const bool ok = whole ? WholeRange(p).Contains(v) && v == std::floor(v) && FitsMember(p, v)
                           : p.range.Contains(v);
@@ -280,33 +281,33 @@ bool IsChoice(const Param<Config>& p, const std::string& value) {
 
 /// The first value of `c` that its row does not allow, in row order.
 template <class Config>
-std::optional<ParamIssue> CheckRows(const ParamTable<Config>& table, const Config& c) {
+std::optional<ParamProblem> CheckRows(const ParamTable<Config>& table, const Config& c) {
     for (const Param<Config>& p : table) {
         switch (p.kind()) {
             case ParamKind::kReal:
-                if (auto m = NumberIssue(p, p.template Ref<double>(c)))
-                    return ParamIssue{p.key, *m, ""};
+                if (auto m = NumberProblem(p, p.template Ref<double>(c)))
+                    return ParamProblem{p.key, *m, ""};
                 break;
             case ParamKind::kSize:
-                if (auto m = NumberIssue(p, double(p.template Ref<std::size_t>(c))))
-                    return ParamIssue{p.key, *m, ""};
+                if (auto m = NumberProblem(p, double(p.template Ref<std::size_t>(c))))
+                    return ParamProblem{p.key, *m, ""};
                 break;
             case ParamKind::kInt:
-                if (auto m = NumberIssue(p, double(p.template Ref<int>(c))))
-                    return ParamIssue{p.key, *m, ""};
+                if (auto m = NumberProblem(p, double(p.template Ref<int>(c))))
+                    return ParamProblem{p.key, *m, ""};
                 break;
             case ParamKind::kFlag:
                 break;
             case ParamKind::kChoice: {
                 const std::string& v = p.template Ref<std::string>(c);
                 if (!IsChoice(p, v))
-                    return ParamIssue{p.key, RuleText(p) + " (got '" + v + "')", ""};
+                    return ParamProblem{p.key, RuleText(p) + " (got '" + v + "')", ""};
                 break;
             }
             case ParamKind::kRealByName:
                 for (const auto& [name, v] : p.template Ref<std::map<std::string, double>>(c)) {
-                    if (auto m = NumberIssue(p, v))
-                        return ParamIssue{std::string(p.key) + "." + name, *m, ""};
+                    if (auto m = NumberProblem(p, v))
+                        return ParamProblem{std::string(p.key) + "." + name, *m, ""};
                 }
                 break;
         }

@@ -56,7 +56,7 @@ struct IndoorFieldConfig {
 
     /// The first value kIndoorFieldParams or vertical_tolerance_m >= resolution_z_m does not
     /// allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "indoor_field.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

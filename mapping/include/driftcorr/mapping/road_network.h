@@ -27,7 +27,7 @@ struct RoadClassConfig {
     double default_half_width_m = 3.0;
 
     /// The first value kRoadClassParams does not allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "roads.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
     /// The effective class -> half-width table.
@@ -81,7 +81,7 @@ struct RoadFieldConfig {
     double tile_m = 256.0;
 
     /// The first value kRoadFieldParams does not allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "field.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

@@ -46,7 +46,7 @@ struct SurfaceFieldConfig {
 
     /// The first value kSurfaceFieldParams or vertical_tolerance_m >= resolution_z_m does not
     /// allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "surface_field.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

@@ -35,7 +35,7 @@ struct AnchorFitConfig {
     double check_position_radius_m = 25.0;
 
     /// The first value kAnchorFitParams does not allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "anchor_fit.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

@@ -39,7 +39,7 @@ struct CorrectorConfig {
 
     /// The first value kCorrectorParams or a rule between its values does not allow (model and
     /// covariance are not looked at).
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field of
     /// model, this struct (section corrector) or covariance.
     std::string Validate() const;

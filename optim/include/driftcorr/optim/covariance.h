@@ -81,7 +81,7 @@ struct CovarianceConfig {
     bool apply_variance_factor = false;
 
     /// The first value kCovarianceParams does not allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "covariance.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

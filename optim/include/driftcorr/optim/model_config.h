@@ -80,7 +80,7 @@ struct ModelConfig {
     double corridor_slack_m = 0.0;    ///< [m]
 
     /// The first value kModelParams or scale_range_min <= scale_range_max does not allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "model.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

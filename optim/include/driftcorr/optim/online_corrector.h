@@ -84,7 +84,7 @@ struct OnlineConfig {
     bool boundary_prior = true;
 
     /// The first value kOnlineParams does not allow (corrector is not looked at).
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field of
     /// corrector or of this struct (section online).
     std::string Validate() const;

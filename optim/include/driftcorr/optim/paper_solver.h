@@ -58,7 +58,7 @@ struct PaperSolverConfig {
     /// The first value kPaperSolverParams or a rule between its values does not allow, including
     /// settings for which the fixed-step descent is unstable (learning_rate * curvature >= 2 on the
     /// step or turn term).
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "paper.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };

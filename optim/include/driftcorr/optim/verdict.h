@@ -70,7 +70,7 @@ struct VerdictConfig {
     double anchor_ambiguous_ratio = 1.5;  ///< [-]
 
     /// The first value kVerdictParams or a rule between its values does not allow.
-    std::optional<ParamIssue> FindIssue() const;
+    std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "verdict.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
