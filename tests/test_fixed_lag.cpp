@@ -10,6 +10,7 @@
 #include "driftcorr/core/observables.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/fixed_lag.h"
+#include "driftcorr/optim/incremental_corrector.h"
 #include "test_state.h"
 
 namespace driftcorr {
@@ -158,6 +159,9 @@ TEST(MarginalPrior, GrowsAlongTheOdometry) {
 TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
     CorrectorConfig cfg;
     cfg.model = Model();
+    // Without a heading-rate bias: on this curve a bias trades a few mm of position against the
+    // heading-preservation prior, and the check below is that the odometry alone is kept.
+    cfg.model.heading_bias_segment_s = 0.0;
     cfg.window_m = 20.0;
     const PlanarTrajectory est = Curve(60);
     for (bool marginalise : {true, false}) {
@@ -179,6 +183,35 @@ TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
         }
         EXPECT_EQ(priors > 0, marginalise);
     }
+}
+
+// A growing trajectory's dropped-step episode is repaired once the speed after it has been seen,
+// and only then; an episode older than the span (20 s) is left to the batch repair.
+TEST(RepairRecentEpisodes, RepairsAnEpisodeOnceItsEndIsSeen) {
+    ModelConfig model;
+    TrajectoryState s = StartState(PoseState{}, true, model);
+    for (std::size_t i = 1; i <= 600; ++i) {  // 10 m/s at 10 Hz; steps 300-319 at a fifth
+        StepObservation o;
+        o.dt_s = 0.1;
+        o.length_m = (i >= 300 && i < 320) ? 0.2 : 1.0;
+        AppendStep(s, PoseState{}, o, double(i - 1), 0.1 * double(i - 1), model);
+    }
+    EXPECT_EQ(RepairRecentEpisodes(s, 315, model), 0u) << "the speed after it is not seen yet";
+    EXPECT_FALSE(s.obs[305].repaired);
+    EXPECT_EQ(RepairRecentEpisodes(s, 330, model), 1u);
+    for (std::size_t i = 300; i < 320; ++i) {
+        EXPECT_TRUE(s.obs[i].repaired) << i;
+        EXPECT_NEAR(s.obs[i].length_m, 1.0, 1e-9) << i;
+        EXPECT_DOUBLE_EQ(s.obs[i].observed_length_m, 0.2);
+    }
+    EXPECT_EQ(RepairRecentEpisodes(s, 340, model), 0u) << "repaired steps stay repaired";
+    TrajectoryState late = StartState(PoseState{}, true, model);
+    for (std::size_t i = 1; i <= 600; ++i) late.obs.push_back(s.obs[i]);
+    for (std::size_t i = 300; i < 320; ++i) {
+        late.obs[i].repaired = false;
+        late.obs[i].length_m = 0.2;
+    }
+    EXPECT_EQ(RepairRecentEpisodes(late, 600, model), 0u) << "28 s later: outside the span";
 }
 
 }  // namespace

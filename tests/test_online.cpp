@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/io/tum_line.h"
@@ -159,6 +161,7 @@ TEST_F(OnlineSynthetic, BackPressureKeepsEveryOutputFresh) {
     const OnlineStatistics st = online.Statistics();
     EXPECT_EQ(st.poses, est.size());
     EXPECT_EQ(st.stale_poses, 0u);
+    EXPECT_GE(st.ahead_poses, est.size() - 2) << "a replay runs faster than real time";
     EXPECT_EQ(st.max_age_epochs, max_age);
     EXPECT_GT(st.solves, 10u);
     EXPECT_EQ(st.solve_s.size(), st.solves);
@@ -172,11 +175,36 @@ TEST_F(OnlineSynthetic, BackPressureKeepsEveryOutputFresh) {
     EXPECT_TRUE(Usable(online.Finish().status));
 }
 
-// Without back-pressure a burst outruns the solver: the worker skips to the newest pose instead
+// A producer at its own real-time pace (stream time advancing as fast as the wall clock) is never
+// held back, whatever the lag; the same poses pushed as fast as possible are (BackPressure...).
+TEST_F(OnlineSynthetic, InputAtRealTimePaceIsNeverHeldBack) {
+    const PlanarTrajectory& est = run_->estimate;
+    OnlineConfig cfg;
+    cfg.max_lag_epochs = 1;
+    OnlineCorrector online(&setup_->field, cfg);
+    constexpr double kStepS = 0.003;
+    for (std::size_t i = 0; i < 400; ++i) {
+        PlanarPose pose = At(est, i);
+        pose.t_s = kStepS * double(i);  // the wall time between Pushes is at least kStepS
+        std::this_thread::sleep_for(std::chrono::duration<double>(kStepS));
+        const PushResult r = online.Push(pose);
+        ASSERT_TRUE(r.Accepted()) << r.message;
+        EXPECT_FALSE(r.ahead_of_real_time) << "pose " << i;
+        EXPECT_EQ(r.waited_s, 0.0) << "pose " << i;
+    }
+    const OnlineStatistics st = online.Statistics();
+    EXPECT_EQ(st.waits, 0u);
+    EXPECT_EQ(st.ahead_poses, 0u);
+    EXPECT_GT(st.requests, 0u);
+}
+
+// Without back-pressure (max_lag_epochs 0) a burst outruns the solver: the worker skips to the newest pose instead
 // of solving every request in turn, and the outputs say how old their correction is.
 TEST_F(OnlineSynthetic, BurstSkipsAheadAndReportsTheAge) {
     const PlanarTrajectory& est = run_->estimate;
-    OnlineCorrector online(&setup_->field, OnlineConfig{});
+    OnlineConfig cfg;
+    cfg.max_lag_epochs = 0;
+    OnlineCorrector online(&setup_->field, cfg);
     std::size_t stale = 0;
     for (std::size_t i = 0; i < est.size(); ++i) {
         const PushResult r = online.Push(At(est, i));

@@ -37,10 +37,12 @@ const char* kStreamUsage =
     "--status-column appends to each line the age of the correction it used: epochs and seconds\n"
     "(stream time) since the last pose of the solve it chains from, and 1 if that was the newest\n"
     "solve requested before the pose (fresh), else 0.\n"
-    "--max-lag N waits (stops reading input) while the newest pose is more than N epochs past the\n"
-    "last solved pose and a solve is under way: for replays and bursts, accuracy instead of speed\n"
-    "(0, the default: never wait; online.max_lag_epochs in --config; --replay without --rate-hz:\n"
-    "1).\n"
+    "Back-pressure: while the input arrives faster than real time (a file piped in, a replay, a\n"
+    "burst: its timestamps advance more than twice as fast as the wall clock), the next line is\n"
+    "read only once the last pose is at most N epochs past the last solved one (--max-lag N,\n"
+    "default 1; online.max_lag_epochs in --config; 0: never wait, outputs then chain from older\n"
+    "solves). Input at its own real-time pace is never held back (online.hold_live_input: true\n"
+    "holds it too).\n"
     "Invalid lines (bad numbers, NaN, timestamps not increasing, a last line without newline) are\n"
     "skipped with a warning on stderr naming the line; the stream goes on. A pause of the input\n"
     "longer than online.gap_warn_s is reported once, when it resumes.\n"
@@ -49,7 +51,10 @@ const char* kStreamUsage =
     "age, solve time per window, output latency per line), then the whole trajectory is smoothed\n"
     "(the batch result) and judged (the verdict); --smoothed-out writes it as TUM.\n"
     "--sync solves inside the pose loop (deterministic; slower per pose).\n"
-    "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, 4 internal.\n";
+    "The causal outputs are then compared with the smoothed trajectory: when the two lie farther\n"
+    "apart than the input lies from the smoothed trajectory, both are reported as failed.\n"
+    "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, the verdict\n"
+    "failed or the causal outputs failed (everything was still written), 4 internal.\n";
 
 struct StreamArgs {
     std::string scenario, config, smoothed_out, max_lag;
@@ -84,7 +89,7 @@ bool ParseStreamArgs(int argc, char** argv, StreamArgs& a, std::string& err) {
     }
     if (!a.max_lag.empty() &&
         (a.max_lag.size() > 9 || a.max_lag.find_first_not_of("0123456789") != std::string::npos)) {
-        err = "--max-lag needs a whole number of epochs >= 0";
+        err = "--max-lag needs a whole number of epochs >= 0 (0: never wait)";
         return false;
     }
     if (a.scenario.empty()) err = "missing scenario";
@@ -143,8 +148,14 @@ public:
         }
         std::fputs(out.c_str(), stdout);
         std::fflush(stdout);
-        latency_s_.push_back(std::chrono::duration<double>(Clock::now() - arrived).count());
+        // Read to written: a back-pressure wait comes before the pose is taken (as if the line
+        // had been read later), so it is not part of the pose's latency; it is reported apart.
+        latency_s_.push_back(std::chrono::duration<double>(Clock::now() - arrived).count() -
+                             r.waited_s);
         Record(in, line);
+        causal_.t_s.push_back(r.corrected.t_s);
+        causal_.p_en.push_back(r.corrected.p_en);
+        causal_.up_m.push_back(r.corrected.up_m);
         ReportWarnings(number, r, pause_s);
     }
 
@@ -157,6 +168,11 @@ public:
             verdict = JudgeCorrection(reference_, &setup_.field, cfg_.corrector.model, result,
                                       nullptr, false, true, VerdictConfig{});
         }
+        std::optional<CausalCheck> causal;
+        if (Usable(result.status)) {
+            causal = CheckCausalOutput(reference_, causal_, result.corrected);
+            verdict = JudgeOnline(*verdict, *causal);
+        }
         if (!quiet) {
             std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
@@ -166,8 +182,12 @@ public:
                 std::fprintf(stderr, "driftcorr stream: verdict %s%s\n",
                              ToString(verdict->level).c_str(), reasons.c_str());
             }
+            if (causal) ReportCausal(*causal);
         }
-        if (smoothed_out.empty()) return 0;
+        // Outputs already written cannot be taken back: what the program cannot vouch for is
+        // said, and the exit code says it too.
+        const bool vouched = verdict && verdict->level != VerdictLevel::kFailed;
+        if (smoothed_out.empty()) return vouched ? 0 : kExitSolver;
         if (!Usable(result.status)) {
             std::fprintf(stderr, "driftcorr stream: no smoothed trajectory (%s); nothing written\n",
                          result.message.c_str());
@@ -175,7 +195,7 @@ public:
         }
         io::WriteTum(smoothed_out, FromPlanar(result.corrected, reference_, accepted_,
                                               setup_.scenario.frame, setup_.anchor));
-        return 0;
+        return vouched ? 0 : kExitSolver;
     }
 
 private:
@@ -187,17 +207,25 @@ private:
                      "driftcorr stream: freshness: %.1f %% of poses emitted without a fresh solve; "
                      "worst age %zu epochs (%.2f s)%s\n",
                      stale, st.max_age_epochs, st.max_age_s,
-                     st.stale_poses > 0 && cfg_.max_lag_epochs == 0
-                         ? " (the solver did not keep up; --max-lag N makes the input wait)"
-                         : "");
+                     st.stale_poses > 0 ? " (the solver did not keep up with the input)" : "");
+        const double ahead = st.poses ? 100.0 * double(st.ahead_poses) / double(st.poses) : 0.0;
+        std::string back_pressure = "off (--max-lag 0)";
+        if (cfg_.max_lag_epochs > 0) {
+            back_pressure = "at " + std::to_string(cfg_.max_lag_epochs) + " epochs, on " +
+                            (cfg_.hold_live_input ? "all input" : "input faster than real time");
+        }
+        std::fprintf(stderr,
+                     "driftcorr stream: input pace: %.1f %% of poses arrived faster than real "
+                     "time; back-pressure %s\n",
+                     ahead, back_pressure.c_str());
         std::fprintf(stderr,
                      "driftcorr stream: solves: %zu of %zu requested (%zu with a marginalised "
                      "prior, %zu failed); solve time per window %s\n",
                      st.solves, st.requests, st.prior_solves, st.failed_solves,
                      Milliseconds(st.solve_s).c_str());
         std::fprintf(stderr,
-                     "driftcorr stream: output latency per line %s; waited %zu times, "
-                     "%.2f s (--max-lag)\n",
+                     "driftcorr stream: output latency per line %s; input held back %zu "
+                     "times, %.2f s in all (back-pressure)\n",
                      Milliseconds(latency_s_).c_str(), st.waits, st.wait_s);
         if (!st.worker_error.empty()) {
             std::fprintf(stderr,
@@ -205,6 +233,12 @@ private:
                          "onto the last solve\n",
                          st.worker_error.c_str());
         }
+    }
+    static void ReportCausal(const CausalCheck& c) {
+        std::fprintf(stderr,
+                     "driftcorr stream: causal outputs against the smoothed trajectory: RMS %.2f m, "
+                     "max %.2f m (the input: RMS %.2f m)\n",
+                     c.causal_rms_m, c.causal_max_m, c.input_rms_m);
     }
     void Skip(long number, const std::string& why) {
         ++skipped_;
@@ -244,6 +278,7 @@ private:
     bool status_column_;
     Trajectory accepted_;
     PlanarTrajectory reference_;
+    PlanarTrajectory causal_;  ///< every output, in the world plane
     std::size_t skipped_ = 0;
     bool outside_ = false;
     std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]
@@ -291,11 +326,7 @@ int RunStream(const StreamArgs& a) {
     OnlineConfig online = cfg.online;
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = a.sync;
-    if (!a.max_lag.empty()) {
-        online.max_lag_epochs = std::stoul(a.max_lag);
-    } else if (a.replay && a.rate_hz == 0.0) {
-        online.max_lag_epochs = 1;  // our own replay as fast as possible: wait for the solver
-    }
+    if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
     StreamSession session(setup, online, a.status_column);
     if (!a.quiet) {

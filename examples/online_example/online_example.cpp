@@ -1,7 +1,8 @@
 // The online corrector in a few lines: a scenario's map, its estimate fed pose by pose, each
 // corrected pose printed as TUM at once, how fresh the corrections were, the smoothed trajectory
-// at the end. A file is a replay: far faster than any sensor, so Push may wait for the solver
-// (max_lag_epochs) instead of emitting poses composed onto old solves.
+// at the end. A file is a replay: far faster than any sensor, so Push waits for the solver
+// (back-pressure, OnlineConfig::max_lag_epochs) instead of emitting poses composed onto old
+// solves; a live source at its own pace is never held back.
 // Run: driftcorr_online_example <scenario dir>
 #include <cstdio>
 
@@ -21,9 +22,7 @@ int main(int argc, char** argv) {
         const Trajectory est = io::LoadTrajectory(setup.scenario.estimate);
         const FrameAxes axes = setup.scenario.frame;
 
-        OnlineConfig config;
-        config.max_lag_epochs = 1;  // a replay: wait for the solve the newest pose asked for
-        OnlineCorrector online(&setup.field, config);
+        OnlineCorrector online(&setup.field, OnlineConfig{});
         for (std::size_t i = 0; i < est.size(); ++i) {
             const PlanarPose in = pipeline::ToPlanarPose(est.t_s[i], est.p_frame[i],
                                                          est.q_frame_body[i], axes, setup.anchor);

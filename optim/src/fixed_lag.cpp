@@ -140,23 +140,16 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
 FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
                                    const TraversableField* field, const CorrectorConfig& config,
                                    bool marginalise)
-    : field_(field), cfg_(config), marginalise_(marginalise) {
-    state_.obs.assign(1, StepObservation{});
-    state_.scale_segment.assign(1, 0);
-    state_.poses.assign(1, pose0);
-    state_.scales.assign(1, 1.0);
-    state_.fix_height = fix_height;
+    : state_(StartState(pose0, fix_height, config.model)),
+      field_(field),
+      cfg_(config),
+      marginalise_(marginalise) {
     dist_.assign(1, 0.0);
 }
 
-// Same segment rule as ScaleSegments (and IncrementalCorrector::Append).
 void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& step) {
-    const int segment = static_cast<int>(dist_.back() / cfg_.model.scale_segment_m);
-    state_.obs.push_back(step);
-    state_.scale_segment.push_back(segment);
-    state_.poses.push_back(initial);
-    if (segment + 1 > static_cast<int>(state_.scales.size()))
-        state_.scales.resize(segment + 1, 1.0);
+    AppendStep(state_, initial, step, dist_.back(), elapsed_s_, cfg_.model);
+    elapsed_s_ += std::max(step.dt_s, 0.0);
     dist_.push_back(dist_.back() + step.length_m);
 }
 
@@ -193,6 +186,7 @@ std::optional<PosePriorTerm> FixedLagSmoother::BoundaryPrior(std::size_t boundar
 
 FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
     DRIFTCORR_CHECK(solved_end_ < end && end < size(), "a solve must add poses");
+    RepairRecentEpisodes(state_, end, cfg_.model);
     SeedNewScales(state_, solved_end_ + 1, end);
     ComposeOdometry(state_, solved_end_ + 1, end);
     const std::size_t first = WindowFirst(end);
@@ -208,6 +202,10 @@ FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
     if (!out.usable) ++stats_.window_failures;
     out.poses.assign(state_.poses.begin() + out.first, state_.poses.begin() + end + 1);
     out.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
+    if (!state_.bias_segment.empty()) {
+        out.biases.assign(state_.biases.begin(),
+                          state_.biases.begin() + state_.bias_segment[end] + 1);
+    }
     // The covariance of the newest pose, for the output's uncertainty.
     const WindowProblem problem(state_, field_, cfg_.model, first, end,
                                 std::vector<std::uint8_t>(end - first + 1, 0),

@@ -186,6 +186,19 @@ TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseSta
     return s;
 }
 
+std::size_t RepairRecentEpisodes(TrajectoryState& s, std::size_t end, const ModelConfig& model) {
+    std::size_t from = end;  // the span's first step
+    for (double span_s = 0.0; from > 1 && span_s < 2.0 * kOutlierEpisodeS; --from) {
+        span_s += std::max(s.obs[from].dt_s, 0.0);
+    }
+    // slice[0] stands for the step before the span (RepairSpeedEpisodes leaves index 0 alone).
+    std::vector<StepObservation> slice(s.obs.begin() + (from - 1), s.obs.begin() + end + 1);
+    const std::size_t episodes = RepairSpeedEpisodes(
+        slice, model.outlier_accel_mps2, kOutlierWindowS, kOutlierEpisodeS, kOutlierDeviation);
+    if (episodes > 0) std::copy(slice.begin() + 1, slice.end(), s.obs.begin() + from);
+    return episodes;
+}
+
 TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig& cfg,
                              bool fix_height) {
     std::vector<PoseState> poses(est.size());
@@ -208,36 +221,44 @@ IncrementalCorrector::IncrementalCorrector(TrajectoryState state, const Traversa
     for (std::size_t i = 1; i < size(); ++i) dist_[i] = dist_[i - 1] + state_.obs[i].length_m;
 }
 
+TrajectoryState StartState(const PoseState& pose0, bool fix_height, const ModelConfig& model) {
+    TrajectoryState s;
+    s.obs.assign(1, StepObservation{});
+    s.scale_segment.assign(1, 0);
+    s.poses.assign(1, pose0);
+    s.scales.assign(1, 1.0);
+    if (model.heading_bias_segment_s > 0.0) {
+        s.bias_segment.assign(1, 0);
+        s.biases.assign(1, 0.0);
+    }
+    s.fix_height = fix_height;
+    return s;
+}
+
+// Step i belongs to scale segment floor(path before it / scale_segment_m) (ScaleSegments) and to
+// bias segment floor(time before it / heading_bias_segment_s) (BiasSegments).
+void AppendStep(TrajectoryState& s, const PoseState& initial, const StepObservation& step,
+                double path_before_m, double elapsed_before_s, const ModelConfig& model) {
+    const int segment = static_cast<int>(path_before_m / model.scale_segment_m);
+    s.obs.push_back(step);
+    s.scale_segment.push_back(segment);
+    s.poses.push_back(initial);
+    if (segment + 1 > static_cast<int>(s.scales.size())) s.scales.resize(segment + 1, 1.0);
+    if (s.bias_segment.empty()) return;
+    const int bias_segment = static_cast<int>(elapsed_before_s / model.heading_bias_segment_s);
+    s.bias_segment.push_back(bias_segment);
+    if (bias_segment + 1 > static_cast<int>(s.biases.size())) s.biases.resize(bias_segment + 1, 0.0);
+}
+
 IncrementalCorrector::IncrementalCorrector(const PoseState& pose0, bool fix_height,
                                            const TraversableField* field,
                                            const CorrectorConfig& config)
-    : field_(field), cfg_(config) {
-    state_.obs.assign(1, StepObservation{});
-    state_.scale_segment.assign(1, 0);
-    state_.poses.assign(1, pose0);
-    state_.scales.assign(1, 1.0);
-    if (cfg_.model.heading_bias_segment_s > 0.0) {
-        state_.bias_segment.assign(1, 0);
-        state_.biases.assign(1, 0.0);
-    }
-    state_.fix_height = fix_height;
+    : state_(StartState(pose0, fix_height, config.model)), field_(field), cfg_(config) {
     dist_.assign(1, 0.0);
 }
 
-// Same segment rule as ScaleSegments: step i belongs to segment floor(path before it / segment_m).
 void IncrementalCorrector::Append(const PoseState& initial, const StepObservation& step) {
-    const int segment = static_cast<int>(dist_.back() / cfg_.model.scale_segment_m);
-    state_.obs.push_back(step);
-    state_.scale_segment.push_back(segment);
-    state_.poses.push_back(initial);
-    if (segment + 1 > static_cast<int>(state_.scales.size())) state_.scales.resize(segment + 1, 1.0);
-    if (!state_.bias_segment.empty()) {  // same rule as BiasSegments: time before the step
-        const int bias_segment = static_cast<int>(elapsed_s_ / cfg_.model.heading_bias_segment_s);
-        state_.bias_segment.push_back(bias_segment);
-        if (bias_segment + 1 > static_cast<int>(state_.biases.size())) {
-            state_.biases.resize(bias_segment + 1, 0.0);
-        }
-    }
+    AppendStep(state_, initial, step, dist_.back(), elapsed_s_, cfg_.model);
     elapsed_s_ += std::max(step.dt_s, 0.0);
     dist_.push_back(dist_.back() + step.length_m);
 }

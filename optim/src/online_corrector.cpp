@@ -124,8 +124,18 @@ double OnlineCorrector::FrontScale(int segment) const {
                                                             : front_scales_.back();
 }
 
+double OnlineCorrector::FrontBias(int segment) const {
+    if (front_biases_.empty()) return 0.0;
+    return segment < static_cast<int>(front_biases_.size()) ? front_biases_[segment]
+                                                            : front_biases_.back();
+}
+
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     if (auto rejected = Validate(pose)) return *rejected;
+    PushResult r;
+    if (!t_s_.empty()) outside_s_ += SecondsSince(push_returned_);
+    r.ahead_of_real_time = AheadOfRealTime(pose.t_s);
+    WaitForSolver(r);
     if (!has_yaw_) has_yaw_ = pose.yaw_rad.has_value();
     double yaw_u = last_yaw_u_;
     bool first_heading = false;
@@ -142,11 +152,14 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         }
     }
     const Entry entry = MakeEntry(pose, yaw_u);
-    PushResult r;
     r.index = t_s_.size();
     r.gap = !t_s_.empty() && entry.step.dt_s > cfg_.gap_warn_s;
     const int segment =
         r.index == 0 ? 0 : static_cast<int>(path_m_ / cfg_.corrector.model.scale_segment_m);
+    const double bias_segment_s = cfg_.corrector.model.heading_bias_segment_s;
+    const int bias_segment = r.index == 0 || !(bias_segment_s > 0.0)
+                                 ? 0
+                                 : static_cast<int>((last_t_s_ - t_s_.front()) / bias_segment_s);
     {
         std::lock_guard<std::mutex> lock(mutex_);
         if (first_heading) {
@@ -157,10 +170,12 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         current_.push_back(r.index == 0
                                ? entry.initial
                                : ComposeStep(current_.back(), entry.step, FrontScale(segment),
-                                             fix_height_, entry.initial.p.z(), 0.0));
+                                             fix_height_, entry.initial.p.z(),
+                                             FrontBias(bias_segment)));
         pending_.push_back(entry);
         steps_.push_back(entry.step);
         segment_.push_back(segment);
+        bias_segment_.push_back(bias_segment);
     }
     entries_.push_back(entry);
     t_s_.push_back(pose.t_s);
@@ -170,7 +185,6 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     path_m_ += entry.step.length_m;
     const std::size_t requested_before = last_request_end_;
     UpdateSchedule(r.index);  // synchronous: solves here
-    WaitForSolver(r.index, r);
     PoseState out;
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -182,6 +196,7 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         r.correction_age_s = pose.t_s - t_s_[r.index - r.correction_age_epochs];
         ++stats_.poses;
         if (!r.fresh) ++stats_.stale_poses;
+        if (r.ahead_of_real_time) ++stats_.ahead_poses;
         stats_.max_age_epochs = std::max(stats_.max_age_epochs, r.correction_age_epochs);
         stats_.max_age_s = std::max(stats_.max_age_s, r.correction_age_s);
     }
@@ -195,21 +210,34 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
             "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
         r.message = r.message.empty() ? msg : msg + "; " + r.message;
     }
+    push_returned_ = std::chrono::steady_clock::now();
     return r;
 }
 
-// Back-pressure: waits while pose `index` is more than max_lag_epochs past the last solved pose
-// and the worker has a solve to do (a request or a running solve); never waits for a solve that
-// nobody asked for (no path since the last one), nor after a worker failure.
-void OnlineCorrector::WaitForSolver(std::size_t index, PushResult& r) {
-    if (cfg_.synchronous || cfg_.max_lag_epochs == 0) return;
+// The input's pace over the last kPaceWindow poses (stream time against wall time outside Push).
+bool OnlineCorrector::AheadOfRealTime(double t_s) {
+    pace_.emplace_back(t_s, outside_s_);
+    if (pace_.size() > kPaceWindow + 1) pace_.pop_front();
+    if (pace_.size() < 3) return false;  // two intervals at least
+    return t_s - pace_.front().first > kAheadFactor * (outside_s_ - pace_.front().second);
+}
+
+// Back-pressure, before a pose is taken: waits while the previous pose is more than
+// max_lag_epochs past the last solved pose and the worker has a solve to do (a request or a
+// running solve); only while the input runs ahead of real time unless hold_live_input; never
+// waits for a solve that nobody asked for (no path since the last one), nor after a worker
+// failure.
+void OnlineCorrector::WaitForSolver(PushResult& r) {
+    if (cfg_.synchronous || cfg_.max_lag_epochs == 0 || t_s_.empty()) return;
+    if (!cfg_.hold_live_input && !r.ahead_of_real_time) return;
+    const std::size_t index = t_s_.size() - 1;
+    const auto t0 = std::chrono::steady_clock::now();  // the lock is part of the wait
     std::unique_lock<std::mutex> lock(mutex_);
     auto caught_up = [&] {
         return index - std::min(solved_end_, index) <= cfg_.max_lag_epochs ||
                !(requested_ || busy_) || !stats_.worker_error.empty();
     };
     if (caught_up()) return;
-    const auto t0 = std::chrono::steady_clock::now();
     solved_.wait(lock, caught_up);
     r.waited_s = SecondsSince(t0);
     ++stats_.waits;
@@ -352,6 +380,7 @@ void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
     if (!sol.usable) ++stats_.failed_solves;
     for (std::size_t i = sol.first; i <= sol.end; ++i) current_[i] = sol.poses[i - sol.first];
     front_scales_ = sol.scales;
+    front_biases_ = sol.biases;
     solved_end_ = sol.end;
     solved_covariance_ = sol.end_covariance;
     solved_covariance_ok_ = sol.end_covariance_ok;
@@ -362,9 +391,8 @@ void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
 // Caller holds mutex_.
 void OnlineCorrector::Recompose(std::size_t end) {
     for (std::size_t i = end + 1; i < current_.size(); ++i) {
-        // The fixed-lag windows estimate no heading-rate bias (FixedLagSmoother's state).
         current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
-                                  current_[i].p.z(), 0.0);
+                                  current_[i].p.z(), FrontBias(bias_segment_[i]));
     }
 }
 

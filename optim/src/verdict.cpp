@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/format.h"
@@ -218,6 +219,38 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     if (field && !field->empty()) {
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
     }
+    return v;
+}
+
+CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
+                              const PlanarTrajectory& smoothed) {
+    if (input.size() != causal.size() || causal.size() != smoothed.size() || input.size() == 0) {
+        throw std::logic_error("CheckCausalOutput: the trajectories must have the same poses");
+    }
+    CausalCheck c;
+    double causal_sq = 0.0, input_sq = 0.0;
+    for (std::size_t i = 0; i < smoothed.size(); ++i) {
+        const double dc = (causal.p_en[i] - smoothed.p_en[i]).norm();
+        causal_sq += dc * dc;
+        c.causal_max_m = std::max(c.causal_max_m, dc);
+        input_sq += (input.p_en[i] - smoothed.p_en[i]).squaredNorm();
+    }
+    const double n = double(smoothed.size());
+    c.causal_rms_m = std::sqrt(causal_sq / n);
+    c.input_rms_m = std::sqrt(input_sq / n);
+    c.disagree = c.causal_rms_m > c.input_rms_m;
+    return c;
+}
+
+Verdict JudgeOnline(Verdict v, const CausalCheck& c) {
+    if (!c.disagree) return v;
+    v.level = VerdictLevel::kFailed;
+    v.reasons.push_back("failed: the causal outputs and the smoothed trajectory lie " +
+                        FormatFixed(c.causal_rms_m, 2) +
+                        " m apart (RMS), farther than the input lies from the smoothed "
+                        "trajectory (" +
+                        FormatFixed(c.input_rms_m, 2) +
+                        " m): one of them followed a wrong branch of the map");
     return v;
 }
 

@@ -10,6 +10,7 @@
 //                                             order, one per estimate pose; a --status-column is
 //                                             read too) against the ground truth, with no
 //                                             re-alignment, and the uncorrected estimate's
+//   STREAM_SCORE_ERRORS=<file> score also writes each pose's time and horizontal error [m].
 // Exit codes: 0 ok, 1 usage, 2 bad input.
 #include <algorithm>
 #include <chrono>
@@ -109,6 +110,12 @@ int Score(const std::string& scenario, const std::string& output) {
     }
     const PlanarTrajectory causal = ToPlanar(out.poses, ps.scenario.frame, ps.anchor);
     const ErrorMetrics m = ComputeMetrics(causal, gt);
+    if (const char* path = std::getenv("STREAM_SCORE_ERRORS")) {  // per pose: t, error [m]
+        std::ofstream errors(path);
+        for (std::size_t i = 0; i < gt.size(); ++i) {
+            errors << gt.t_s[i] << ' ' << (causal.p_en[i] - gt.p_en[i]).norm() << '\n';
+        }
+    }
     const ErrorMetrics e = ComputeMetrics(ps.estimate, gt);
     std::printf(
         "%s: causal ATE %.2f m (final %.2f, max %.2f, right floor %.1f %%), estimate ATE "

@@ -66,6 +66,11 @@ MethodResult RunOnline(const pipeline::PreparedScenario& ps, const pipeline::Pip
         causal.yaw_rad.push_back(*pushed.corrected.yaw_rad);
     }
     const CorrectionResult smoothed = online.Finish();
+    if (Usable(smoothed.status)) {  // the stream's verdict: the smoothed one and the causal check
+        const Verdict v = JudgeCorrection(est, &ps.field, oc.corrector.model, smoothed, nullptr,
+                                          false, true, VerdictConfig{});
+        r.verdict = JudgeOnline(v, CheckCausalOutput(est, causal, smoothed.corrected));
+    }
     r.wall_s = Since(t0);
     r.poses_per_s = est.size() / std::max(1e-9, r.wall_s);
     r.ok = true;

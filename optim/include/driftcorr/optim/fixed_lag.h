@@ -22,8 +22,9 @@
 // solved), the marginal at e_k is carried to b through the odometry terms of the steps between
 // (the same construction without the map: the dead-reckoning covariance). Fixed heights (planar
 // mode) are not in the prior. A pose 0 boundary is the known start, held fixed.
-// The step-length scales of segments before the window stay fixed at their last solution; the
-// scale random walk ties the window's first scale to them (as in the batch windows).
+// The step-length scales and heading-rate biases of segments before the window stay fixed at
+// their last solution; their random walks tie the window's first ones to them (as in the batch
+// windows).
 //
 // No I/O, no threads. Not thread-safe.
 #include <cstddef>
@@ -43,6 +44,9 @@ struct FixedLagSolution {
     std::size_t end = 0;           ///< the window's last pose
     std::vector<PoseState> poses;  ///< poses [first, end] as solved
     std::vector<double> scales;    ///< step-length scale of segments [0, segment of end]
+    /// Heading-rate bias of bias segments [0, bias segment of end] [rad/s]; empty: the model
+    /// has none.
+    std::vector<double> biases;
     bool usable = false;           ///< Ipopt returned a usable solution (else the state is kept)
     bool boundary_prior = false;   ///< the boundary pose carried a marginalised prior
     /// Marginal covariance of pose `end` under the window's curvature (kNotComputed when its
@@ -95,6 +99,7 @@ private:
     CorrectorConfig cfg_;
     bool marginalise_;
     std::vector<double> dist_;                   ///< path length from pose 0 [m]
+    double elapsed_s_ = 0.0;                     ///< time of the appended steps [s]
     std::size_t solved_end_ = 0;                 ///< last pose of the last solve
     std::size_t window_first_ = 1;               ///< first pose of the last solved window
     std::optional<PosePriorTerm> window_prior_;  ///< its prior on pose window_first_ - 1

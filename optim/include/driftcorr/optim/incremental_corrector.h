@@ -81,6 +81,16 @@ private:
     CorrectionResult stats_;
 };
 
+/// The state of a trajectory that grows one pose at a time (the incremental and fixed-lag
+/// solvers): the known pose 0, its segments, the heading-rate bias segments when the model has
+/// them (model.heading_bias_segment_s > 0).
+TrajectoryState StartState(const PoseState& pose0, bool fix_height, const ModelConfig& model);
+/// Appends pose i = s.poses.size() with `step` (the step from pose i-1) and its scale and bias
+/// segments, by the rules of ScaleSegments and BiasSegments: `path_before_m` and
+/// `elapsed_before_s` are the path length and the time from pose 0 to pose i-1.
+void AppendStep(TrajectoryState& s, const PoseState& initial, const StepObservation& step,
+                double path_before_m, double elapsed_before_s, const ModelConfig& model);
+
 /// Dead reckoning of one step: pose `a` moved by observation `step` with step-length `scale`,
 /// its heading change plus `bias_rad_s` * dt (the heading-rate bias; 0 where there is none).
 /// The height follows dup_m unless `fix_height`, when it stays `up_fixed_m`.
@@ -110,6 +120,11 @@ SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
 /// bias segments, the given poses (pose 0: the start).
 TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseState> poses,
                            const CorrectorConfig& config, bool fix_height);
+/// The dropped-step repair of BatchState over the steps of the last 2 * the longest episode
+/// (20 s) up to pose `end`, for solvers that see the trajectory grow: an episode is repaired once
+/// the speed after it has been seen. Steps repaired once stay repaired. Time bounded by the span,
+/// not by the trajectory. Returns the number of episodes repaired in the span.
+std::size_t RepairRecentEpisodes(TrajectoryState& s, std::size_t end, const ModelConfig& model);
 /// The initial state of a whole estimate (BatchState of its observations, poses at the estimate).
 TrajectoryState InitialState(const PlanarTrajectory& estimate, const CorrectorConfig& config,
                              bool fix_height);

@@ -21,8 +21,15 @@
 //    between are skipped, not queued).
 //  - Freshness: every PushResult says which solve its pose chains from (the age in epochs and in
 //    stream seconds) and whether that is the newest solve the schedule had asked for before the
-//    pose (fresh). max_lag_epochs > 0 makes Push wait (back-pressure) while the newest pose is
-//    more than that many epochs past the last solved one and a solve is under way.
+//    pose (fresh).
+//  - Back-pressure: before it takes a pose, Push waits while the previous pose is more than
+//    max_lag_epochs past the last solved one and a solve is under way, but (hold_live_input
+//    false, the default) only while the input arrives faster than real time: its stream time
+//    over the last kPaceWindow poses (at least two steps) advanced more than kAheadFactor times
+//    as fast as the wall clock outside Push (a replay from a file, a burst). A producer running at its own pace is
+//    never held back: when the solver does not keep up with it, outputs chain from older solves
+//    and say so (correction_age, fresh). The wait comes before the pose is taken, so it delays
+//    reading the next input, not the output of a pose already taken.
 //  - Finish() solves the whole trajectory as the batch mode does (CorrectTrajectory's chunks,
 //    windows and hard-corridor refinement over the same observations): the batch result when the
 //    input carries headings (up to Ipopt's own run-to-run variation).
@@ -42,6 +49,7 @@
 // Finish must be called from one thread (or serialised by the caller). With synchronous = true
 // no thread is started and Push solves a requested window before it returns (deterministic, but
 // that Push takes as long as the solve).
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -50,6 +58,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "driftcorr/optim/corrector.h"
@@ -71,10 +80,14 @@ struct OnlineConfig {
     /// Path between solves for the causal output, as a share of corrector.chunk_m (0.125: every
     /// 10 m with the road chunks of 80 m); 0: only at the chunk rule.
     double update_fraction = 0.125;
-    /// Back-pressure (threaded mode): Push waits while its pose is more than this many epochs
-    /// past the last solved pose and a solve is requested or running; 0: never waits (under a
-    /// burst the outputs then chain from older solves, and say so in their age).
-    std::size_t max_lag_epochs = 0;
+    /// Back-pressure (threaded mode): before taking a pose, Push waits while the previous pose
+    /// is more than this many epochs past the last solved pose and a solve is requested or
+    /// running; 0: never waits (under a burst the outputs then chain from older solves, and say
+    /// so in their age).
+    std::size_t max_lag_epochs = 1;
+    /// false: back-pressure only while the input arrives faster than real time (see above), so
+    /// a live producer is never held back; true: whenever the lag exceeds max_lag_epochs.
+    bool hold_live_input = false;
     /// The online windows' boundary pose: true, a variable under the marginalised prior of the
     /// poses before it (optim/fixed_lag.h); false, held fixed at its last solution. Measured
     /// causal ATE (synchronous) with / without: synthetic road 3.05 / 3.06, synthetic building
@@ -100,6 +113,8 @@ inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
      "the causal pose is moved into the corridor when within corridor_gate_m"},
     {"max_lag_epochs", Field<&OnlineConfig::max_lag_epochs>(), kNonNegative,
      "back-pressure: Push waits while this many epochs past the last solve; 0: never waits"},
+    {"hold_live_input", Field<&OnlineConfig::hold_live_input>(), kNoRange,
+     "back-pressure also on input that arrives at real time; false: only on faster input"},
     {"boundary_prior", Field<&OnlineConfig::boundary_prior>(), kNoRange,
      "online windows: the past marginalised onto the boundary pose"},
 };
@@ -134,7 +149,10 @@ struct PushResult {
     /// The output chains from the newest solve the schedule had requested before this pose
     /// (false: the solver was behind; the pose was composed onto an older solve).
     bool fresh = true;
-    double waited_s = 0.0;  ///< time Push waited for the solver (max_lag_epochs) [s]
+    /// Time Push waited for the solver before taking the pose (back-pressure) [s]
+    double waited_s = 0.0;
+    /// The input arrived faster than real time when this pose was pushed (see above).
+    bool ahead_of_real_time = false;
     /// Marginal covariance of the solved pose the output chains from (its window's curvature);
     /// the output adds the odometry of correction_age_epochs steps. Valid when covariance_ok.
     PoseCovariance covariance;
@@ -153,13 +171,19 @@ struct OnlineStatistics {
     std::size_t failed_solves = 0;     ///< Ipopt gave no usable solution (state kept)
     std::size_t prior_solves = 0;      ///< solves whose boundary carried a marginalised prior
     std::vector<double> solve_s;       ///< wall time of every solve [s]
-    std::size_t waits = 0;             ///< Pushes that waited (max_lag_epochs)
+    std::size_t waits = 0;             ///< Pushes that waited (back-pressure)
     double wait_s = 0.0;               ///< total wait [s]
+    std::size_t ahead_poses = 0;       ///< poses that arrived faster than real time
     std::string worker_error;          ///< a solve that threw (the worker then stopped)
 };
 
 class OnlineCorrector {
 public:
+    /// The input counts as faster than real time when its stream time over the last
+    /// kPaceWindow poses advanced more than kAheadFactor times the wall time (outside Push).
+    static constexpr std::size_t kPaceWindow = 10;
+    static constexpr double kAheadFactor = 2.0;
+
     /// `field` may be null (odometry only) and must outlive this object. Precondition:
     /// config.Validate() is empty.
     OnlineCorrector(const TraversableField* field, const OnlineConfig& config);
@@ -188,11 +212,13 @@ private:
     std::optional<PushResult> Validate(const PlanarPose& pose) const;
     Entry MakeEntry(const PlanarPose& pose, double yaw_unwrapped);
     double FrontScale(int segment) const;
+    double FrontBias(int segment) const;  ///< solved heading-rate bias (0: none solved)
     /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
     bool ProjectOutput(PoseState& pose) const;
     void UpdateSchedule(std::size_t index);
     void Request(std::size_t end, bool restarts);
-    void WaitForSolver(std::size_t index, PushResult& r);
+    bool AheadOfRealTime(double t_s);
+    void WaitForSolver(PushResult& r);
     void WorkerLoop();
     void RunSolve(std::size_t end, bool restarts);
     void Merge(const FixedLagSolution& solution, double solve_s);
@@ -213,6 +239,11 @@ private:
     std::vector<double> t_s_;
     std::vector<Entry> entries_;  ///< every accepted pose, for Finish()
     std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
+    /// The input's pace: stream time and wall time outside Push (waits excluded) of the last
+    /// kPaceWindow poses, oldest first.
+    std::deque<std::pair<double, double>> pace_;
+    double outside_s_ = 0.0;  ///< wall time spent outside Push since the first pose [s]
+    std::chrono::steady_clock::time_point push_returned_{};
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;
@@ -227,7 +258,9 @@ private:
     std::vector<PoseState> current_;      ///< latest estimate of every accepted pose
     std::vector<StepObservation> steps_;  ///< observation of every accepted pose
     std::vector<int> segment_;            ///< scale segment of every accepted pose
+    std::vector<int> bias_segment_;       ///< heading-rate bias segment of every accepted pose
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
+    std::vector<double> front_biases_;    ///< solved biases, up to the last solved segment
     std::size_t solved_end_ = 0;          ///< last pose of the newest merged solve
     PoseCovariance solved_covariance_;
     bool solved_covariance_ok_ = false;

@@ -125,4 +125,25 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
                         const AnchorFitResult* anchor_fit, bool start_estimated,
                         bool scale_estimated, const VerdictConfig& config);
 
+/// Two solutions of the same poses, the causal (online) outputs and the smoothed trajectory,
+/// against each other. Both are corrections of the input, so they should agree far better than
+/// either agrees with the input. When they lie farther apart (RMS over the poses) than the input
+/// lies from the smoothed trajectory, one of them followed a wrong branch of the map (measured
+/// both ways: a causal chain stuck on a wrong road while the smoothed solve recovered, and a
+/// smoothed solve in a wrong corridor while the causal chain stayed right), and with no ground
+/// truth neither can be vouched for.
+struct CausalCheck {
+    double causal_rms_m = 0.0, causal_max_m = 0.0;  ///< causal output to smoothed [m]
+    double input_rms_m = 0.0;                       ///< input to smoothed [m]
+    bool disagree = false;
+};
+
+/// Precondition: the three trajectories have the same poses (same size, > 0).
+CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
+                              const PlanarTrajectory& smoothed);
+
+/// The verdict on an online run: `smoothed_verdict` (JudgeCorrection of its smoothed trajectory)
+/// with the causal check's finding; a disagreement fails both.
+Verdict JudgeOnline(Verdict smoothed_verdict, const CausalCheck& check);
+
 }  // namespace driftcorr
