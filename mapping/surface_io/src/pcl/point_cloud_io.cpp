@@ -15,14 +15,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <map>
 #include <new>
 #include <optional>
-#include <set>
 #include <sstream>
+#include <fstream>
 #include <stdexcept>
 #include <string>
+#include <set>
+#include <map>
 #include <vector>
 
 #include "driftcorr/core/errors.h"
@@ -61,8 +61,7 @@ int CallPcl(const std::string& path, const std::string& kind, F&& read) {
     } catch (const std::bad_alloc&) {
         throw InputError(path, 0, "", kind + " file declares more data than can be held in memory");
     } catch (const std::exception& e) {
-        throw InputError(path, 0, "",
-                         "cannot be parsed as a " + kind + " point cloud: " + e.what());
+        throw InputError(path, 0, "", "cannot be parsed as a " + kind + " point cloud: " + e.what());
     }
 }
 
@@ -72,9 +71,9 @@ void RequireDeclaredPointsFit(const std::string& path, const std::string& kind, 
     std::error_code ec;
     const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
     if (!ec && count > bytes) {
-        throw InputError(path, 0, "",
-                         kind + " header declares " + std::to_string(count) +
-                             " points but the file has only " + std::to_string(bytes) + " bytes");
+        throw InputError(path, 0, "", kind + " header declares " + std::to_string(count) +
+                                          " points but the file has only " +
+                                          std::to_string(bytes) + " bytes");
     }
 }
 
@@ -130,9 +129,9 @@ void PrecheckPcdAsciiBody(const std::string& path, std::istream& in, long header
         }
     }
     if (seen != points) {
-        throw InputError(path, n, "",
-                         "PCD data: " + std::to_string(seen) +
-                             " point lines, the header declares " + std::to_string(points));
+        throw InputError(path, n, "", "PCD data: " + std::to_string(seen) +
+                                          " point lines, the header declares " +
+                                          std::to_string(points));
     }
 }
 
@@ -148,7 +147,8 @@ void PrecheckPcdCompressedBody(const std::string& path, std::istream& in,
     }
     std::error_code ec;
     const std::uintmax_t file = std::filesystem::file_size(path, ec);
-    if (sizes[1] != bytes || (!ec && static_cast<std::uintmax_t>(start) + 8 + sizes[0] > file)) {
+    if (sizes[1] != bytes ||
+        (!ec && static_cast<std::uintmax_t>(start) + 8 + sizes[0] > file)) {
         throw InputError(path, 0, "",
                          "PCD data: binary_compressed sizes (" + std::to_string(sizes[0]) +
                              " compressed, " + std::to_string(sizes[1]) +
@@ -194,9 +194,8 @@ void PrecheckPcdHeader(const std::string& path) {
         }
         const std::vector<std::string> words = internal::SplitWords(line);
         const std::string& key = words.front();  // the line is not empty and starts with a word
-        static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",   "TYPE",
-                                                    "COUNT",   "WIDTH",  "HEIGHT", "VIEWPOINT",
-                                                    "POINTS",  "DATA"};
+        static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",      "TYPE", "COUNT",
+                                                    "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
         if (!kKeys.count(key)) bad(n, "unknown line '" + line.substr(0, 40) + "'");
         if (keys.count(key)) bad(n, key + " given twice");
         keys[key] = std::vector<std::string>(words.begin() + 1, words.end());
@@ -251,8 +250,7 @@ void PrecheckPcdHeader(const std::string& path) {
         bad(0, "POINTS must be a whole number equal to WIDTH * HEIGHT");
     }
     const auto& data = keys["DATA"];
-    if (data.size() != 1 ||
-        (data[0] != "ascii" && data[0] != "binary" && data[0] != "binary_compressed")) {
+    if (data.size() != 1 || (data[0] != "ascii" && data[0] != "binary" && data[0] != "binary_compressed")) {
         bad(0, "DATA must be ascii, binary or binary_compressed");
     }
     RequireDeclaredDataFits(path, std::size_t(points), std::size_t(step));
@@ -276,24 +274,15 @@ double Load(const std::uint8_t* at) {
 
 std::optional<double> FieldValue(const std::uint8_t* at, std::uint8_t datatype) {
     switch (datatype) {
-        case pcl::PCLPointField::INT8:
-            return Load<std::int8_t>(at);
-        case pcl::PCLPointField::UINT8:
-            return Load<std::uint8_t>(at);
-        case pcl::PCLPointField::INT16:
-            return Load<std::int16_t>(at);
-        case pcl::PCLPointField::UINT16:
-            return Load<std::uint16_t>(at);
-        case pcl::PCLPointField::INT32:
-            return Load<std::int32_t>(at);
-        case pcl::PCLPointField::UINT32:
-            return Load<std::uint32_t>(at);
-        case pcl::PCLPointField::FLOAT32:
-            return Load<float>(at);
-        case pcl::PCLPointField::FLOAT64:
-            return Load<double>(at);
-        default:
-            return std::nullopt;
+        case pcl::PCLPointField::INT8: return Load<std::int8_t>(at);
+        case pcl::PCLPointField::UINT8: return Load<std::uint8_t>(at);
+        case pcl::PCLPointField::INT16: return Load<std::int16_t>(at);
+        case pcl::PCLPointField::UINT16: return Load<std::uint16_t>(at);
+        case pcl::PCLPointField::INT32: return Load<std::int32_t>(at);
+        case pcl::PCLPointField::UINT32: return Load<std::uint32_t>(at);
+        case pcl::PCLPointField::FLOAT32: return Load<float>(at);
+        case pcl::PCLPointField::FLOAT64: return Load<double>(at);
+        default: return std::nullopt;
     }
 }
 
@@ -314,11 +303,10 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
         throw InputError(path, 0, "", kind + " file holds less point data than its header says");
     }
     for (const pcl::PCLPointField& f : blob.fields) {
-        const std::size_t end = std::size_t(f.offset) + std::size_t(pcl::getFieldSize(f.datatype)) *
-                                                            std::max<std::size_t>(1, f.count);
+        const std::size_t end = std::size_t(f.offset) +
+                                std::size_t(pcl::getFieldSize(f.datatype)) * std::max<std::size_t>(1, f.count);
         if (end > blob.point_step) {
-            throw InputError(path, 0, "",
-                             kind + " file field '" + f.name + "' lies outside its point");
+            throw InputError(path, 0, "", kind + " file field '" + f.name + "' lies outside its point");
         }
     }
     // Converted here, not by pcl::fromPCLPointCloud2: that one matches fields by type as well as
@@ -339,8 +327,8 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
         for (int k = 0; k < 3; ++k) {
             const std::optional<double> v = FieldValue(point + xyz[k]->offset, xyz[k]->datatype);
             if (!v) {
-                throw InputError(path, 0, "",
-                                 kind + " field '" + xyz[k]->name + "' has an unsupported type");
+                throw InputError(path, 0, "", kind + " field '" + xyz[k]->name +
+                                                  "' has an unsupported type");
             }
             p[k] = *v;
         }
