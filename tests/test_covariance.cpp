@@ -273,6 +273,35 @@ INSTANTIATE_TEST_SUITE_P(SmallProblems, CovarianceVsDense,
 // At the estimate itself every odometry residual vanishes (the heading-preservation and scale
 // terms are linear, so their residuals drop no curvature); the speed is constant (no stop), and
 // the map distance is linear (zero Hessian), so the map term drops nothing either.
+// Dead reckoning's covariance, by hand: a known pose heading North, one step of 10 m at scale 1.1.
+// The step adds its length variance along the track (North), its lateral variance across it
+// (East), its heading variance; the pose's heading variance v moves the new position across the
+// track by (scale * length)^2 * v, correlated with the heading.
+TEST(PropagateStep, AddsTheStepNoiseAndCarriesTheHeadingAcrossTheTrack) {
+    ModelConfig m;
+    PoseState a;
+    a.yaw_rad = M_PI / 2.0;
+    StepObservation o;
+    o.length_m = 10.0;
+    o.dt_s = 1.0;
+    o.dheading_rad = 0.02;
+    const StepNoise n = StepNoiseOf(m, o);
+    PoseMatrix sigma_a = PoseMatrix::Zero();
+    sigma_a(3, 3) = 1e-4;
+    const PoseMatrix b = PropagateStep(sigma_a, a, o, 1.1, false, m);
+    const double across = 11.0 * 11.0 * 1e-4;
+    EXPECT_NEAR(b(0, 0), n.lateral_m * n.lateral_m + across, 1e-12);  // East: across the track
+    EXPECT_NEAR(b(1, 1), n.length_m * n.length_m, 1e-12);             // North: along it
+    EXPECT_NEAR(b(0, 1), 0.0, 1e-12);
+    EXPECT_NEAR(b(2, 2), n.height_m * n.height_m, 1e-12);
+    EXPECT_NEAR(b(3, 3), 1e-4 + n.heading_rad * n.heading_rad, 1e-12);
+    EXPECT_NEAR(b(0, 3), -11.0 * 1e-4, 1e-12);  // d East / d yaw = -len sin(yaw)
+    EXPECT_NEAR(b(3, 0), b(0, 3), 0.0);
+    EXPECT_EQ(PropagateStep(sigma_a, a, o, 1.1, true, m)(2, 2), 0.0) << "fixed height";
+    const PoseMatrix back = ToPoseMatrix(ToPoseCovariance(b));
+    EXPECT_NEAR((back - b).norm(), 0.0, 1e-15);
+}
+
 TEST(GaussNewtonHessian, EqualsTheExactHessianAtZeroResiduals) {
     for (bool fix_height : {true, false}) {
         for (bool all_terms : {false, true}) {

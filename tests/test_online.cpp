@@ -15,6 +15,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/io/tum_line.h"
@@ -448,7 +449,8 @@ TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
 }
 
 // A producer that pauses longer than gap_warn_s and resumes: the stream goes on and says so once;
-// --status-column adds the correction's age to every line; the summary says how fresh they were.
+// --status-column adds the correction's age and the pose's covariance to every line; the summary
+// says how fresh they were.
 TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
     const Trajectory est = io::LoadTrajectory(run_->scenario.estimate);
     const std::string dir = TmpDir("pause");
@@ -485,10 +487,17 @@ TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
     std::size_t lines = 0;
     while (std::getline(out, line)) {
         std::istringstream ss(line);
-        double v;
-        int fields = 0;
-        while (ss >> v) ++fields;
-        ASSERT_EQ(fields, 11) << "line " << lines + 1 << ": " << line;
+        std::vector<double> v;
+        for (std::string field; ss >> field;) v.push_back(std::strtod(field.c_str(), nullptr));
+        ASSERT_EQ(v.size(), 14u) << "line " << lines + 1 << ": " << line;
+        // The pose's horizontal covariance: from the known start (0) growing along the odometry,
+        // a solved window's marginal after each solve.
+        const double var_e = v[11], cov_en = v[12], var_n = v[13];
+        EXPECT_TRUE(var_e >= 0.0 && var_n >= 0.0 && cov_en * cov_en <= var_e * var_n + 1e-12)
+            << "line " << lines + 1 << ": " << line;
+        if (lines > 0) {
+            EXPECT_GT(var_e + var_n, 0.0) << "line " << lines + 1;
+        }
         ++lines;
     }
     EXPECT_EQ(lines, 300u);

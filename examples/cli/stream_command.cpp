@@ -7,6 +7,7 @@
 #include <cstring>
 #include <exception>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <string>
 #include <thread>
@@ -35,8 +36,9 @@ const char* kStreamUsage =
     "through the same path instead of standard input, at R poses per second (as fast as possible\n"
     "when R is 0 or absent).\n"
     "--status-column appends to each line the age of the correction it used: epochs and seconds\n"
-    "(stream time) since the last pose of the solve it chains from, and 1 if that was the newest\n"
-    "solve requested before the pose (fresh), else 0.\n"
+    "(stream time) since the last pose of the solve it chains from, 1 if that was the newest\n"
+    "solve requested before the pose (fresh) else 0, and the pose's horizontal covariance\n"
+    "var_east var_east_north var_north [m^2] (nan when not known).\n"
     "Back-pressure: while the input arrives faster than real time (a file piped in, a replay, a\n"
     "burst: its timestamps advance more than twice as fast as the wall clock), the next line is\n"
     "read only once the last pose is at most N epochs past the last solved one (--max-lag N,\n"
@@ -140,9 +142,13 @@ public:
                                                      line.q_frame_body, axes, setup_.anchor);
         std::string out = io::FormatTumLine(line.t_s, p, q);
         if (status_column_) {
-            char status[64];
-            std::snprintf(status, sizeof(status), " %zu %.3f %d\n", r.correction_age_epochs,
-                          r.correction_age_s, r.fresh ? 1 : 0);
+            char status[160];
+            const Eigen::Matrix2d& c = r.covariance.xy_m2;
+            const double nan = std::numeric_limits<double>::quiet_NaN();
+            std::snprintf(status, sizeof(status), " %zu %.3f %d %.6g %.6g %.6g\n",
+                          r.correction_age_epochs, r.correction_age_s, r.fresh ? 1 : 0,
+                          r.covariance_ok ? c(0, 0) : nan, r.covariance_ok ? c(0, 1) : nan,
+                          r.covariance_ok ? c(1, 1) : nan);
             out.pop_back();
             out += status;
         }

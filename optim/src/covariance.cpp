@@ -396,4 +396,39 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
     return r;
 }
 
+PoseMatrix PropagateStep(const PoseMatrix& sigma_a, const PoseState& a, const StepObservation& o,
+                         double scale, bool fix_height, const ModelConfig& model) {
+    const double phi = a.yaw_rad + o.direction_rad, len = scale * o.length_m;
+    const Eigen::Vector2d along(std::cos(phi), std::sin(phi)), across(-along.y(), along.x());
+    PoseMatrix f = PoseMatrix::Identity();  // d pose_b / d pose_a (ComposeStep)
+    f.block<2, 1>(0, 3) = len * across;
+    if (fix_height) f(2, 2) = 0.0;
+    const StepNoise n = StepNoiseOf(model, o);
+    PoseMatrix q = PoseMatrix::Zero();
+    q.topLeftCorner<2, 2>() = n.length_m * n.length_m * along * along.transpose() +
+                              n.lateral_m * n.lateral_m * across * across.transpose();
+    q(2, 2) = fix_height ? 0.0 : n.height_m * n.height_m;
+    q(3, 3) = n.heading_rad * n.heading_rad;
+    return f * sigma_a * f.transpose() + q;
+}
+
+PoseCovariance ToPoseCovariance(const PoseMatrix& sigma) {
+    PoseCovariance c;
+    c.xy_m2 = sigma.topLeftCorner<2, 2>();
+    c.z_m2 = sigma(2, 2);
+    c.yaw_rad2 = sigma(3, 3);
+    c.xy_yaw_m_rad = Eigen::Vector2d(sigma(0, 3), sigma(1, 3));
+    return c;
+}
+
+PoseMatrix ToPoseMatrix(const PoseCovariance& c) {
+    PoseMatrix m = PoseMatrix::Zero();
+    m.topLeftCorner<2, 2>() = c.xy_m2;
+    m(2, 2) = c.z_m2;
+    m(3, 3) = c.yaw_rad2;
+    m.block<2, 1>(0, 3) = c.xy_yaw_m_rad;
+    m.block<1, 2>(3, 0) = c.xy_yaw_m_rad.transpose();
+    return m;
+}
+
 }  // namespace driftcorr

@@ -85,8 +85,9 @@ std::optional<PoseMarginal> Marginal(const WindowProblem& problem, std::size_t p
     return m;
 }
 
-// Sigma's inverse on the variables that are not fixed (height excluded when fixed).
-std::optional<PoseMatrix> InformationOf(const PoseMatrix& sigma, bool fix_height) {
+// The inverse on the variables that are not fixed (height excluded when fixed): a covariance from
+// an information matrix, or the other way round.
+std::optional<PoseMatrix> InverseOnFree(const PoseMatrix& sigma, bool fix_height) {
     PoseMatrix info = PoseMatrix::Zero();
     if (!fix_height) {
         const Eigen::FullPivLU<PoseMatrix> lu(sigma);
@@ -111,14 +112,6 @@ std::optional<PoseMatrix> InformationOf(const PoseMatrix& sigma, bool fix_height
 
 PoseVector ToVector(const PoseState& p) { return PoseVector(p.p.x(), p.p.y(), p.p.z(), p.yaw_rad); }
 
-PoseCovariance ToPoseCovariance(const PoseMatrix& sigma) {
-    PoseCovariance c;
-    c.xy_m2 = sigma.topLeftCorner<2, 2>();
-    c.z_m2 = sigma(2, 2);
-    c.yaw_rad2 = sigma(3, 3);
-    c.xy_yaw_m_rad = Eigen::Vector2d(sigma(0, 3), sigma(1, 3));
-    return c;
-}
 
 }  // namespace
 
@@ -132,7 +125,7 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
                                 WindowUse::kLinearise, prior);
     const std::optional<PoseMarginal> m = Marginal(problem, last, s.fix_height);
     if (!m) return std::nullopt;
-    const std::optional<PoseMatrix> info = InformationOf(m->sigma, s.fix_height);
+    const std::optional<PoseMatrix> info = InverseOnFree(m->sigma, s.fix_height);
     if (!info) return std::nullopt;
     return PosePriorTerm{ToVector(s.poses[last]) + m->shift, *info};
 }
@@ -184,6 +177,41 @@ std::optional<PosePriorTerm> FixedLagSmoother::BoundaryPrior(std::size_t boundar
     return prior;
 }
 
+// The covariance of pose `end` for the output's uncertainty, with the batch's model
+// (ComputeCovariance: the map offset correlated along the path, the variance components) over
+// the window [first, end] relative to its boundary pose first-1, plus the boundary's own
+// uncertainty (the marginalised prior's covariance) carried rigidly to pose `end`: a boundary
+// moved by (dx, dy, dyaw) moves the window with it.
+std::optional<PoseMatrix> FixedLagSmoother::EndCovariance(
+    std::size_t first, std::size_t end, const std::optional<PosePriorTerm>& prior) const {
+    TrajectoryState window;  // poses first-1 (held fixed, as pose 0) .. end
+    window.obs.assign(state_.obs.begin() + (first - 1), state_.obs.begin() + end + 1);
+    window.obs.front() = StepObservation{};
+    window.scale_segment.assign(state_.scale_segment.begin() + (first - 1),
+                                state_.scale_segment.begin() + end + 1);
+    window.scales = state_.scales;
+    if (!state_.bias_segment.empty()) {
+        window.bias_segment.assign(state_.bias_segment.begin() + (first - 1),
+                                   state_.bias_segment.begin() + end + 1);
+        window.biases = state_.biases;
+    }
+    window.poses.assign(state_.poses.begin() + (first - 1), state_.poses.begin() + end + 1);
+    window.fix_height = state_.fix_height;
+    const CovarianceResult cov = ComputeCovariance(window, field_, cfg_.model, cfg_.covariance);
+    if (cov.status != CovarianceStatus::kOk) return std::nullopt;
+    PoseMatrix sigma = ToPoseMatrix(cov.poses.back());
+    if (!prior) return sigma;  // the boundary is the known start
+    const PoseState& b = state_.poses[first - 1];
+    const PoseState& e = state_.poses[end];
+    PoseMatrix j = PoseMatrix::Identity();  // d pose_end / d pose_boundary, the window rigid
+    j(0, 3) = -(e.p.y() - b.p.y());
+    j(1, 3) = e.p.x() - b.p.x();
+    if (state_.fix_height) j(2, 2) = 0.0;
+    const std::optional<PoseMatrix> sigma_b = InverseOnFree(prior->information, state_.fix_height);
+    if (!sigma_b) return std::nullopt;
+    return PoseMatrix(sigma + j * *sigma_b * j.transpose());
+}
+
 FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
     DRIFTCORR_CHECK(solved_end_ < end && end < size(), "a solve must add poses");
     RepairRecentEpisodes(state_, end, cfg_.model);
@@ -206,12 +234,8 @@ FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
         out.biases.assign(state_.biases.begin(),
                           state_.biases.begin() + state_.bias_segment[end] + 1);
     }
-    // The covariance of the newest pose, for the output's uncertainty.
-    const WindowProblem problem(state_, field_, cfg_.model, first, end,
-                                std::vector<std::uint8_t>(end - first + 1, 0),
-                                WindowUse::kLinearise, prior);
-    if (const auto m = Marginal(problem, end, state_.fix_height)) {
-        out.end_covariance = ToPoseCovariance(m->sigma);
+    if (const std::optional<PoseMatrix> sigma = EndCovariance(first, end, prior)) {
+        out.end_covariance = ToPoseCovariance(*sigma);
         out.end_covariance_ok = true;
     }
     solved_end_ = end;

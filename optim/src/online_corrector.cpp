@@ -167,6 +167,10 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
             for (Entry& e : entries_) e.initial.yaw_rad = last_yaw_u_;
             for (PoseState& s : current_) s.yaw_rad = last_yaw_u_;
         }
+        if (r.index > 0) {
+            chain_sigma_ = PropagateStep(chain_sigma_, current_.back(), entry.step,
+                                         FrontScale(segment), fix_height_, cfg_.corrector.model);
+        }
         current_.push_back(r.index == 0
                                ? entry.initial
                                : ComposeStep(current_.back(), entry.step, FrontScale(segment),
@@ -191,8 +195,8 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
         out = current_[r.index];
         r.correction_age_epochs = r.index - std::min(solved_end_, r.index);
         r.fresh = solved_end_ >= requested_before;
-        r.covariance = solved_covariance_;
-        r.covariance_ok = solved_covariance_ok_;
+        r.covariance = ToPoseCovariance(chain_sigma_);
+        r.covariance_ok = chain_sigma_ok_;
         r.correction_age_s = pose.t_s - t_s_[r.index - r.correction_age_epochs];
         ++stats_.poses;
         if (!r.fresh) ++stats_.stale_poses;
@@ -382,15 +386,17 @@ void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
     front_scales_ = sol.scales;
     front_biases_ = sol.biases;
     solved_end_ = sol.end;
-    solved_covariance_ = sol.end_covariance;
-    solved_covariance_ok_ = sol.end_covariance_ok;
+    chain_sigma_ok_ = sol.end_covariance_ok;
+    if (chain_sigma_ok_) chain_sigma_ = ToPoseMatrix(sol.end_covariance);
     Recompose(sol.end);
 }
 
-// Re-composes the causal estimates after `end` onto the (newly solved) pose `end`.
-// Caller holds mutex_.
+// Re-composes the causal estimates after `end` onto the (newly solved) pose `end`, and carries
+// its covariance (chain_sigma_, set to pose end's) to the newest pose. Caller holds mutex_.
 void OnlineCorrector::Recompose(std::size_t end) {
     for (std::size_t i = end + 1; i < current_.size(); ++i) {
+        chain_sigma_ = PropagateStep(chain_sigma_, current_[i - 1], steps_[i],
+                                     FrontScale(segment_[i]), fix_height_, cfg_.corrector.model);
         current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
                                   current_[i].p.z(), FrontBias(bias_segment_[i]));
     }

@@ -109,21 +109,28 @@ void WindowProblem::BindPose(TermBlock& block, int k0, std::size_t pose) const {
     for (int c = 0; c < 4; ++c) block.Bind(k0 + c, PoseVar(pose, c), fixed[c]);
 }
 
+StepNoise StepNoiseOf(const ModelConfig& m, const StepObservation& o) {
+    StepNoise n;
+    const double len_rel = o.repaired ? std::max(m.step_sigma_rel, m.outlier_sigma_rel)
+                                      : m.step_sigma_rel;
+    n.length_m = m.step_sigma_m + len_rel * o.length_m;
+    n.lateral_m = m.lateral_sigma_m + m.lateral_sigma_rel * o.length_m;
+    const double rw = m.heading_rw_rad_per_sqrt_s, rel = m.heading_sigma_rel * o.dheading_rad;
+    n.heading_rad =
+        std::max(m.heading_sigma_min_rad, std::sqrt(rw * rw * std::max(o.dt_s, 0.0) + rel * rel));
+    n.height_m = m.height_sigma_m + m.height_sigma_rel * std::abs(o.dup_m);
+    return n;
+}
+
 // Step i's terms over [pose i-1, pose i, scale] (core StepVar layout): length, direction, heading
 // change, heading preservation, height change (heights free); then speed continuity over poses
 // i-2..i.
 void WindowProblem::AddStepBlocks(std::size_t i) {
     const StepObservation& o = state_.obs[i];
-    const double len_sigma =
-        cfg_.step_sigma_m +
-        (o.repaired ? std::max(cfg_.step_sigma_rel, cfg_.outlier_sigma_rel) : cfg_.step_sigma_rel) *
-            o.length_m;
-    const double lat_sigma = cfg_.lateral_sigma_m + cfg_.lateral_sigma_rel * o.length_m;
-    const double rw = cfg_.heading_rw_rad_per_sqrt_s, rel = cfg_.heading_sigma_rel * o.dheading_rad;
-    const double head_sigma = std::max(cfg_.heading_sigma_min_rad,
-                                       std::sqrt(rw * rw * std::max(o.dt_s, 0.0) + rel * rel));
+    const StepNoise noise = StepNoiseOf(cfg_, o);
+    const double len_sigma = noise.length_m, lat_sigma = noise.lateral_m;
+    const double head_sigma = noise.heading_rad, hs = noise.height_m;
     const double robust_k = IsJump(i) ? 0.0 : cfg_.step_robust_k;
-    const double hs = cfg_.height_sigma_m + cfg_.height_sigma_rel * std::abs(o.dup_m);
     const std::size_t begin = blocks_.size();
     blocks_.push_back(Core<StepLengthTerm, 9>(
         TermFamily::kStepLength,

@@ -12,6 +12,7 @@
 //                                             re-alignment, and the uncorrected estimate's
 //   STREAM_SCORE_ERRORS=<file> score also writes each pose's time and horizontal error [m].
 // Exit codes: 0 ok, 1 usage, 2 bad input.
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -64,6 +65,7 @@ int Feed(const std::string& scenario, double rate_hz, const std::string& ready_l
 struct StreamOutput {
     Trajectory poses;
     std::vector<double> age_epochs, age_s;
+    std::vector<Eigen::Matrix2d> xy_m2;  ///< per pose, when the status column has it
     std::size_t stale = 0;
 };
 
@@ -87,6 +89,13 @@ StreamOutput ReadOutput(const std::string& path) {
             out.age_epochs.push_back(age);
             out.age_s.push_back(age_s);
             out.stale += fresh == 0;
+            std::string e, en, n;  // the horizontal covariance, "nan" when not known
+            if (ss >> e >> en >> n) {
+                Eigen::Matrix2d c;
+                c << std::strtod(e.c_str(), nullptr), std::strtod(en.c_str(), nullptr),
+                    std::strtod(en.c_str(), nullptr), std::strtod(n.c_str(), nullptr);
+                out.xy_m2.push_back(c);
+            }
         }
     }
     return out;
@@ -125,6 +134,18 @@ int Score(const std::string& scenario, const std::string& output) {
         std::printf("; stale %.1f %%, age p50 %.0f / max %.0f epochs",
                     100.0 * out.stale / out.poses.size(), Quantile(out.age_epochs, 0.5),
                     Quantile(out.age_epochs, 1.0));
+    }
+    if (out.xy_m2.size() == gt.size()) {  // 95 % region: d^T C^-1 d <= chi2(2 dof, 0.95)
+        std::size_t inside = 0, known = 0;
+        for (std::size_t i = 0; i < gt.size(); ++i) {
+            const Eigen::Matrix2d& c = out.xy_m2[i];
+            if (!c.allFinite() || !(c.determinant() > 0.0)) continue;
+            ++known;
+            const Eigen::Vector2d d = causal.p_en[i] - gt.p_en[i];
+            inside += d.dot(c.inverse() * d) <= 5.991;
+        }
+        std::printf("; true error inside the 95 %% region: %.1f %% of %zu poses with a covariance",
+                    known ? 100.0 * double(inside) / double(known) : 0.0, known);
     }
     std::printf("\n");
     return 0;

@@ -140,6 +140,16 @@ struct CovarianceResult {
     std::size_t factor_nonzeros = 0;  ///< entries of L below the diagonal (fill diagnostic)
 };
 
+/// The covariance [East, North, up, yaw] of pose b = ComposeStep(a, step, scale, ...) given pose
+/// a's, to first order: a's through the step's Jacobian plus the step's own noise (StepNoiseOf;
+/// length along the step direction, lateral across it, height unless `fix_height`, heading).
+/// Dead reckoning's growth of the uncertainty, step by step.
+PoseMatrix PropagateStep(const PoseMatrix& sigma_a, const PoseState& a, const StepObservation& step,
+                         double scale, bool fix_height, const ModelConfig& model);
+/// The 4x4 [East, North, up, yaw] matrix as the result type, and back.
+PoseCovariance ToPoseCovariance(const PoseMatrix& sigma);
+PoseMatrix ToPoseMatrix(const PoseCovariance& c);
+
 /// The matrix the covariance inverts, for tests and diagnostics: the information matrix of the
 /// unknowns (both triangles) after the variance components, and per pose its unknowns x, y, z,
 /// yaw (-1: fixed; pose 0 all -1).

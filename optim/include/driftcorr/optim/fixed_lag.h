@@ -49,8 +49,9 @@ struct FixedLagSolution {
     std::vector<double> biases;
     bool usable = false;           ///< Ipopt returned a usable solution (else the state is kept)
     bool boundary_prior = false;   ///< the boundary pose carried a marginalised prior
-    /// Marginal covariance of pose `end` under the window's curvature (kNotComputed when its
-    /// information matrix could not be factored).
+    /// Covariance of pose `end`: the batch's covariance model (ComputeCovariance) over the
+    /// window relative to its boundary, plus the boundary's marginalised uncertainty carried
+    /// rigidly (end_covariance_ok false when a matrix could not be factored).
     PoseCovariance end_covariance;
     bool end_covariance_ok = false;
 };
@@ -93,6 +94,8 @@ public:
 private:
     std::size_t WindowFirst(std::size_t end) const;
     std::optional<PosePriorTerm> BoundaryPrior(std::size_t boundary);
+    std::optional<PoseMatrix> EndCovariance(std::size_t first, std::size_t end,
+                                            const std::optional<PosePriorTerm>& prior) const;
 
     TrajectoryState state_;
     const TraversableField* field_;

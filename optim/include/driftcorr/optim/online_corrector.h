@@ -153,8 +153,10 @@ struct PushResult {
     double waited_s = 0.0;
     /// The input arrived faster than real time when this pose was pushed (see above).
     bool ahead_of_real_time = false;
-    /// Marginal covariance of the solved pose the output chains from (its window's curvature);
-    /// the output adds the odometry of correction_age_epochs steps. Valid when covariance_ok.
+    /// Covariance of the output pose: the marginal of the solved pose it chains from (its
+    /// window's curvature) carried through the odometry of the correction_age_epochs steps since
+    /// (PropagateStep); before the first solve, the known start's (zero) so carried. Valid when
+    /// covariance_ok (false after a solve whose curvature could not be factored, until the next).
     PoseCovariance covariance;
     bool covariance_ok = false;
     bool Accepted() const { return status == PushStatus::kAccepted; }
@@ -262,8 +264,8 @@ private:
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
     std::vector<double> front_biases_;    ///< solved biases, up to the last solved segment
     std::size_t solved_end_ = 0;          ///< last pose of the newest merged solve
-    PoseCovariance solved_covariance_;
-    bool solved_covariance_ok_ = false;
+    PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
+    bool chain_sigma_ok_ = true;
     bool stop_ = false;
     OnlineStatistics stats_;              ///< worker's part (solves); Push's part below
 

@@ -48,6 +48,13 @@ constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
 
 /// Assigns scale segments from the estimated path length (one per `segment_m`).
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
+/// The standard deviations of one step's odometry terms under `model`: its length (looser for a
+/// repaired step), its lateral offset, its heading change and its height change.
+struct StepNoise {
+    double length_m = 0.0, lateral_m = 0.0, heading_rad = 0.0, height_m = 0.0;
+};
+StepNoise StepNoiseOf(const ModelConfig& model, const StepObservation& step);
+
 /// Assigns heading-rate bias segments from the time (one per `segment_s`); empty if segment_s
 /// is 0 (no bias).
 std::vector<int> BiasSegments(const std::vector<StepObservation>& obs, double segment_s);
