@@ -1,9 +1,9 @@
 # Installs the libraries, their public headers, the CLI (BUILD_EXAMPLES) and the CMake package
 # driftcorr (lib/cmake/driftcorr): find_package(driftcorr) gives driftcorr::core, ::mapping,
-# ::mapping_pcl, ::optim, ::io, ::pipeline and ::eval.
+# ::surface_io, ::optim, ::io, ::pipeline and ::eval.
 include(CMakePackageConfigHelpers)
 
-set(DRIFTCORR_LIBRARIES driftcorr_core driftcorr_mapping driftcorr_mapping_pcl driftcorr_optim
+set(DRIFTCORR_LIBRARIES driftcorr_core driftcorr_mapping driftcorr_surface_io driftcorr_optim
     driftcorr_io driftcorr_pipeline driftcorr_eval)
 foreach(lib ${DRIFTCORR_LIBRARIES})
   string(REPLACE "driftcorr_" "" export_name ${lib})
@@ -16,7 +16,7 @@ install(TARGETS ${DRIFTCORR_LIBRARIES} EXPORT driftcorrTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-foreach(dir core mapping mapping/pcl optim examples/io examples/pipeline examples/eval)
+foreach(dir core mapping mapping/surface_io optim examples/io examples/pipeline examples/eval)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${dir}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
     FILES_MATCHING PATTERN "*.h")
 endforeach()

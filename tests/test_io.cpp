@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
-#include "driftcorr/io/atomic_file.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/scenario.h"
 #include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/atomic_file.h"
 
 #if __has_include(<nlohmann/json.hpp>)
 #include <nlohmann/json.hpp>

@@ -1,4 +1,4 @@
-// Surface-map sources: the PCD/PLY/OctoMap readers (driftcorr_mapping_pcl), BuildSurfaceField on
+// Surface-map sources: the PCD/PLY/OctoMap readers (driftcorr_surface_io), BuildSurfaceField on
 // hand-computable geometry, and the synthetic building generator (determinism; the three map
 // formats give the same field).
 #include <gtest/gtest.h>

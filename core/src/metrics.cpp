@@ -1,15 +1,15 @@
 #include "driftcorr/core/metrics.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/observables.h"
 
 namespace driftcorr {
 
 std::vector<double> HorizontalErrors(const PlanarTrajectory& traj, const PlanarTrajectory& gt) {
-    assert(traj.size() == gt.size() && "trajectories must have one pose per timestamp");
+    DRIFTCORR_CHECK(traj.size() == gt.size(), "trajectories must have one pose per timestamp");
     std::vector<double> e(traj.size());
     for (std::size_t i = 0; i < e.size(); ++i) e[i] = (traj.p_en[i] - gt.p_en[i]).norm();
     return e;

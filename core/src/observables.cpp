@@ -1,10 +1,10 @@
 #include "driftcorr/core/observables.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 namespace {
@@ -45,7 +45,7 @@ std::vector<double> UnwrappedHeadings(const PlanarTrajectory& traj, double stati
 
 std::vector<StepObservation> ComputeObservations(const PlanarTrajectory& traj,
                                                  double stationary_m) {
-    assert(traj.size() >= 2 && "a trajectory needs at least two poses");
+    DRIFTCORR_CHECK(traj.size() >= 2, "a trajectory needs at least two poses");
     const std::vector<double> yaw = UnwrappedHeadings(traj, stationary_m);
     std::vector<StepObservation> obs(traj.size());
     for (std::size_t i = 1; i < traj.size(); ++i) {

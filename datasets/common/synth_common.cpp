@@ -1,14 +1,12 @@
 #include "synth_common.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
-#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
 
 #include "driftcorr/core/angles.h"
@@ -119,21 +117,6 @@ int GeneratorMain(int argc, char** argv, const char* name, void (*print_usage)(s
     } catch (const std::exception& e) {
         std::fprintf(stderr, "%s: %s\n", name, e.what());
         return kExitFailure;
-    }
-}
-
-void WriteAtomically(const std::string& path, const std::string& content) {
-    const std::string tmp_path = path + ".tmp";
-    {
-        std::ofstream out(tmp_path, std::ios::binary | std::ios::trunc);
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        out.close();
-        if (!out) throw std::runtime_error(tmp_path + ": cannot write");
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp_path, path, ec);
-    if (ec) {
-        throw std::runtime_error(path + ": cannot rename from " + tmp_path + ": " + ec.message());
     }
 }
 

@@ -61,8 +61,4 @@ int GeneratorMain(int argc, char** argv, const char* name, void (*print_usage)(s
                   const std::function<std::string(int, char**)>& parse,
                   const std::function<int()>& run);
 
-/// Writes `content` to path + ".tmp", then renames it to `path` (no partial file on failure).
-/// Throws std::runtime_error naming the path.
-void WriteAtomically(const std::string& path, const std::string& content);
-
 }  // namespace driftcorr::synth

@@ -9,6 +9,7 @@
 
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/atomic_file.h"
 #include "synth_common.h"
 
 namespace driftcorr::stress {
@@ -218,8 +219,8 @@ std::string ScenarioYaml(const InputScenario& input, const VariantSpec& spec,
 void WriteTrajectoryFile(const InputScenario& input, const std::string& source_path,
                          const std::optional<Trajectory>& rewritten, io::TrajectoryFormat format,
                          const fs::path& target) {
-    synth::WriteAtomically(target.string(), rewritten ? TrajectoryText(*rewritten, format)
-                                                      : input.file_bytes.at(source_path));
+    WriteFileAtomically(target.string(), rewritten ? TrajectoryText(*rewritten, format)
+                                                   : input.file_bytes.at(source_path));
 }
 
 }  // namespace
@@ -235,27 +236,26 @@ void WriteVariant(const InputScenario& input, const VariantSpec& spec,
     WriteTrajectoryFile(input, sc.estimate.path, spec.estimate, sc.estimate.format,
                         dir / names.estimate);
     if (sc.estimate.times_path) {
-        synth::WriteAtomically((dir / names.estimate_times).string(),
-                               input.file_bytes.at(*sc.estimate.times_path));
+        WriteFileAtomically((dir / names.estimate_times).string(),
+                            input.file_bytes.at(*sc.estimate.times_path));
     }
     if (sc.ground_truth) {
         WriteTrajectoryFile(input, sc.ground_truth->path, spec.ground_truth,
                             sc.ground_truth->format, dir / names.ground_truth);
         const auto& times = sc.ground_truth->times_path;
         if (times && names.ground_truth_times != names.estimate_times) {
-            synth::WriteAtomically((dir / names.ground_truth_times).string(),
-                                   input.file_bytes.at(*times));
+            WriteFileAtomically((dir / names.ground_truth_times).string(),
+                                input.file_bytes.at(*times));
         }
     }
     for (std::size_t i = 0; i < sc.map.size(); ++i) {
         const auto rewritten = spec.map_text.find(i);
-        synth::WriteAtomically((dir / names.maps[i]).string(),
-                               rewritten != spec.map_text.end()
-                                   ? rewritten->second
-                                   : input.file_bytes.at(sc.map[i].path));
+        WriteFileAtomically((dir / names.maps[i]).string(),
+                            rewritten != spec.map_text.end() ? rewritten->second
+                                                             : input.file_bytes.at(sc.map[i].path));
     }
-    synth::WriteAtomically((dir / "scenario.yaml").string(),
-                           ScenarioYaml(input, spec, generated_by, names));
+    WriteFileAtomically((dir / "scenario.yaml").string(),
+                        ScenarioYaml(input, spec, generated_by, names));
 }
 
 }  // namespace driftcorr::stress

@@ -1,8 +1,9 @@
 #include "stress_transforms.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr::stress {
 
@@ -17,7 +18,7 @@ double UniformSource::Next01() {
 double UniformSource::Range(double lo, double hi) { return lo + (hi - lo) * Next01(); }
 
 std::size_t UniformSource::Index(std::size_t lo, std::size_t hi) {
-    assert(lo <= hi);
+    DRIFTCORR_CHECK(lo <= hi, "empty interval");
     const double span = static_cast<double>(hi - lo + 1);
     const auto offset = static_cast<std::size_t>(std::floor(Next01() * span));
     return std::min(hi, lo + offset);
@@ -37,7 +38,7 @@ std::string DropStepsConfig::Validate() const {
 
 std::vector<DropEpisode> PlanDropEpisodes(std::size_t poses, const DropStepsConfig& config,
                                           UniformSource& random) {
-    assert(config.Validate().empty());
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid DropStepsConfig");
     const std::size_t steps = poses > 1 ? poses - 1 : 0;
     const auto fits = static_cast<std::size_t>(std::floor(
         config.max_share * static_cast<double>(steps) / static_cast<double>(config.max_steps)));
@@ -62,7 +63,8 @@ std::vector<DropEpisode> PlanDropEpisodes(std::size_t poses, const DropStepsConf
 Trajectory ShortenSteps(const Trajectory& traj, const std::vector<DropEpisode>& episodes) {
     std::vector<double> ratio(traj.size(), 1.0);
     for (const DropEpisode& e : episodes) {
-        assert(e.first_step >= 1 && e.first_step + e.steps <= traj.size());
+        DRIFTCORR_CHECK(e.first_step >= 1 && e.first_step + e.steps <= traj.size(),
+                        "episode off the trajectory");
         std::fill_n(ratio.begin() + static_cast<std::ptrdiff_t>(e.first_step), e.steps, e.ratio);
     }
     Trajectory out = traj;

@@ -13,6 +13,7 @@
 
 #include "building.h"
 #include "driftcorr/core/angles.h"
+#include "driftcorr/mapping/atomic_file.h"
 #include "driftcorr/mapping/surface_io.h"
 #include "synth_common.h"
 #include "walk.h"
@@ -65,7 +66,7 @@ void WriteTumFile(const std::string& path, const std::vector<WalkPose>& poses) {
         text += Format("%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.t_s, p.p_enu.x(), p.p_enu.y(),
                        p.p_enu.z(), 0.0, 0.0, std::sin(half_yaw_rad), std::cos(half_yaw_rad));
     }
-    WriteAtomically(path, text);
+    WriteFileAtomically(path, text);
 }
 
 struct ErrorSummary {
@@ -149,12 +150,14 @@ int Run(const Options& opt) {
     WriteTumFile((dir / "ground_truth.tum").string(), gt);
     WriteTumFile((dir / "estimate.tum").string(), est);
     const auto header = YamlHeader(opt, gt.size(), surface.size(), s);
-    WriteAtomically((dir / "scenario_ply.yaml").string(),
-                    ScenarioYaml(header, "building.ply", "ply"));
-    WriteAtomically((dir / "scenario_octomap.yaml").string(),
-                    ScenarioYaml(header, "building.bt", "bt"));
-    WriteAtomically((dir / "scenario_ot.yaml").string(), ScenarioYaml(header, "building.ot", "ot"));
-    WriteAtomically((dir / "scenario.yaml").string(), ScenarioYaml(header, "building.pcd", "pcd"));
+    WriteFileAtomically((dir / "scenario_ply.yaml").string(),
+                        ScenarioYaml(header, "building.ply", "ply"));
+    WriteFileAtomically((dir / "scenario_octomap.yaml").string(),
+                        ScenarioYaml(header, "building.bt", "bt"));
+    WriteFileAtomically((dir / "scenario_ot.yaml").string(),
+                        ScenarioYaml(header, "building.ot", "ot"));
+    WriteFileAtomically((dir / "scenario.yaml").string(),
+                        ScenarioYaml(header, "building.pcd", "pcd"));
     std::printf(
         "synthetic-building: %zu poses, %.1f m walked, %zu surface points; estimate ATE %.2f m, "
         "final error %.2f m, max error %.2f m, max height error %.2f m, %.1f %% of poses on the "

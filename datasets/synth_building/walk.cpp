@@ -1,10 +1,9 @@
 #include "walk.h"
 
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 
 namespace driftcorr::synth {
 namespace {
@@ -139,10 +138,8 @@ std::string PdrDriftConfig::Validate() const {
 
 std::vector<WalkPose> IntegrateDriftingPdr(const std::vector<WalkPose>& ground_truth,
                                            const PdrDriftConfig& config) {
-    if (!config.Validate().empty() || ground_truth.empty()) {
-        std::fprintf(stderr, "IntegrateDriftingPdr: invalid config or empty input\n");
-        std::abort();
-    }
+    DRIFTCORR_CHECK(config.Validate().empty() && !ground_truth.empty(),
+                    "IntegrateDriftingPdr: invalid config or empty input");
     NormalSampler normal(config.seed);
     std::vector<WalkPose> estimate = {ground_truth.front()};
     double bias_deg_per_s = config.heading_bias0_deg_per_s;

@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -12,6 +10,7 @@
 #include <utility>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 
 namespace driftcorr::synth {
 namespace {
@@ -33,13 +32,6 @@ constexpr double kStopLineSetback_m = 5.0;  // the stop is this far before the t
 constexpr double kProfileStep_m = 0.5;      // grid of the speed profile
 constexpr double kWaypointSnap_m = 1.0;     // a route waypoint must sit on a network node
 constexpr int kMaxLaps = 30;
-
-void Check(bool ok, const char* what) {
-    if (!ok) {
-        std::fprintf(stderr, "driftcorr_make_road_scenario: internal error: %s\n", what);
-        std::abort();
-    }
-}
 
 struct Waypoint {
     Eigen::Vector2d p_en;
@@ -99,7 +91,8 @@ int NearestVehicleNode(const RoadNetwork& net, const Graph& graph, const Eigen::
         const double d_m = (net.nodes[i].p_en - p_en).norm();
         if (!graph[i].empty() && d_m < best_m) best = static_cast<int>(i), best_m = d_m;
     }
-    Check(best >= 0 && best_m < kWaypointSnap_m, "route waypoint is not a vehicle-road node");
+    DRIFTCORR_CHECK(best >= 0 && best_m < kWaypointSnap_m,
+                    "route waypoint is not a vehicle-road node");
     return best;
 }
 
@@ -124,7 +117,7 @@ std::vector<int> ShortestPath(const Graph& graph, int from, int to) {
             }
         }
     }
-    Check(std::isfinite(dist[to]), "route leg has no path on vehicle roads");
+    DRIFTCORR_CHECK(std::isfinite(dist[to]), "route leg has no path on vehicle roads");
     std::vector<int> path;
     for (int v = to; v != -1; v = parent[v]) path.push_back(v);
     std::reverse(path.begin(), path.end());
@@ -142,7 +135,7 @@ double EdgeSpeed(const Graph& graph, int a, int b) {
     for (const Edge& e : graph[a]) {
         if (e.to == b) return e.speed_mps;
     }
-    Check(false, "route edge missing");
+    DRIFTCORR_CHECK(false, "route edge missing");
     return 0.0;
 }
 
@@ -227,7 +220,7 @@ double FilletTangent(const std::vector<RouteVertex>& v, std::size_t i) {
 void AddPiece(DrivenLine& line, const Eigen::Vector2d& start_en, double heading_rad,
               double curvature_pm, double length_m, double class_speed_mps, double offset_m) {
     const double stretch = 1.0 + offset_m * curvature_pm;  // driven length / centre length
-    Check(stretch > 0.0, "fillet radius smaller than the lateral offset");
+    DRIFTCORR_CHECK(stretch > 0.0, "fillet radius smaller than the lateral offset");
     const double driven_curvature_pm = std::abs(curvature_pm / stretch);
     double limit_mps = class_speed_mps;
     if (driven_curvature_pm > 0.0) {
@@ -249,7 +242,7 @@ DrivenLine BuildDrivenLine(const std::vector<RouteVertex>& v, double offset_m) {
         const Eigen::Vector2d dir = (v[i + 1].p_en - v[i].p_en).normalized();
         const double straight_m =
             (v[i + 1].p_en - v[i].p_en).norm() - tangent_m[i] - tangent_m[i + 1];
-        Check(straight_m > -1e-9, "fillets overlap");
+        DRIFTCORR_CHECK(straight_m > -1e-9, "fillets overlap");
         if (straight_m > 1e-9) {
             AddPiece(line, v[i].p_en + tangent_m[i] * dir, heading_rad, 0.0, straight_m,
                      v[i].speed_mps, offset_m);
@@ -310,7 +303,7 @@ std::vector<double> GridSpeedLimits(const DrivenLine& line, std::size_t n, doubl
         for (std::size_t j = j0; j <= j1; ++j) limit[j] = std::min(limit[j], p.speed_limit_mps);
         limit[jm] = std::min(limit[jm], p.speed_limit_mps);  // pieces shorter than a step
     }
-    for (double l : limit) Check(std::isfinite(l), "speed profile grid not covered");
+    for (double l : limit) DRIFTCORR_CHECK(std::isfinite(l), "speed profile grid not covered");
     return limit;
 }
 
@@ -368,7 +361,7 @@ std::string DriveConfig::Validate() const {
 }
 
 std::vector<DrivePose> SimulateDrive(const RoadNetwork& net, const DriveConfig& config) {
-    Check(config.Validate().empty(), "invalid DriveConfig");
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid DriveConfig");
     const auto n_poses =
         static_cast<std::size_t>(std::floor(config.duration_s * config.rate_hz + 1e-9)) + 1;
     const double last_s = static_cast<double>(n_poses - 1) / config.rate_hz;
@@ -388,7 +381,7 @@ std::vector<DrivePose> SimulateDrive(const RoadNetwork& net, const DriveConfig& 
         }
         return poses;
     }
-    Check(false, "duration needs more laps than allowed");
+    DRIFTCORR_CHECK(false, "duration needs more laps than allowed");
     return {};
 }
 

@@ -1,10 +1,9 @@
 #include "odometry_drift.h"
 
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 
 namespace driftcorr::synth {
 
@@ -24,10 +23,8 @@ std::string DriftConfig::Validate() const {
 
 std::vector<DrivePose> IntegrateDriftingOdometry(const std::vector<DrivePose>& ground_truth,
                                                  const DriftConfig& config) {
-    if (!config.Validate().empty() || ground_truth.empty()) {
-        std::fprintf(stderr, "IntegrateDriftingOdometry: invalid config or empty input\n");
-        std::abort();
-    }
+    DRIFTCORR_CHECK(config.Validate().empty() && !ground_truth.empty(),
+                    "IntegrateDriftingOdometry: invalid config or empty input");
     NormalSampler normal(config.seed);
     std::vector<DrivePose> estimate = {ground_truth.front()};
     double bias_deg_per_s = 0.0;

@@ -8,9 +8,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include "synth_common.h"
-
 #include "driftcorr/core/angles.h"
+#include "driftcorr/mapping/atomic_file.h"
+#include "synth_common.h"
 
 namespace driftcorr::synth {
 
@@ -97,7 +97,7 @@ void WriteOsmFile(const std::string& path, const RoadNetwork& net, const LocalTa
     xml +=
         "  <!-- Synthetic road network made by driftcorr_make_road_scenario; not OSM data. -->\n";
     xml += OsmBounds(geo) + OsmNodes(net, geo) + OsmWays(net) + "</osm>\n";
-    WriteAtomically(path, xml);
+    WriteFileAtomically(path, xml);
 }
 
 void WriteTumFile(const std::string& path, const std::vector<DrivePose>& poses) {
@@ -108,7 +108,7 @@ void WriteTumFile(const std::string& path, const std::vector<DrivePose>& poses) 
             Format("%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", pose.t_s, pose.p_en.x(),
                    pose.p_en.y(), 0.0, 0.0, 0.0, std::sin(half_yaw_rad), std::cos(half_yaw_rad));
     }
-    WriteAtomically(path, text);
+    WriteFileAtomically(path, text);
 }
 
 void WriteScenarioYaml(const std::string& path, const GeoPoint& anchor,
@@ -125,7 +125,7 @@ void WriteScenarioYaml(const std::string& path, const GeoPoint& anchor,
                    anchor.lon_deg, anchor.alt_m);
     yaml += "  yaw_deg: 0.0\n";
     yaml += "map:\n  - path: map.osm\n    format: osm\n";
-    WriteAtomically(path, yaml);
+    WriteFileAtomically(path, yaml);
 }
 
 }  // namespace driftcorr::synth

@@ -61,6 +61,7 @@ void RunInProcesses(std::size_t count, int jobs,
 int RunCorrectCommand(int argc, char** argv);
 int RunStreamCommand(int argc, char** argv);
 int RunEvalCommand(int argc, char** argv);
+int RunParamsCommand(int argc, char** argv);
 /// The usage text of `correct` (driftcorr --help prints it).
 void PrintCorrectUsage(std::FILE* out);
 

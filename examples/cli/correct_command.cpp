@@ -25,9 +25,9 @@
 #include "commands.h"
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
-#include "driftcorr/io/atomic_file.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/atomic_file.h"
 #include "driftcorr/mapping/geodesy.h"
 #include "driftcorr/pipeline/pipeline.h"
 
@@ -247,7 +247,7 @@ void WriteCovariance(const std::string& path, const pipeline::CorrectionRun& run
     if (cov.status != CovarianceStatus::kOk) {
         throw std::runtime_error(path + ": no covariance: " + cov.message);
     }
-    io::AtomicFile file(path);
+    AtomicFile file(path);
     std::ofstream& out = file.stream();
     out << "# t var_e_m2 cov_en_m2 var_n_m2 var_up_m2 var_yaw_rad2 flags"
            " (flags: 1 off the map, 2 input jump, 4 implausible scale)\n";

@@ -18,11 +18,13 @@ const char* kAbout =
     "  stream    online correction, pose by pose (driftcorr stream -h)\n"
     "  eval      the estimate, the paper's method and driftcorr against ground truth\n"
     "            (driftcorr eval -h)\n"
+    "  params    every params.yaml key at its default, with its allowed values\n"
     "\n";
 const char* kOtherUsage =
     "       driftcorr eval <scenario dirs...> [-o report_dir] [--config params.yaml] [--quiet]\n"
     "       driftcorr stream <scenario dir | scenario.yaml> [--replay] [--rate-hz R] [--sync]\n"
-    "                        [--config params.yaml] [--smoothed-out smoothed.tum]\n";
+    "                        [--config params.yaml] [--smoothed-out smoothed.tum]\n"
+    "       driftcorr params\n";
 
 struct Command {
     const char* name;
@@ -32,6 +34,7 @@ const Command kCommands[] = {
     {"correct", &driftcorr::cli::RunCorrectCommand},
     {"eval", &driftcorr::cli::RunEvalCommand},
     {"stream", &driftcorr::cli::RunStreamCommand},
+    {"params", &driftcorr::cli::RunParamsCommand},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -1,9 +1,10 @@
 #include "driftcorr/mapping/grid.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <limits>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 namespace {
@@ -69,7 +70,7 @@ void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
 
 std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
                                               const std::vector<std::uint8_t>& feature) {
-    assert(feature.size() == spec.size() && "feature mask does not match the grid");
+    DRIFTCORR_CHECK(feature.size() == spec.size(), "feature mask does not match the grid");
     std::vector<float> g(spec.size());
     for (std::size_t i = 0; i < g.size(); ++i) g[i] = feature[i] ? 0.0f : kInf;
     EdtAxis(g, spec, 0);

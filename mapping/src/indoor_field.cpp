@@ -146,22 +146,13 @@ GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
 
 }  // namespace
 
+std::optional<ParamProblem> IndoorFieldConfig::FindProblem() const {
+    if (auto problem = CheckRows(kIndoorFieldParams, *this)) return problem;
+    return internal::ThinLayerProblem(vertical_tolerance_m, resolution_z_m);
+}
+
 std::string IndoorFieldConfig::Validate() const {
-    if (!(resolution_m > 0.0)) return "indoor.resolution_m: must be > 0";
-    if (!(resolution_z_m > 0.0)) return "indoor.resolution_z_m: must be > 0";
-    if (!std::isfinite(device_height_m)) return "indoor.device_height_m: must be finite";
-    if (!(vertical_tolerance_m >= resolution_z_m)) {
-        return "indoor.vertical_tolerance_m: must be >= resolution_z_m (a thinner layer is one "
-               "voxel thick and the B-spline would mix the outside samples above and below into "
-               "the value at the surface)";
-    }
-    if (!(walkway_half_width_m >= 0.0)) return "indoor.walkway_half_width_m: must be >= 0";
-    if (!(margin_m >= 0.0)) return "indoor.margin_m: must be >= 0";
-    if (!(vertical_margin_m >= 0.0)) return "indoor.vertical_margin_m: must be >= 0";
-    if (!(truncation_m > 0.0)) return "indoor.truncation_m: must be > 0";
-    if (!(exact_band_m >= 0.0)) return "indoor.exact_band_m: must be >= 0";
-    if (!(max_memory_mb > 0.0)) return "indoor.max_memory_mb: must be > 0";
-    return "";
+    return ToMessage(kIndoorFieldParams.section, FindProblem());
 }
 
 TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,

@@ -1,8 +1,9 @@
 #include "driftcorr/mapping/interpolated_field.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 namespace {
@@ -104,7 +105,7 @@ void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& s
 
 InterpolatedField::InterpolatedField(const GridSpec& spec, std::vector<float> values)
     : spec_(spec), values_(std::move(values)) {
-    assert(values_.size() == spec_.size() && "field values do not match the grid");
+    DRIFTCORR_CHECK(values_.size() == spec_.size(), "field values do not match the grid");
 }
 
 std::optional<FieldSample> InterpolatedField::Query(const Eigen::Vector3d& p) const {

@@ -223,15 +223,12 @@ int TileCells(const RoadFieldConfig& config) {
 
 }  // namespace
 
+std::optional<ParamProblem> RoadClassConfig::FindProblem() const {
+    return CheckRows(kRoadClassParams, *this);
+}
+
 std::string RoadClassConfig::Validate() const {
-    if (profile != "vehicle" && profile != "pedestrian" && profile != "all") {
-        return "road_profile: must be vehicle, pedestrian or all (got '" + profile + "')";
-    }
-    for (const auto& [cls, hw] : half_width_overrides_m) {
-        if (!(hw >= 0.0) || !std::isfinite(hw)) return "road_half_width_m." + cls + ": must be >= 0";
-    }
-    if (!(default_half_width_m > 0.0)) return "default_half_width_m: must be > 0";
-    return "";
+    return ToMessage(kRoadClassParams.section, FindProblem());
 }
 
 std::map<std::string, double> RoadClassConfig::Table() const {
@@ -278,14 +275,12 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
     return net;
 }
 
+std::optional<ParamProblem> RoadFieldConfig::FindProblem() const {
+    return CheckRows(kRoadFieldParams, *this);
+}
+
 std::string RoadFieldConfig::Validate() const {
-    if (!(resolution_m > 0.0)) return "field.resolution_m: must be > 0";
-    if (!(tile_m >= 0.0) || !std::isfinite(tile_m)) return "field.tile_m: must be >= 0";
-    if (!(margin_m >= 0.0)) return "field.margin_m: must be >= 0";
-    if (!(truncation_m > 0.0)) return "field.truncation_m: must be > 0";
-    if (!(exact_band_m >= 0.0)) return "field.exact_band_m: must be >= 0";
-    if (!(max_memory_mb > 0.0)) return "field.max_memory_mb: must be > 0";
-    return "";
+    return ToMessage(kRoadFieldParams.section, FindProblem());
 }
 
 TraversableField RasteriseRoads(const RoadNetwork& network, const Eigen::AlignedBox2d& region_en,

@@ -35,21 +35,13 @@ Eigen::AlignedBox3d LiftedBounds(const std::vector<Eigen::Vector3d>& points, dou
 
 }  // namespace
 
+std::optional<ParamProblem> SurfaceFieldConfig::FindProblem() const {
+    if (auto problem = CheckRows(kSurfaceFieldParams, *this)) return problem;
+    return internal::ThinLayerProblem(vertical_tolerance_m, resolution_z_m);
+}
+
 std::string SurfaceFieldConfig::Validate() const {
-    if (!(wall_clearance_m >= 0.0) || !std::isfinite(wall_clearance_m)) return "wall_clearance_m: must be >= 0";
-    if (!(resolution_m > 0.0)) return "surface.resolution_m: must be > 0";
-    if (!(resolution_z_m > 0.0)) return "surface.resolution_z_m: must be > 0";
-    if (!std::isfinite(device_height_m)) return "surface.device_height_m: must be finite";
-    if (!(vertical_tolerance_m >= resolution_z_m)) {
-        return "surface.vertical_tolerance_m: must be >= resolution_z_m (a thinner layer is one "
-               "voxel thick and the B-spline would mix the outside samples above and below into "
-               "the value at the surface)";
-    }
-    if (!(margin_m >= 0.0)) return "surface.margin_m: must be >= 0";
-    if (!(vertical_margin_m >= 0.0)) return "surface.vertical_margin_m: must be >= 0";
-    if (!(truncation_m > 0.0)) return "surface.truncation_m: must be > 0";
-    if (!(max_memory_mb > 0.0)) return "surface.max_memory_mb: must be > 0";
-    return "";
+    return ToMessage(kSurfaceFieldParams.section, FindProblem());
 }
 
 TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_points_enu,

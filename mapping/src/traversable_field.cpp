@@ -1,7 +1,8 @@
 #include "driftcorr/mapping/traversable_field.h"
 
-#include <cassert>
 #include <cmath>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 
@@ -11,21 +12,23 @@ TraversableField::TraversableField(InterpolatedField centre, InterpolatedField c
       centre_(std::move(centre)),
       corridor_(std::move(corridor)),
       truncation_m_(truncation_m) {
-    assert(centre_.spec().size() == corridor_.spec().size() && "fields must share one grid");
+    DRIFTCORR_CHECK(centre_.spec().size() == corridor_.spec().size(), "fields must share one grid");
 }
 
 TraversableField::TraversableField(const GridSpec& grid, int tile_cells, std::vector<Tile> tiles,
                                    double truncation_m)
     : grid_(grid), tile_cells_(tile_cells), tiles_(std::move(tiles)), truncation_m_(truncation_m) {
-    assert(grid_.planar() && tile_cells_ >= 4 && "a tiled field is planar, tiles >= 4 cells");
+    DRIFTCORR_CHECK(grid_.planar() && tile_cells_ >= 4,
+                    "a tiled field is planar, tiles >= 4 cells");
     tiles_x_ = (grid_.nx + tile_cells_ - 1) / tile_cells_;
     tiles_y_ = (grid_.ny + tile_cells_ - 1) / tile_cells_;
     tile_index_.assign(std::size_t(tiles_x_) * std::size_t(tiles_y_), -1);
     for (std::size_t k = 0; k < tiles_.size(); ++k) {
         const Tile& t = tiles_[k];
-        assert(t.ti >= 0 && t.ti < tiles_x_ && t.tj >= 0 && t.tj < tiles_y_ && "tile off the grid");
+        DRIFTCORR_CHECK(t.ti >= 0 && t.ti < tiles_x_ && t.tj >= 0 && t.tj < tiles_y_,
+                        "tile off the grid");
         int& slot = tile_index_[std::size_t(t.tj) * tiles_x_ + t.ti];
-        assert(slot < 0 && "a tile given twice");
+        DRIFTCORR_CHECK(slot < 0, "a tile given twice");
         slot = int(k);
     }
 }
@@ -38,12 +41,12 @@ std::size_t TraversableField::Samples() const {
 }
 
 const InterpolatedField& TraversableField::centre() const {
-    assert(!tiled() && "centre() of a tiled field");
+    DRIFTCORR_CHECK(!tiled(), "centre() of a tiled field");
     return centre_;
 }
 
 const InterpolatedField& TraversableField::corridor() const {
-    assert(!tiled() && "corridor() of a tiled field");
+    DRIFTCORR_CHECK(!tiled(), "corridor() of a tiled field");
     return corridor_;
 }
 

@@ -8,6 +8,16 @@
 #include <stdexcept>
 
 namespace driftcorr::internal {
+
+std::optional<ParamProblem> ThinLayerProblem(double vertical_tolerance_m, double resolution_z_m) {
+    if (vertical_tolerance_m >= resolution_z_m) return std::nullopt;
+    ParamProblem problem = RelationProblem("vertical_tolerance_m", vertical_tolerance_m,
+                                           ">=", "resolution_z_m", resolution_z_m);
+    problem.message +=
+        ": a thinner layer is one voxel thick and the B-spline would mix the outside samples "
+        "above and below into the value at the surface";
+    return problem;
+}
 namespace {
 
 using Mask = std::vector<std::uint8_t>;

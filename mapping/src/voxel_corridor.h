@@ -1,11 +1,12 @@
 #pragma once
 // Internal helper shared by the voxel field builders (indoor_field.cpp, surface_field.cpp): the
 // corridor field of a 3D traversable set. Not installed; not part of the public API.
+#include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
-#include <Eigen/Geometry>
-
+#include "driftcorr/core/params.h"
 #include "driftcorr/mapping/grid.h"
 
 namespace driftcorr::internal {
@@ -24,6 +25,9 @@ struct VoxelGridSize {
 /// would need more than max_memory_mb, saying which horizontal resolution would fit; `what`
 /// names the field in that message ("indoor", "surface").
 GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what);
+
+/// The rule both voxel fields share: vertical_tolerance_m >= resolution_z_m, with why.
+std::optional<ParamProblem> ThinLayerProblem(double vertical_tolerance_m, double resolution_z_m);
 
 std::vector<float> CorridorField(const GridSpec& s, const std::vector<std::uint8_t>& inside,
                                  float trunc);

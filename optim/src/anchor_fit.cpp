@@ -87,17 +87,12 @@ void Refine(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableFie
 
 }  // namespace
 
+std::optional<ParamProblem> AnchorFitConfig::FindProblem() const {
+    return CheckRows(kAnchorFitParams, *this);
+}
+
 std::string AnchorFitConfig::Validate() const {
-    if (!(lead_path_m > 0.0)) return "anchor_fit.lead_path_m: must be > 0";
-    if (!(sample_spacing_m > 0.0)) return "anchor_fit.sample_spacing_m: must be > 0";
-    if (!(yaw_step_deg > 0.0 && yaw_step_deg <= 45.0))
-        return "anchor_fit.yaw_step_deg: must be in (0, 45]";
-    if (!(position_step_m > 0.0)) return "anchor_fit.position_step_m: must be > 0";
-    if (!(reach_m > 0.0)) return "anchor_fit.reach_m: must be > 0";
-    if (!(distinct_yaw_deg > 0.0)) return "anchor_fit.distinct_yaw_deg: must be > 0";
-    if (!(distinct_position_m > 0.0)) return "anchor_fit.distinct_position_m: must be > 0";
-    if (!(check_position_radius_m >= 0.0)) return "anchor_fit.check_position_radius_m: must be >= 0";
-    return "";
+    return ToMessage(kAnchorFitParams.section, FindProblem());
 }
 
 AnchorFitResult FitAnchor(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,

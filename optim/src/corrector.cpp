@@ -1,25 +1,31 @@
 #include "driftcorr/optim/corrector.h"
 
-#include <cassert>
 #include <cmath>
 #include <string>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/window_problem.h"
 
 namespace driftcorr {
 
+std::optional<ParamProblem> CorrectorConfig::FindProblem() const {
+    if (auto problem = CheckRows(kCorrectorParams, *this)) return problem;
+    if (!(window_m >= chunk_m)) {
+        return RelationProblem("window_m", window_m, ">=", "chunk_m", chunk_m);
+    }
+    if (max_window_poses < max_chunk_poses) {
+        return RelationProblem("max_window_poses", double(max_window_poses),
+                               ">=", "max_chunk_poses", double(max_chunk_poses));
+    }
+    return std::nullopt;
+}
+
 std::string CorrectorConfig::Validate() const {
     if (std::string m = model.Validate(); !m.empty()) return m;
-    if (!(chunk_m > 0.0)) return "corrector.chunk_m: must be > 0";
-    if (!(window_m >= chunk_m)) return "corrector.window_m: must be >= chunk_m";
-    if (max_chunk_poses < 1) return "corrector.max_chunk_poses: must be >= 1";
-    if (max_window_poses < max_chunk_poses)
-        return "corrector.max_window_poses: must be >= max_chunk_poses";
-    if (!(stationary_m >= 0.0)) return "corrector.stationary_m: must be >= 0";
-    if (std::string m = covariance.Validate(); !m.empty()) return m;
-    return "";
+    if (std::string m = ToMessage(kCorrectorParams.section, FindProblem()); !m.empty()) return m;
+    return covariance.Validate();
 }
 
 namespace {
@@ -84,7 +90,7 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 // corrector); the batch case hands it the whole estimate at once.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
-    assert(estimate.size() >= 3 && "CorrectTrajectory needs at least 3 poses");
+    DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectTrajectory needs at least 3 poses");
     const bool planar = !field || field->planar();
     IncrementalCorrector inc(InitialState(estimate, cfg, planar), field, cfg);
     inc.SolveRemaining(progress);

@@ -4,9 +4,10 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <optional>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 namespace {
@@ -184,7 +185,7 @@ public:
         if (r < c) std::swap(r, c);
         const auto begin = li_.begin() + lp_[c], end = li_.begin() + lp_[c + 1];
         const auto it = std::lower_bound(begin, end, r);
-        assert(it != end && *it == r && "entry outside the factor's pattern");
+        DRIFTCORR_CHECK(it != end && *it == r, "entry outside the factor's pattern");
         return lower_[it - li_.begin()];
     }
 
@@ -212,7 +213,7 @@ std::optional<SelectedInverse> Invert(const std::vector<LinearisedTerm>& terms,
                                       SparseMatrix& h) {
     h = AssembleLower(terms, order, problem, state);
     Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt(h);
-    assert(ldlt.permutationP().size() == 0 && "the chain order must be kept");
+    DRIFTCORR_CHECK(ldlt.permutationP().size() == 0, "the chain order must be kept");
     const int bad = ldlt.info() == Eigen::Success ? FirstNonPositivePivot(ldlt.vectorD(), h) : -2;
     if (bad != -1) {
         r.status = CovarianceStatus::kNotPositiveDefinite;
@@ -304,13 +305,12 @@ CovarianceSystem System(const SparseMatrix& h_lower, const Ordering& o, const Wi
 
 }  // namespace
 
+std::optional<ParamProblem> CovarianceConfig::FindProblem() const {
+    return CheckRows(kCovarianceParams, *this);
+}
+
 std::string CovarianceConfig::Validate() const {
-    if (!(map_offset_share >= 0.0 && map_offset_share < 1.0)) {
-        return "covariance.map_offset_share: must be in [0, 1)";
-    }
-    if (!(map_offset_correlation_m > 0.0))
-        return "covariance.map_offset_correlation_m: must be > 0";
-    return "";
+    return ToMessage(kCovarianceParams.section, FindProblem());
 }
 
 const char* ToString(CovarianceStatus status) {
@@ -344,7 +344,7 @@ Eigen::MatrixXd DenseGaussNewtonHessian(const WindowProblem& problem, const doub
 CovarianceResult ComputeCovariance(const TrajectoryState& state, const TraversableField* field,
                                    const ModelConfig& model, const CovarianceConfig& config,
                                    CovarianceSystem* system) {
-    assert(config.Validate().empty() && "invalid CovarianceConfig");
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid CovarianceConfig");
     CovarianceResult r;
     const std::size_t n = state.poses.size();
     if (n < 2 || state.obs.size() != n || state.scale_segment.size() != n ||

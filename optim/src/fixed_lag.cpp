@@ -3,9 +3,9 @@
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
 namespace driftcorr {
@@ -118,7 +118,7 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
                                            const ModelConfig& model, std::size_t first,
                                            std::size_t last,
                                            const std::optional<PosePriorTerm>& prior) {
-    assert(first >= 1 && first <= last && last < s.poses.size() && "bad marginal window");
+    DRIFTCORR_CHECK(first >= 1 && first <= last && last < s.poses.size(), "bad marginal window");
     const WindowProblem problem(s, field, model, first, last,
                                 std::vector<std::uint8_t>(last - first + 1, 0),
                                 WindowUse::kLinearise, prior);
@@ -212,7 +212,7 @@ std::optional<PoseMatrix> FixedLagSmoother::EndCovariance(
 }
 
 FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
-    assert(solved_end_ < end && end < size() && "a solve must add poses");
+    DRIFTCORR_CHECK(solved_end_ < end && end < size(), "a solve must add poses");
     RepairRecentEpisodes(state_, end, cfg_.model);
     SeedNewScales(state_, solved_end_ + 1, end);
     ComposeOdometry(state_, solved_end_ + 1, end);

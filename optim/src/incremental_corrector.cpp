@@ -1,10 +1,10 @@
 #include "driftcorr/optim/incremental_corrector.h"
 
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/observables.h"
 
 namespace driftcorr {
@@ -172,7 +172,7 @@ PoseState ComposeStep(const PoseState& a, const StepObservation& o, double scale
 
 TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseState> poses,
                            const CorrectorConfig& cfg, bool fix_height) {
-    assert(obs.size() == poses.size() && !obs.empty() && "one observation per pose");
+    DRIFTCORR_CHECK(obs.size() == poses.size() && !obs.empty(), "one observation per pose");
     TrajectoryState s;
     s.obs = std::move(obs);
     RepairSpeedEpisodes(s.obs, cfg.model.outlier_accel_mps2, kOutlierWindowS, kOutlierEpisodeS,
@@ -214,8 +214,9 @@ TrajectoryState InitialState(const PlanarTrajectory& est, const CorrectorConfig&
 IncrementalCorrector::IncrementalCorrector(TrajectoryState state, const TraversableField* field,
                                            const CorrectorConfig& config)
     : state_(std::move(state)), field_(field), cfg_(config) {
-    assert(!state_.poses.empty() && state_.obs.size() == state_.poses.size() &&
-           state_.scale_segment.size() == state_.poses.size() && "inconsistent state");
+    DRIFTCORR_CHECK(!state_.poses.empty() && state_.obs.size() == state_.poses.size() &&
+                        state_.scale_segment.size() == state_.poses.size(),
+                    "inconsistent state");
     dist_.assign(size(), 0.0);
     for (std::size_t i = 1; i < size(); ++i) dist_[i] = dist_[i - 1] + state_.obs[i].length_m;
 }
@@ -273,7 +274,7 @@ std::size_t IncrementalCorrector::NextChunkEnd() const {
 }
 
 void IncrementalCorrector::SolveChunk(std::size_t end) {
-    assert(done_ < end && end < size() && "chunk must add poses");
+    DRIFTCORR_CHECK(done_ < end && end < size(), "chunk must add poses");
     const auto t0 = std::chrono::steady_clock::now();
     SeedNewScales(state_, done_ + 1, end);
     ComposeOdometry(state_, done_ + 1, end);
@@ -304,7 +305,8 @@ void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {
 
 CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
                                               const ProgressCallback& progress) {
-    assert(size() >= 3 && done_ + 1 == size() && t_s.size() == size() && "Finish preconditions");
+    DRIFTCORR_CHECK(size() >= 3 && done_ + 1 == size() && t_s.size() == size(),
+                    "Finish preconditions");
     CorrectionResult result = stats_;
     const auto t0 = std::chrono::steady_clock::now();
     const std::size_t n = size();

@@ -123,16 +123,6 @@ std::string StatusName(Ipopt::ApplicationReturnStatus s) {
 
 }  // namespace
 
-std::string ToString(SolveStatus status) {
-    switch (status) {
-        case SolveStatus::kSuccess: return "success";
-        case SolveStatus::kAcceptable: return "acceptable";
-        case SolveStatus::kMaxIterations: return "max_iterations";
-        case SolveStatus::kInfeasible: return "infeasible";
-        default: return "failed";
-    }
-}
-
 SolveReport SolveWithIpopt(WindowProblem& problem, const IpoptOptions& options) {
     // MUMPS keeps state in Fortran module variables and is not thread-safe (Ipopt >= 3.14 locks
     // around it itself; Debian's 3.11 does not): one solve at a time in the process, held for the

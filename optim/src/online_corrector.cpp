@@ -1,7 +1,6 @@
 #include "driftcorr/optim/online_corrector.h"
 
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -13,6 +12,7 @@
 #endif
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
@@ -51,18 +51,18 @@ PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
 
 }  // namespace
 
+std::optional<ParamProblem> OnlineConfig::FindProblem() const {
+    return CheckRows(kOnlineParams, *this);
+}
+
 std::string OnlineConfig::Validate() const {
     if (std::string m = corrector.Validate(); !m.empty()) return m;
-    if (!(gap_warn_s > 0.0)) return "online.gap_warn_s: must be > 0";
-    if (!(update_fraction >= 0.0 && update_fraction <= 1.0)) {
-        return "online.update_fraction: must be in [0, 1]";
-    }
-    return "";
+    return ToMessage(kOnlineParams.section, FindProblem());
 }
 
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config)
     : field_(field), cfg_(config), fix_height_(!field || field->planar()) {
-    assert(config.Validate().empty() && "invalid OnlineConfig");
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");
     if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
 }
 

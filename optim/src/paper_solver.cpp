@@ -1,11 +1,11 @@
 #include "driftcorr/optim/paper_solver.h"
 
 #include <algorithm>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/cost_terms.h"
 
 namespace driftcorr {
@@ -101,42 +101,40 @@ std::vector<double> EstimateCourses(const PlanarTrajectory& est, double stationa
 
 }  // namespace
 
-std::string PaperSolverConfig::Validate() const {
-    if (!(learning_rate > 0.0)) return "learning_rate: must be > 0";
-    if (iterations_per_epoch < 1) return "iterations_per_epoch: must be >= 1";
-    for (const auto& [name, w] : {std::pair{"turn_weight", turn_weight},
-                                  {"step_weight", step_weight}, {"map_weight", map_weight},
-                                  {"preservation_weight", preservation_weight}}) {
-        if (!(w >= 0.0 && w <= 1.0)) return std::string(name) + ": must be in [0, 1]";
+std::optional<ParamProblem> PaperSolverConfig::FindProblem() const {
+    if (auto problem = CheckRows(kPaperSolverParams, *this)) return problem;
+    if (!(min_step_m >= stationary_m)) {
+        return RelationProblem("min_step_m", min_step_m, ">=", "stationary_m", stationary_m);
     }
-    if (!(turn_sigma_rad > 0.0)) return "turn_sigma_rad: must be > 0";
-    if (!(step_sigma_m > 0.0)) return "step_sigma_m: must be > 0";
-    if (!(map_sigma_m > 0.0)) return "map_sigma_m: must be > 0";
-    if (!(preservation_sigma_rad > 0.0)) return "preservation_sigma_rad: must be > 0";
-    if (!(map_truncation_m >= 0.0)) return "map_truncation_m: must be >= 0";
-    if (!(stationary_m > 0.0)) return "stationary_m: must be > 0";
-    if (!(min_step_m >= stationary_m)) return "min_step_m: must be >= stationary_m";
     // Fixed-step descent on a quadratic of curvature k is stable only for learning_rate * k < 2.
     if (learning_rate * step_weight / (step_sigma_m * step_sigma_m) >= 2.0) {
-        return "step_sigma_m: too small for learning_rate (learning_rate * step_weight / "
-               "step_sigma_m^2 must be < 2)";
+        return ParamProblem{"step_sigma_m",
+                            "too small for learning_rate (learning_rate * step_weight / "
+                            "step_sigma_m^2 must be < 2)",
+                            "learning_rate"};
     }
     const double turn_k = (turn_weight / (turn_sigma_rad * turn_sigma_rad) +
                            preservation_weight / (preservation_sigma_rad * preservation_sigma_rad)) /
                           (min_step_m * min_step_m);
     if (learning_rate * turn_k >= 2.0) {
-        return "min_step_m: too small for learning_rate and turn_sigma_rad (learning_rate * "
-               "turn curvature at min_step_m must be < 2)";
+        return ParamProblem{"min_step_m",
+                            "too small for learning_rate and turn_sigma_rad (learning_rate * turn "
+                            "curvature at min_step_m must be < 2)",
+                            "learning_rate"};
     }
-    return "";
+    return std::nullopt;
+}
+
+std::string PaperSolverConfig::Validate() const {
+    return ToMessage(kPaperSolverParams.section, FindProblem());
 }
 
 CorrectionResult CorrectWithPaperMethod(const PlanarTrajectory& estimate,
                                         const TraversableField* field,
                                         const PaperSolverConfig& config,
                                         const ProgressCallback& progress) {
-    assert(estimate.size() >= 3 && "the paper solver needs at least 3 poses");
-    assert(config.Validate().empty() && "invalid PaperSolverConfig");
+    DRIFTCORR_CHECK(estimate.size() >= 3, "the paper solver needs at least 3 poses");
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid PaperSolverConfig");
     const auto t0 = std::chrono::steady_clock::now();
     const std::size_t n = estimate.size();
     CorrectionResult res;

@@ -1,7 +1,8 @@
 #include "driftcorr/optim/term_block.h"
 
 #include <Eigen/Eigenvalues>
-#include <cassert>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 namespace {
@@ -47,7 +48,8 @@ const char* ToString(TermFamily family) {
 }
 
 const std::optional<TraversableSample>& MapDistanceBlock::Sample(const BlockContext& ctx) const {
-    assert(ctx.samples && pose() >= static_cast<int>(ctx.first_pose) && "map block outside window");
+    DRIFTCORR_CHECK(ctx.samples && pose() >= static_cast<int>(ctx.first_pose),
+                    "map block outside window");
     return (*ctx.samples)[static_cast<std::size_t>(pose()) - ctx.first_pose];
 }
 

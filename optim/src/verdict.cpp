@@ -180,30 +180,25 @@ std::string ToString(VerdictLevel level) {
     return "?";
 }
 
-std::string VerdictConfig::Validate() const {
-    if (!(scale_plausible_min > 0.0 && scale_plausible_min <= 1.0)) {
-        return "verdict.scale_plausible_min: must be in (0, 1]";
-    }
-    if (!(scale_plausible_max >= 1.0)) return "verdict.scale_plausible_max: must be >= 1";
-    if (!(scale_failed_min > 0.0 && scale_failed_min <= scale_plausible_min)) {
-        return "verdict.scale_failed_min: must be in (0, scale_plausible_min]";
+std::optional<ParamProblem> VerdictConfig::FindProblem() const {
+    if (auto problem = CheckRows(kVerdictParams, *this)) return problem;
+    if (!(scale_failed_min <= scale_plausible_min)) {
+        return RelationProblem("scale_failed_min", scale_failed_min, "<=", "scale_plausible_min",
+                               scale_plausible_min);
     }
     if (!(scale_failed_max >= scale_plausible_max)) {
-        return "verdict.scale_failed_max: must be >= scale_plausible_max";
+        return RelationProblem("scale_failed_max", scale_failed_max, ">=", "scale_plausible_max",
+                               scale_plausible_max);
     }
-    if (!(jump_window_s > 0.0)) return "verdict.jump_window_s: must be > 0";
-    if (!(max_accel_mps2 > 0.0)) return "verdict.max_accel_mps2: must be > 0";
-    if (!(off_map_degraded_share >= 0.0 && off_map_degraded_share <= off_map_failed_share &&
-          off_map_failed_share <= 1.0)) {
-        return "verdict.off_map_degraded_share: must be in [0, off_map_failed_share <= 1]";
+    if (!(off_map_degraded_share <= off_map_failed_share)) {
+        return RelationProblem("off_map_degraded_share", off_map_degraded_share,
+                               "<=", "off_map_failed_share", off_map_failed_share);
     }
-    if (!(anchor_other_yaw_deg > 0.0)) return "verdict.anchor_other_yaw_deg: must be > 0";
-    if (!(anchor_other_position_m > 0.0)) return "verdict.anchor_other_position_m: must be > 0";
-    if (!(anchor_rms_ratio > 0.0 && anchor_rms_ratio < 1.0)) {
-        return "verdict.anchor_rms_ratio: must be in (0, 1)";
-    }
-    if (!(anchor_ambiguous_ratio >= 1.0)) return "verdict.anchor_ambiguous_ratio: must be >= 1";
-    return "";
+    return std::nullopt;
+}
+
+std::string VerdictConfig::Validate() const {
+    return ToMessage(kVerdictParams.section, FindProblem());
 }
 
 Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField* field,

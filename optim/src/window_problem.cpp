@@ -1,9 +1,10 @@
 #include "driftcorr/optim/window_problem.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <unordered_map>
+
+#include "driftcorr/core/check.h"
 
 namespace driftcorr {
 namespace {
@@ -51,13 +52,14 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
       last_(last),
       prior_(std::move(boundary_prior)),
       var_first_(prior_ ? first - 1 : first) {
-    assert(first >= 1 && first <= last && last < state.poses.size() && "bad window");
-    assert(constrained.size() == last - first + 1 && "one constraint flag per window pose");
+    DRIFTCORR_CHECK(first >= 1 && first <= last && last < state.poses.size(), "bad window");
+    DRIFTCORR_CHECK(constrained.size() == last - first + 1, "one constraint flag per window pose");
     seg_first_ = state.scale_segment[first];
     seg_last_ = state.scale_segment[last];
     n_vars_ = 4 * static_cast<int>(last - var_first_ + 1) + (seg_last_ - seg_first_ + 1);
     if (HasBias()) {
-        assert(state.bias_segment.size() == state.poses.size() && "one bias segment per step");
+        DRIFTCORR_CHECK(state.bias_segment.size() == state.poses.size(),
+                        "one bias segment per step");
         bias_first_ = state.bias_segment[first];
         bias_last_ = state.bias_segment[last];
         bias_var0_ = n_vars_;
@@ -327,7 +329,7 @@ void WindowProblem::JacobianValues(const double* x, double* values) const {
 
 void WindowProblem::HessianValues(const double* x, double obj_factor, const double* lambda,
                                   double* values) const {
-    assert(block_slot_begin_.size() == blocks_.size() && "built with kLinearise");
+    DRIFTCORR_CHECK(block_slot_begin_.size() == blocks_.size(), "built with kLinearise");
     std::fill(values, values + hess_.size(), 0.0);
     const BlockContext ctx = Context(x);
     BlockMatrix h;

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
-#include "driftcorr/io/atomic_file.h"
+#include "driftcorr/mapping/atomic_file.h"
 
 namespace driftcorr::eval {
 namespace {
@@ -595,7 +595,7 @@ std::vector<std::string> WriteReport(const std::string& report_dir,
     std::vector<std::string> written;
     auto write = [&](const std::string& name, const std::string& text) {
         const std::string path = (fs::path(report_dir) / name).string();
-        io::AtomicFile f(path);
+        AtomicFile f(path);
         f.stream() << text;
         f.Commit();
         written.push_back(path);

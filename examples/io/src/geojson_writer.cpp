@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "driftcorr/io/atomic_file.h"
+#include "driftcorr/mapping/atomic_file.h"
 
 namespace driftcorr::io {
 

@@ -2,21 +2,21 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
-#include <cstdint>
-#include <map>
 #include <cctype>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
 
 #include "driftcorr/core/errors.h"
-#include "driftcorr/io/atomic_file.h"
+#include "driftcorr/mapping/atomic_file.h"
 #include "parse_number.h"
 
 namespace driftcorr::io {

@@ -5,9 +5,11 @@
 // road field (which is its one-slice case).
 #include <Eigen/Core>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/params.h"
 #include "driftcorr/mapping/traversable_field.h"
 
 namespace driftcorr {
@@ -52,9 +54,38 @@ struct IndoorFieldConfig {
     double exact_band_m = 1.0;      ///< exact walkway distances within this band; EDT beyond [m]
     double max_memory_mb = 1024.0;  ///< refuse fields larger than this [MB]
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kIndoorFieldParams or vertical_tolerance_m >= resolution_z_m does not
+    /// allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "indoor_field.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// Params.yaml section `indoor_field` (indoor3d GeoJSON floor plans).
+inline constexpr Param<IndoorFieldConfig> kIndoorFieldParamRows[] = {
+    {"resolution_m", Field<&IndoorFieldConfig::resolution_m>(), kPositive,
+     "horizontal grid spacing"},
+    {"resolution_z_m", Field<&IndoorFieldConfig::resolution_z_m>(), kPositive,
+     "vertical grid spacing"},
+    {"device_height_m", Field<&IndoorFieldConfig::device_height_m>(), kFinite,
+     "traversable surface above floor_z_m"},
+    {"vertical_tolerance_m", Field<&IndoorFieldConfig::vertical_tolerance_m>(), kPositive,
+     "the walkable layer spans the surface +/- this; >= resolution_z_m"},
+    {"walkway_half_width_m", Field<&IndoorFieldConfig::walkway_half_width_m>(), kNonNegative,
+     "traversable within this distance of a walkway line"},
+    {"margin_m", Field<&IndoorFieldConfig::margin_m>(), kNonNegative,
+     "the grid extends this far around the map (horizontal)"},
+    {"vertical_margin_m", Field<&IndoorFieldConfig::vertical_margin_m>(), kNonNegative,
+     "and this far below the lowest, above the highest floor"},
+    {"truncation_m", Field<&IndoorFieldConfig::truncation_m>(), kPositive,
+     "distances are capped at this value"},
+    {"exact_band_m", Field<&IndoorFieldConfig::exact_band_m>(), kNonNegative,
+     "exact walkway distances within this band; EDT beyond"},
+    {"max_memory_mb", Field<&IndoorFieldConfig::max_memory_mb>(), kPositive,
+     "refuse fields larger than this"},
+};
+inline constexpr ParamTable<IndoorFieldConfig> kIndoorFieldParams{"indoor_field",
+                                                                  kIndoorFieldParamRows};
 
 /// What was built.
 struct IndoorFieldStats {

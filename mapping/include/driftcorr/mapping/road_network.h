@@ -1,13 +1,14 @@
 #pragma once
 // The road network in the local East-North plane, and its rasterisation into a TraversableField.
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
+#include "driftcorr/core/params.h"
 #include "driftcorr/mapping/osm_reader.h"
 #include "driftcorr/mapping/traversable_field.h"
 
@@ -25,11 +26,24 @@ struct RoadClassConfig {
     /// Half-width [m] of a way whose class is in neither table, when profile == "all".
     double default_half_width_m = 3.0;
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kRoadClassParams does not allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "roads.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
     /// The effective class -> half-width table.
     std::map<std::string, double> Table() const;
 };
+
+/// Params.yaml section `roads`.
+inline constexpr Param<RoadClassConfig> kRoadClassParamRows[] = {
+    {"profile", Field<&RoadClassConfig::profile>(), kNoRange,
+     "traversable OSM highway classes and their half-widths", "vehicle|pedestrian|all"},
+    {"half_width_m", Field<&RoadClassConfig::half_width_overrides_m>(), kNonNegative,
+     "per-class half-widths that override or extend the profile's; 0 removes a class"},
+    {"default_half_width_m", Field<&RoadClassConfig::default_half_width_m>(), kPositive,
+     "half-width of a class in neither table (profile all)"},
+};
+inline constexpr ParamTable<RoadClassConfig> kRoadClassParams{"roads", kRoadClassParamRows};
 
 struct RoadPolyline {
     std::int64_t osm_id = 0;
@@ -66,8 +80,27 @@ struct RoadFieldConfig {
     /// (RasteriseRoadCorridor keeps only the tiles its corridor touches); 0: one grid [m]
     double tile_m = 256.0;
 
+    /// The first value kRoadFieldParams does not allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "field.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// Params.yaml section `field`.
+inline constexpr Param<RoadFieldConfig> kRoadFieldParamRows[] = {
+    {"resolution_m", Field<&RoadFieldConfig::resolution_m>(), kPositive, "grid spacing"},
+    {"margin_m", Field<&RoadFieldConfig::margin_m>(), kNonNegative,
+     "the grid extends this far around the estimate: the drift the field allows for"},
+    {"truncation_m", Field<&RoadFieldConfig::truncation_m>(), kPositive,
+     "distances are capped at this value"},
+    {"exact_band_m", Field<&RoadFieldConfig::exact_band_m>(), kNonNegative,
+     "exact point-to-segment distances within this band beyond the corridor edge; EDT beyond"},
+    {"max_memory_mb", Field<&RoadFieldConfig::max_memory_mb>(), kPositive,
+     "refuse fields larger than this"},
+    {"tile_m", Field<&RoadFieldConfig::tile_m>(), kNonNegative,
+     "built and held in tiles of this side; 0: one grid over the bounding box"},
+};
+inline constexpr ParamTable<RoadFieldConfig> kRoadFieldParams{"field", kRoadFieldParamRows};
 
 /// Rasterises the network over `region_en` grown by margin_m (and clipped to the network's
 /// bounds grown by truncation_m): exact distances near the roads, an exact EDT beyond, both

@@ -2,12 +2,14 @@
 // The map prior from a sampled walkable surface (a point cloud of floors, stairs and lift cabin
 // floors, or the floor voxels of an OctoMap): a 3D TraversableField, the same interface as the
 // floor-plan field of indoor_field.h. Needs no PCL: the points come from any reader (see
-// driftcorr_mapping_pcl, surface_io.h).
+// driftcorr_surface_io, surface_io.h).
 #include <Eigen/Core>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/params.h"
 #include "driftcorr/mapping/traversable_field.h"
 
 namespace driftcorr {
@@ -42,9 +44,36 @@ struct SurfaceFieldConfig {
     double truncation_m = 5.0;       ///< distances are capped at this value [m]
     double max_memory_mb = 1024.0;   ///< refuse fields larger than this [MB]
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kSurfaceFieldParams or vertical_tolerance_m >= resolution_z_m does not
+    /// allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "surface_field.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// Params.yaml section `surface_field` (indoor3d point-cloud and OctoMap maps).
+inline constexpr Param<SurfaceFieldConfig> kSurfaceFieldParamRows[] = {
+    {"resolution_m", Field<&SurfaceFieldConfig::resolution_m>(), kPositive,
+     "horizontal grid spacing; the points must be about this dense"},
+    {"resolution_z_m", Field<&SurfaceFieldConfig::resolution_z_m>(), kPositive,
+     "vertical grid spacing"},
+    {"device_height_m", Field<&SurfaceFieldConfig::device_height_m>(), kFinite,
+     "walked surface above the sampled surface"},
+    {"vertical_tolerance_m", Field<&SurfaceFieldConfig::vertical_tolerance_m>(), kPositive,
+     "traversable within this height of a surface point; >= resolution_z_m"},
+    {"wall_clearance_m", Field<&SurfaceFieldConfig::wall_clearance_m>(), kNonNegative,
+     "the map term keeps poses this far from the edge of the walkable area; 0: surface only"},
+    {"margin_m", Field<&SurfaceFieldConfig::margin_m>(), kNonNegative,
+     "the grid extends this far around the points (horizontal)"},
+    {"vertical_margin_m", Field<&SurfaceFieldConfig::vertical_margin_m>(), kNonNegative,
+     "and this far below the lowest, above the highest point"},
+    {"truncation_m", Field<&SurfaceFieldConfig::truncation_m>(), kPositive,
+     "distances are capped at this value"},
+    {"max_memory_mb", Field<&SurfaceFieldConfig::max_memory_mb>(), kPositive,
+     "refuse fields larger than this"},
+};
+inline constexpr ParamTable<SurfaceFieldConfig> kSurfaceFieldParams{"surface_field",
+                                                                    kSurfaceFieldParamRows};
 
 /// What was built.
 struct SurfaceFieldStats {

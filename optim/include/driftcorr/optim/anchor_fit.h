@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "driftcorr/core/params.h"
 #include "driftcorr/core/types.h"
 #include "driftcorr/mapping/traversable_field.h"
 
@@ -33,9 +34,33 @@ struct AnchorFitConfig {
     /// heading (a position a few tens of metres off, e.g. a fix of the wrong end of a car park) [m].
     double check_position_radius_m = 25.0;
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kAnchorFitParams does not allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "anchor_fit.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// The anchor fit's settings (not a params.yaml section: the pipeline sets reach_m from the
+/// mode's map_giveup_m).
+inline constexpr Param<AnchorFitConfig> kAnchorFitParamRows[] = {
+    {"lead_path_m", Field<&AnchorFitConfig::lead_path_m>(), kPositive,
+     "leading path of the estimate matched to the map"},
+    {"sample_spacing_m", Field<&AnchorFitConfig::sample_spacing_m>(), kPositive,
+     "one pose per this much path is scored"},
+    {"yaw_step_deg", Field<&AnchorFitConfig::yaw_step_deg>(), ParamRange{0.0, 45.0, true, false},
+     "coarse heading grid"},
+    {"position_step_m", Field<&AnchorFitConfig::position_step_m>(), kPositive,
+     "coarse position grid"},
+    {"reach_m", Field<&AnchorFitConfig::reach_m>(), kPositive,
+     "a pose farther from every traversable place counts as off the map"},
+    {"distinct_yaw_deg", Field<&AnchorFitConfig::distinct_yaw_deg>(), kPositive,
+     "placements whose headings differ by more are distinct"},
+    {"distinct_position_m", Field<&AnchorFitConfig::distinct_position_m>(), kPositive,
+     "placements whose positions differ by more are distinct"},
+    {"check_position_radius_m", Field<&AnchorFitConfig::check_position_radius_m>(), kNonNegative,
+     "the anchor check also searches positions within this radius"},
+};
+inline constexpr ParamTable<AnchorFitConfig> kAnchorFitParams{"anchor_fit", kAnchorFitParamRows};
 
 /// One placement of the leading path: turned by `dyaw_rad` about the pivot (the frame origin) and
 /// moved by `offset_en`, relative to the estimate as handed in.

@@ -46,9 +46,11 @@
 #include <Eigen/SparseCore>
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/params.h"
 #include "driftcorr/optim/window_problem.h"
 
 namespace driftcorr {
@@ -78,9 +80,25 @@ struct CovarianceConfig {
     /// it shrinks covariances that are already too small (README, Uncertainty).
     bool apply_variance_factor = false;
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kCovarianceParams does not allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "covariance.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// The covariance settings of a CorrectorConfig (not a params.yaml section).
+inline constexpr Param<CovarianceConfig> kCovarianceParamRows[] = {
+    {"map_offset_share", Field<&CovarianceConfig::map_offset_share>(),
+     ParamRange{0.0, 1.0, false, true},
+     "share of the map variance that is an offset common along a street"},
+    {"map_offset_correlation_m", Field<&CovarianceConfig::map_offset_correlation_m>(), kPositive,
+     "correlation length of that offset along the path"},
+    {"family_variance_components", Field<&CovarianceConfig::family_variance_components>(), kNoRange,
+     "variance components of the observation families"},
+    {"apply_variance_factor", Field<&CovarianceConfig::apply_variance_factor>(), kNoRange,
+     "multiply the covariances by the a posteriori variance factor"},
+};
+inline constexpr ParamTable<CovarianceConfig> kCovarianceParams{"covariance", kCovarianceParamRows};
 
 enum class CovarianceStatus {
     kNotComputed,

@@ -7,7 +7,7 @@
 // latest scale estimate, the new poses are dead-reckoned by composing the odometry observations
 // onto the corrected end, and a trailing window of about window_m of path is re-solved with the
 // soft terms (Ipopt), restarting from other step-length scale hypotheses when the solution lands in
-// a poor basin. Refine() then solves the whole trajectory with the hard corridor constraints.
+// a poor basin. Finish() then solves the whole trajectory with the hard corridor constraints.
 //
 // What a window keeps of the poses before it (they are not re-solved): pose first-1 is held fixed
 // and anchors the window through the step and heading terms of step `first`; the step-length scale
@@ -21,7 +21,8 @@
 #include <optional>
 #include <vector>
 
-#include "driftcorr/optim/corrector.h"
+#include "driftcorr/optim/correction_result.h"
+#include "driftcorr/optim/corrector_config.h"
 #include "driftcorr/optim/window_problem.h"
 
 namespace driftcorr {

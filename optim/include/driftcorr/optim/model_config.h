@@ -1,7 +1,10 @@
 #pragma once
 // The parameters of the weighted NLL: one sigma and one weight per term. Sigmas are given in
 // sampling-independent units so the same values serve 10 Hz cars and 2 Hz pedestrian steps.
+#include <optional>
 #include <string>
+
+#include "driftcorr/core/params.h"
 
 namespace driftcorr {
 
@@ -76,8 +79,85 @@ struct ModelConfig {
     double corridor_gate_m = 3.0;     ///< [m]
     double corridor_slack_m = 0.0;    ///< [m]
 
-    /// Empty if valid, else a message naming the first bad field.
+    /// The first value kModelParams or scale_range_min <= scale_range_max does not allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "model.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// Params.yaml section `model` (and `indoor_model`); the defaults are the members' initialisers.
+inline constexpr Param<ModelConfig> kModelParamRows[] = {
+    {"step_sigma_m", Field<&ModelConfig::step_sigma_m>(), kPositive,
+     "step length sigma = step_sigma_m + step_sigma_rel * L"},
+    {"step_sigma_rel", Field<&ModelConfig::step_sigma_rel>(), kNonNegative,
+     "step length sigma, share of the step length"},
+    {"lateral_sigma_m", Field<&ModelConfig::lateral_sigma_m>(), kPositive,
+     "sideways motion sigma = lateral_sigma_m + lateral_sigma_rel * L"},
+    {"lateral_sigma_rel", Field<&ModelConfig::lateral_sigma_rel>(), kNonNegative,
+     "sideways motion sigma, share of the step length"},
+    {"step_robust_k", Field<&ModelConfig::step_robust_k>(), kNonNegative,
+     "Cauchy width of the step-length term in sigmas; 0: Gaussian"},
+    {"accel_sigma_mps2", Field<&ModelConfig::accel_sigma_mps2>(), kNonNegative,
+     "speed continuity between steps, sigma = accel_sigma_mps2 * dt; 0: off"},
+    {"speed_weight", Field<&ModelConfig::speed_weight>(), kWeight, "weight of the speed term"},
+    {"outlier_accel_mps2", Field<&ModelConfig::outlier_accel_mps2>(), kNonNegative,
+     "dropped-step episodes (speed falls and recovers faster) observed at the speed around them; "
+     "0: off"},
+    {"outlier_sigma_rel", Field<&ModelConfig::outlier_sigma_rel>(), kNonNegative,
+     "step sigma share of a repaired step"},
+    {"max_speed_mps", Field<&ModelConfig::max_speed_mps>(), kPositive,
+     "faster steps are discontinuities of the estimate (not scaled, no speed term)"},
+    {"heading_rw_rad_per_sqrt_s", Field<&ModelConfig::heading_rw_rad_per_sqrt_s>(), kNonNegative,
+     "heading random walk"},
+    {"heading_sigma_rel", Field<&ModelConfig::heading_sigma_rel>(), kNonNegative,
+     "gyro scale error, share of a turn"},
+    {"heading_sigma_min_rad", Field<&ModelConfig::heading_sigma_min_rad>(), kPositive,
+     "floor of the heading-change sigma"},
+    {"heading_bias_segment_s", Field<&ModelConfig::heading_bias_segment_s>(), kNonNegative,
+     "one heading-rate bias unknown per this much time; 0: no bias"},
+    {"heading_bias_prior_rad_s", Field<&ModelConfig::heading_bias_prior_rad_s>(), kPositive,
+     "prior of the first heading-rate bias around 0"},
+    {"heading_bias_rw_rad_s", Field<&ModelConfig::heading_bias_rw_rad_s>(), kPositive,
+     "random walk of the heading-rate bias per segment"},
+    {"preservation_sigma_rad", Field<&ModelConfig::preservation_sigma_rad>(), kPositive,
+     "heading preservation prior per step; large: weak"},
+    {"height_sigma_m", Field<&ModelConfig::height_sigma_m>(), kPositive,
+     "height change sigma = height_sigma_m + height_sigma_rel * |dup| (indoor3d)"},
+    {"height_sigma_rel", Field<&ModelConfig::height_sigma_rel>(), kNonNegative,
+     "height change sigma, share of the height change"},
+    {"map_sigma_m", Field<&ModelConfig::map_sigma_m>(), kPositive,
+     "pull towards the nearest traversable centre"},
+    {"map_giveup_m", Field<&ModelConfig::map_giveup_m>(), kPositive,
+     "beyond about this distance from the map the map term lets go"},
+    {"scale_segment_m", Field<&ModelConfig::scale_segment_m>(), kPositive,
+     "one step-length scale unknown per this much estimated path"},
+    {"scale_prior_sigma", Field<&ModelConfig::scale_prior_sigma>(), kPositive,
+     "prior of the first scale around 1"},
+    {"scale_rw_sigma", Field<&ModelConfig::scale_rw_sigma>(), kPositive,
+     "random walk of the scale per segment"},
+    {"scale_rw_robust_k", Field<&ModelConfig::scale_rw_robust_k>(), kNonNegative,
+     "Cauchy width of the scale walk in sigmas; 0: Gaussian"},
+    {"scale_range_min", Field<&ModelConfig::scale_range_min>(), kPositive,
+     "plausible scale range: free inside, Gaussian with scale_range_sigma outside"},
+    {"scale_range_max", Field<&ModelConfig::scale_range_max>(), kPositive,
+     "upper end of the plausible scale range"},
+    {"scale_range_sigma", Field<&ModelConfig::scale_range_sigma>(), kNonNegative,
+     "sigma outside the plausible scale range; 0: no range prior"},
+    {"step_weight", Field<&ModelConfig::step_weight>(), kWeight, "weight of the step terms"},
+    {"heading_weight", Field<&ModelConfig::heading_weight>(), kWeight,
+     "weight of the heading-change terms"},
+    {"preservation_weight", Field<&ModelConfig::preservation_weight>(), kWeight,
+     "weight of the heading preservation terms"},
+    {"map_weight", Field<&ModelConfig::map_weight>(), kWeight, "weight of the map terms"},
+    {"height_weight", Field<&ModelConfig::height_weight>(), kWeight,
+     "weight of the height-change terms"},
+    {"hard_corridor", Field<&ModelConfig::hard_corridor>(), kNoRange,
+     "final solve: every pose near the map ends inside its corridor"},
+    {"corridor_gate_m", Field<&ModelConfig::corridor_gate_m>(), kNonNegative,
+     "poses starting within this distance of the corridor are held inside it"},
+    {"corridor_slack_m", Field<&ModelConfig::corridor_slack_m>(), kNonNegative,
+     "allowed signed corridor distance of a held pose"},
+};
+inline constexpr ParamTable<ModelConfig> kModelParams{"model", kModelParamRows};
 
 }  // namespace driftcorr

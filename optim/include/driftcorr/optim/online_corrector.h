@@ -96,9 +96,29 @@ struct OnlineConfig {
     /// 9.62 / 9.65 m.
     bool boundary_prior = true;
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kOnlineParams does not allow (corrector is not looked at).
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field of
+    /// corrector or of this struct (section online).
     std::string Validate() const;
 };
+
+/// Params.yaml section `online` (synchronous and corrector are set by the caller).
+inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
+    {"update_fraction", Field<&OnlineConfig::update_fraction>(), kShare,
+     "a window solve for the causal output every this share of chunk_m; 0: at the chunk rule"},
+    {"gap_warn_s", Field<&OnlineConfig::gap_warn_s>(), kPositive,
+     "a longer input pause or timestamp gap is reported"},
+    {"project_output", Field<&OnlineConfig::project_output>(), kNoRange,
+     "the causal pose is moved into the corridor when within corridor_gate_m"},
+    {"max_lag_epochs", Field<&OnlineConfig::max_lag_epochs>(), kNonNegative,
+     "back-pressure: Push waits while this many epochs past the last solve; 0: never waits"},
+    {"hold_live_input", Field<&OnlineConfig::hold_live_input>(), kNoRange,
+     "back-pressure also on input that arrives at real time; false: only on faster input"},
+    {"boundary_prior", Field<&OnlineConfig::boundary_prior>(), kNoRange,
+     "online windows: the past marginalised onto the boundary pose"},
+};
+inline constexpr ParamTable<OnlineConfig> kOnlineParams{"online", kOnlineParamRows};
 
 /// One pose in the world plane (ENU at the anchor).
 struct PlanarPose {

@@ -1,23 +1,30 @@
 #pragma once
-// The paper's solver, kept as a reference mode (`driftcorr correct --solver paper`, and a column
-// of `driftcorr eval`): an epoch-by-epoch filter. Per epoch i the previous poses stay fixed, the
-// new position starts at the previous corrected pose composed with the observed step, and plain
-// fixed-step gradient descent (learning rate 0.01, as published, no line search) minimises four
-// weighted terms of that one position:
+// The baseline: the paper's solver, kept as a reference mode (`driftcorr correct --solver paper`,
+// and a column of `driftcorr eval`): an epoch-by-epoch filter. Per epoch i the previous poses stay
+// fixed, the new position starts at the previous corrected pose composed with the observed step,
+// and plain fixed-step gradient descent (learning rate 0.01, as published, no line search)
+// minimises four weighted terms of that one position:
 //
 //   E_i(p) = w_t (c_i - c_{i-1} - dc_i)^2 / 2 sigma_t^2     turn angle        (HeadingChangeTerm)
 //          + w_s (|p - p_{i-1}| - L_i)^2 / 2 sigma_s^2      step length       (StepLengthTerm)
 //          + w_m min(d(p), h(p))^2 / 2 sigma_m^2            truncated distance
-//          + w_p (c_i - c_{i-1})^2 / 2 sigma_p^2            heading preservation (HeadingPreservationTerm)
+//          + w_p (c_i - c_{i-1})^2 / 2 sigma_p^2            heading preservation
+//          (HeadingPreservationTerm)
 //
 // c_i = atan2(p - p_{i-1}) is the course (heading derived from the step direction), dc_i and L_i
 // the estimate's course change and step length, d the distance to the nearest road centre line
 // from the bilinearly interpolated grid (InterpolatedField::QueryBilinear) and h the road's
 // half-width there: the map term pulls a pose towards the centre line while it is on the road and
 // lets go (flat) once it is off it. No I/O.
+// It shares only the solver-neutral result types with the batch corrector (correction_result.h)
+// and does not depend on the Ipopt adapter.
+#include <optional>
+#include <string>
+
+#include "driftcorr/core/params.h"
 #include "driftcorr/core/types.h"
 #include "driftcorr/mapping/traversable_field.h"
-#include "driftcorr/optim/corrector.h"
+#include "driftcorr/optim/correction_result.h"
 #include "driftcorr/optim/model_config.h"
 
 namespace driftcorr {
@@ -48,10 +55,37 @@ struct PaperSolverConfig {
     double min_step_m = 0.5;
     double stationary_m = 1e-3;         ///< steps shorter than this are stops [m]
 
-    /// Empty if valid, else a message naming the first bad field. Rejects settings for which the
-    /// fixed-step descent is unstable (learning_rate * curvature >= 2 on the step or turn term).
+    /// The first value kPaperSolverParams or a rule between its values does not allow, including
+    /// settings for which the fixed-step descent is unstable (learning_rate * curvature >= 2 on the
+    /// step or turn term).
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "paper.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// Params.yaml section `paper`.
+inline constexpr Param<PaperSolverConfig> kPaperSolverParamRows[] = {
+    {"learning_rate", Field<&PaperSolverConfig::learning_rate>(), kPositive,
+     "fixed gradient step, as published"},
+    {"iterations_per_epoch", Field<&PaperSolverConfig::iterations_per_epoch>(), Between(1, 1e6),
+     "gradient steps per epoch"},
+    {"turn_weight", Field<&PaperSolverConfig::turn_weight>(), kShare, "w_t"},
+    {"step_weight", Field<&PaperSolverConfig::step_weight>(), kShare, "w_s"},
+    {"map_weight", Field<&PaperSolverConfig::map_weight>(), kShare, "w_m"},
+    {"preservation_weight", Field<&PaperSolverConfig::preservation_weight>(), kShare, "w_p"},
+    {"turn_sigma_rad", Field<&PaperSolverConfig::turn_sigma_rad>(), kPositive, "sigma_t"},
+    {"step_sigma_m", Field<&PaperSolverConfig::step_sigma_m>(), kPositive, "sigma_s"},
+    {"map_sigma_m", Field<&PaperSolverConfig::map_sigma_m>(), kPositive, "sigma_m"},
+    {"preservation_sigma_rad", Field<&PaperSolverConfig::preservation_sigma_rad>(), kPositive,
+     "sigma_p"},
+    {"map_truncation_m", Field<&PaperSolverConfig::map_truncation_m>(), kNonNegative,
+     "truncation h of the map distance; 0: the road's own half-width"},
+    {"min_step_m", Field<&PaperSolverConfig::min_step_m>(), kPositive,
+     "shorter observed steps are composed without descent; >= stationary_m"},
+    {"stationary_m", Field<&PaperSolverConfig::stationary_m>(), kPositive,
+     "steps shorter than this are stops"},
+};
+inline constexpr ParamTable<PaperSolverConfig> kPaperSolverParams{"paper", kPaperSolverParamRows};
 
 /// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry only)
 /// with the paper's method. Pose 0 is the known initial pose and stays fixed. Returns the same

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/params.h"
 #include "driftcorr/core/types.h"
 #include "driftcorr/mapping/traversable_field.h"
 #include "driftcorr/optim/anchor_fit.h"
@@ -68,9 +69,41 @@ struct VerdictConfig {
     /// of the best one's.
     double anchor_ambiguous_ratio = 1.5;  ///< [-]
 
-    /// Empty if valid, else a message naming the bad field.
+    /// The first value kVerdictParams or a rule between its values does not allow.
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "verdict.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
+
+/// The verdict's thresholds (not a params.yaml section).
+inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
+    {"scale_plausible_min", Field<&VerdictConfig::scale_plausible_min>(),
+     ParamRange{0.0, 1.0, true, false}, "a scale below is degraded"},
+    {"scale_plausible_max", Field<&VerdictConfig::scale_plausible_max>(), AtLeast(1.0),
+     "a scale above is degraded"},
+    {"scale_failed_min", Field<&VerdictConfig::scale_failed_min>(), kPositive,
+     "a scale below is failed; <= scale_plausible_min"},
+    {"scale_failed_max", Field<&VerdictConfig::scale_failed_max>(), kPositive,
+     "a scale above is failed; >= scale_plausible_max"},
+    {"jump_window_s", Field<&VerdictConfig::jump_window_s>(), kPositive,
+     "input jumps: mean speed over this window"},
+    {"max_accel_mps2", Field<&VerdictConfig::max_accel_mps2>(), kPositive,
+     "input jumps: the mean speed changes faster than this"},
+    {"off_map_degraded_share", Field<&VerdictConfig::off_map_degraded_share>(), kShare,
+     "share of off-map poses that is degraded; <= off_map_failed_share"},
+    {"off_map_failed_share", Field<&VerdictConfig::off_map_failed_share>(), kShare,
+     "share of off-map poses that is failed"},
+    {"anchor_other_yaw_deg", Field<&VerdictConfig::anchor_other_yaw_deg>(), kPositive,
+     "another start at least this far in heading..."},
+    {"anchor_other_position_m", Field<&VerdictConfig::anchor_other_position_m>(), kPositive,
+     "...or position..."},
+    {"anchor_rms_ratio", Field<&VerdictConfig::anchor_rms_ratio>(),
+     ParamRange{0.0, 1.0, true, true},
+     "...that fits the map with less than this share of the RMS: the start does not fit"},
+    {"anchor_ambiguous_ratio", Field<&VerdictConfig::anchor_ambiguous_ratio>(), AtLeast(1.0),
+     "an estimated start is ambiguous when the next one's RMS is within this factor"},
+};
+inline constexpr ParamTable<VerdictConfig> kVerdictParams{"verdict", kVerdictParamRows};
 
 struct Verdict {
     VerdictLevel level = VerdictLevel::kOk;

@@ -13,16 +13,16 @@
 
 namespace driftcorr::eval {
 
-/// The compared methods, in table column order.
-/// Hook for the online corrector: once optim/ has it, add `kOnline` here, its name in ToString,
-/// a case in RunMethod (evaluation.cpp) and it to DefaultMethods(); the report writer iterates
-/// over whatever methods a ScenarioEvaluation holds, so the table, JSON and plots follow.
-/// kOnline is the causal (per-epoch) output of the online corrector (optim/online_corrector.h),
-/// run synchronously: each pose's estimate is what Push returned for it, every window solved
-/// before the next pose arrives (what the threaded mode gives when solves keep up with the input).
+/// The compared methods, in table column order. A new method is an enumerator here, its name in
+/// ToString, a case in RunMethod (evaluation.cpp) and an entry in DefaultMethods(); the report
+/// writer iterates over whatever methods a ScenarioEvaluation holds, so the table, JSON and plots
+/// follow. kOnline is the causal (per-epoch) output of the online corrector
+/// (optim/online_corrector.h), run synchronously: each pose's estimate is what Push returned for
+/// it, every window solved before the next pose arrives (what the threaded mode gives when solves
+/// keep up with the input).
 enum class Method { kEstimate, kPaper, kDriftcorr, kOnline };
 std::string ToString(Method method);
-/// estimate, paper, driftcorr (batch).
+/// estimate, paper, driftcorr (batch), online.
 std::vector<Method> DefaultMethods();
 
 /// One method's outcome on one scenario.

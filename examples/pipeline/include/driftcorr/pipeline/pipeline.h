@@ -45,19 +45,54 @@ struct PipelineConfig {
     /// driftcorr stream and the online method of eval (section `online`); its `corrector` is
     /// not read from the file: the mode's corrector above is used.
     OnlineConfig online;
-    /// The anchor check and `yaw_deg: auto` (section `anchor_fit`; reach_m is the mode's
-    /// map_giveup_m and is not read from the file).
+    /// The anchor check and `yaw_deg: auto` (not read from the file; reach_m is the mode's
+    /// map_giveup_m).
     AnchorFitConfig anchor_fit;
-    /// The verdict's thresholds (optim/verdict.h).
+    /// The verdict's thresholds (optim/verdict.h; not read from the file).
     VerdictConfig verdict;
 
+    /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
 };
 
+/// Calls f(section, table, part, about) for every params.yaml section, in the order
+/// ParameterReference lists them: `table` is the ParamTable of the section's keys, `part` the
+/// member of `config` (a PipelineConfig, const or not) the section sets, `about` one line on it.
+template <class Pipeline, class F>
+void ForEachParamSection(Pipeline&& config, F&& f) {
+    f("model", kModelParams, config.corrector.model,
+      "road2d: sigmas and weights of the NLL (optim/include/driftcorr/optim/model_config.h)");
+    f("corrector", kCorrectorParams, config.corrector,
+      "road2d: chunks, windows, restarts (optim/include/driftcorr/optim/corrector_config.h)");
+    f("paper", kPaperSolverParams, config.paper,
+      "--solver paper: the published method (optim/include/driftcorr/optim/paper_solver.h)");
+    f("roads", kRoadClassParams, config.roads,
+      "road2d: traversable OSM classes (mapping/include/driftcorr/mapping/road_network.h)");
+    f("field", kRoadFieldParams, config.field,
+      "road2d: the road distance field (mapping/include/driftcorr/mapping/road_network.h)");
+    f("indoor_model", kModelParams, config.indoor_corrector.model,
+      "indoor3d: the keys of model, pedestrian defaults (pipeline.h)");
+    f("indoor_corrector", kCorrectorParams, config.indoor_corrector,
+      "indoor3d: the keys of corrector, pedestrian defaults (pipeline.h)");
+    f("indoor_field", kIndoorFieldParams, config.indoor_field,
+      "indoor3d GeoJSON floor plans (mapping/include/driftcorr/mapping/indoor_field.h)");
+    f("surface_field", kSurfaceFieldParams, config.surface_field,
+      "indoor3d point-cloud / OctoMap maps (mapping/include/driftcorr/mapping/surface_field.h)");
+    f("online", kOnlineParams, config.online,
+      "driftcorr stream, eval's online method (optim/include/driftcorr/optim/online_corrector.h)");
+}
+
 /// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`, `indoor_model`,
-/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`). Unknown keys are errors
-/// (a misspelt parameter must not be ignored). Throws InputError naming file, line and key.
+/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`; their keys are the rows of the
+/// parameter tables, e.g. kModelParams). Unknown keys are errors (a misspelt parameter must not be
+/// ignored). Throws InputError naming the file, the line and the key as written
+/// ("params.yaml:3: indoor_field.resolution_m: must be > 0 (got -1)"), one bad key at a time.
 PipelineConfig LoadPipelineConfig(const std::string& path);
+
+/// Every section and key of params.yaml with its value in `config`, and a comment with what it
+/// may be and what it does: a complete params.yaml (LoadPipelineConfig reads it back to `config`).
+/// `driftcorr params` prints it for the defaults; it is the parameter list of README.md.
+std::string ParameterReference(const PipelineConfig& config = PipelineConfig{});
 
 /// Converts between the world plane (ENU at the anchor) and WGS84, for maps and GeoJSON output.
 class WorldFrame {

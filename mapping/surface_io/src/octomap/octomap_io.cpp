@@ -1,4 +1,4 @@
-// OctoMap occupancy trees (PRIVATE to driftcorr_mapping_pcl): floor voxels out, surface voxels in.
+// OctoMap occupancy trees (PRIVATE to driftcorr_surface_io): floor voxels out, surface voxels in.
 #include <octomap/AbstractOcTree.h>
 #include <octomap/OcTree.h>
 
@@ -18,6 +18,7 @@
 #include <string>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/atomic_file.h"
 #include "driftcorr/mapping/surface_io.h"
 
 namespace driftcorr {
@@ -324,15 +325,13 @@ void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Ve
             /*lazy_eval=*/true);
     }
     tree.updateInnerOccupancy();
-    const std::string tmp = path + ".tmp";
-    const bool written = [&] {
-        const QuietStreams quiet;
-        return IsFullTreePath(path) ? tree.write(tmp) : tree.writeBinary(tmp);
-    }();
-    if (!written) throw std::runtime_error(tmp + ": cannot write OctoMap");
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) throw std::runtime_error(path + ": cannot rename from " + tmp + ": " + ec.message());
+    WriteAtomically(path, [&](const std::string& tmp) {
+        const bool written = [&] {
+            const QuietStreams quiet;
+            return IsFullTreePath(path) ? tree.write(tmp) : tree.writeBinary(tmp);
+        }();
+        if (!written) throw std::runtime_error(path + ": cannot write OctoMap");
+    });
 }
 
 }  // namespace driftcorr

@@ -1,4 +1,4 @@
-// Validation of a PLY file before PCL reads it (PRIVATE to driftcorr_mapping_pcl).
+// Validation of a PLY file before PCL reads it (PRIVATE to driftcorr_surface_io).
 //
 // PCL 1.13's PLYReader asserts (and so aborts the process: Debian builds it with assertions) or
 // writes out of bounds on files it does not expect: a header keyword after a blank (found by

@@ -1,6 +1,6 @@
 #pragma once
 // Readers and writers of walkable-surface maps: point clouds (PCD, PLY; via PCL) and OctoMap
-// occupancy trees (.bt, .ot). Part of the separate target driftcorr_mapping_pcl: PCL and OctoMap
+// occupancy trees (.bt, .ot). Part of the separate target driftcorr_surface_io: PCL and OctoMap
 // are linked PRIVATE there and no type of theirs appears here, only Eigen and std types.
 // All coordinates are metres in the map's local frame (for a scenario: East-North-Up around the
 // anchor, z in the map's height datum); the readers do no transformation.
@@ -34,8 +34,8 @@ std::vector<Eigen::Vector3d> ReadSurfacePoints(const std::string& path);
 /// cannot be read or parsed as an OcTree, or has no floor voxel.
 std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path);
 
-/// Writers (used by the synthetic building generator and the tests). Each writes to
-/// path + ".tmp" and renames it when complete; throws std::runtime_error naming the file when
+/// Writers (used by the synthetic building generator and the tests). Each writes through a
+/// temporary file renamed when complete (atomic_file.h); throws std::runtime_error naming the file when
 /// it cannot be written. Points are stored as 32-bit floats (keep coordinates local: a float has
 /// about 0.5 m resolution at UTM northings).
 void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points);

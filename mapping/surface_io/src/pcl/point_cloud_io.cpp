@@ -1,4 +1,4 @@
-// PCD and PLY surface clouds through PCL (PRIVATE to driftcorr_mapping_pcl).
+// PCD and PLY surface clouds through PCL (PRIVATE to driftcorr_surface_io).
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
 #include <pcl/conversions.h>
@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/atomic_file.h"
 #include "driftcorr/mapping/surface_io.h"
 #include "header_text.h"
 #include "ply_check.h"
@@ -354,12 +355,6 @@ void RequireReadable(const std::string& path, const std::string& kind) {
     }
 }
 
-void RenameInto(const std::string& tmp, const std::string& path) {
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) throw std::runtime_error(path + ": cannot rename from " + tmp + ": " + ec.message());
-}
-
 pcl::PointCloud<pcl::PointXYZ> ToCloud(const std::vector<Eigen::Vector3d>& points) {
     pcl::PointCloud<pcl::PointXYZ> cloud;
     cloud.resize(points.size());
@@ -445,19 +440,19 @@ std::vector<Eigen::Vector3d> ReadSurfacePoints(const std::string& path) {
 }
 
 void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points) {
-    const std::string tmp = path + ".tmp";
-    if (pcl::io::savePCDFileBinary(tmp, ToCloud(points)) < 0) {
-        throw std::runtime_error(tmp + ": cannot write PCD");
-    }
-    RenameInto(tmp, path);
+    WriteAtomically(path, [&](const std::string& tmp) {
+        if (pcl::io::savePCDFileBinary(tmp, ToCloud(points)) < 0) {
+            throw std::runtime_error(path + ": cannot write PCD");
+        }
+    });
 }
 
 void WriteSurfacePointsPly(const std::string& path, const std::vector<Eigen::Vector3d>& points) {
-    const std::string tmp = path + ".tmp";
-    if (pcl::io::savePLYFileBinary(tmp, ToCloud(points)) < 0) {
-        throw std::runtime_error(tmp + ": cannot write PLY");
-    }
-    RenameInto(tmp, path);
+    WriteAtomically(path, [&](const std::string& tmp) {
+        if (pcl::io::savePLYFileBinary(tmp, ToCloud(points)) < 0) {
+            throw std::runtime_error(path + ": cannot write PLY");
+        }
+    });
 }
 
 }  // namespace driftcorr

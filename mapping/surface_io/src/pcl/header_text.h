@@ -1,4 +1,4 @@
-// Word-level helpers for the PCD and PLY header checks (PRIVATE to driftcorr_mapping_pcl).
+// Word-level helpers for the PCD and PLY header checks (PRIVATE to driftcorr_surface_io).
 #pragma once
 
 #include <cstdlib>

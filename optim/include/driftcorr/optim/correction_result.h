@@ -1,0 +1,50 @@
+#pragma once
+// What a correction of a whole trajectory returns, whichever solver made it (the batch corrector,
+// optim/corrector.h; the paper's baseline, optim/paper_solver.h), and how it reports progress.
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/types.h"
+#include "driftcorr/optim/covariance.h"
+#include "driftcorr/optim/solve_status.h"
+
+namespace driftcorr {
+
+struct CorrectionProgress {
+    std::string stage;  ///< "incremental", "refine" or "paper"
+    std::size_t poses_done = 0;
+    std::size_t poses_total = 0;
+};
+using ProgressCallback = std::function<void(const CorrectionProgress&)>;
+
+struct CorrectionResult {
+    SolveStatus status = SolveStatus::kFailed;
+    std::string message;         ///< human-readable outcome, names the failing stage
+    PlanarTrajectory corrected;  ///< valid only when Usable(status)
+    std::size_t windows = 0;
+    std::size_t window_retries = 0;           ///< windows re-solved without hard constraints
+    std::size_t window_failures = 0;          ///< windows that failed even then
+    std::size_t window_restarts = 0;          ///< extra window solves from other scale hypotheses
+    int iterations = 0;                       ///< solver iterations, all solves
+    std::size_t constrained_poses = 0;        ///< poses with the hard corridor constraint (refine)
+    double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range
+    /// The odometry's step lengths as the model observed them [m], one per pose (step into pose
+    /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
+    std::vector<double> step_length_m;
+    std::size_t repaired_steps = 0;  ///< steps whose length was replaced
+    SolveReport refine_report;
+    double incremental_s = 0.0;  ///< wall time of the incremental pass [s]
+    double refine_s = 0.0;       ///< wall time of the refinement [s]
+    /// Marginal covariance of every corrected pose; status kNotComputed unless
+    /// config.compute_covariance and the correction is usable.
+    CovarianceResult covariance;
+    double covariance_s = 0.0;  ///< wall time of the covariance [s]
+    /// Degenerate input or outcome worth a user's attention, one sentence each (the map covers
+    /// none or little of the drive, the estimate does not move, the scale hit its bound, steps
+    /// treated as discontinuities). The correction may still be usable.
+    std::vector<std::string> warnings;
+};
+
+}  // namespace driftcorr

@@ -1,0 +1,84 @@
+#pragma once
+// The batch corrector's settings (optim/corrector.h; the online corrector uses them too): chunks,
+// windows, restarts, the Ipopt limits, the model and the covariance.
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "driftcorr/core/params.h"
+#include "driftcorr/optim/covariance.h"
+#include "driftcorr/optim/ipopt_solver.h"
+#include "driftcorr/optim/model_config.h"
+
+namespace driftcorr {
+
+struct CorrectorConfig {
+    ModelConfig model;
+    double chunk_m = 80.0;                ///< estimated path added per incremental step [m]
+    double window_m = 240.0;              ///< trailing path re-solved per incremental step [m]
+    std::size_t max_chunk_poses = 400;    ///< cap per chunk (long stops) [poses]
+    std::size_t max_window_poses = 1500;  ///< cap per window [poses]
+    bool refine = true;                   ///< final whole-trajectory solve
+    /// A window whose solution leaves more than restart_offroad_share of its poses farther than
+    /// restart_offroad_m from every road, or whose NLL per pose exceeds restart_nll_per_pose, is
+    /// re-solved from these step-length scale hypotheses
+    /// (multiplying the current scale); the lowest NLL wins. Empty: no restarts.
+    std::vector<double> restart_scale_factors = {1.3, 0.8, 1.7};
+    double restart_offroad_m = 6.0;       ///< [m]
+    double restart_offroad_share = 0.05;  ///< [-]
+    double restart_nll_per_pose = 0.3;    ///< [-]
+    double stationary_m = 1e-3;           ///< steps shorter than this are stops [m]
+    IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0};
+    IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
+    /// Per-pose covariance of the corrected trajectory (optim/covariance.h) into
+    /// CorrectionResult::covariance. Linear in the number of poses; KITTI 00 (4541 poses):
+    /// 15-20 ms, about 2 % of the correction.
+    bool compute_covariance = true;
+    CovarianceConfig covariance;
+
+    /// The first value kCorrectorParams or a rule between its values does not allow (model and
+    /// covariance are not looked at).
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field of
+    /// model, this struct (section corrector) or covariance.
+    std::string Validate() const;
+};
+
+/// Params.yaml section `corrector` (and `indoor_corrector`).
+inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
+    {"chunk_m", Field<&CorrectorConfig::chunk_m>(), kPositive,
+     "estimated path added per incremental step"},
+    {"window_m", Field<&CorrectorConfig::window_m>(), kPositive,
+     "trailing path re-solved per incremental step; >= chunk_m"},
+    {"max_chunk_poses", Field<&CorrectorConfig::max_chunk_poses>(), AtLeast(1),
+     "cap on the poses of a chunk (long stops)"},
+    {"max_window_poses", Field<&CorrectorConfig::max_window_poses>(), AtLeast(1),
+     "cap on the poses of a window; >= max_chunk_poses"},
+    {"refine", Field<&CorrectorConfig::refine>(), kNoRange, "final whole-trajectory solve"},
+    {"restart_offroad_m", Field<&CorrectorConfig::restart_offroad_m>(), kNonNegative,
+     "a window leaving more than restart_offroad_share of its poses this far off the map restarts"},
+    {"restart_offroad_share", Field<&CorrectorConfig::restart_offroad_share>(), kShare,
+     "share of off-map poses that restarts a window"},
+    {"restart_nll_per_pose", Field<&CorrectorConfig::restart_nll_per_pose>(), kNonNegative,
+     "a window whose NLL per pose exceeds this restarts"},
+    {"stationary_m", Field<&CorrectorConfig::stationary_m>(), kNonNegative,
+     "steps shorter than this are stops"},
+    {"window_max_iterations",
+     Field<&CorrectorConfig::window_ipopt, &IpoptOptions::max_iterations>(), kNonNegative,
+     "Ipopt iterations per window solve"},
+    {"window_max_cpu_time_s",
+     Field<&CorrectorConfig::window_ipopt, &IpoptOptions::max_cpu_time_s>(), kPositive,
+     "Ipopt time limit per window solve"},
+    {"refine_max_iterations",
+     Field<&CorrectorConfig::refine_ipopt, &IpoptOptions::max_iterations>(), kNonNegative,
+     "Ipopt iterations of the final solve"},
+    {"refine_max_cpu_time_s",
+     Field<&CorrectorConfig::refine_ipopt, &IpoptOptions::max_cpu_time_s>(), kPositive,
+     "Ipopt time limit of the final solve"},
+    {"compute_covariance", Field<&CorrectorConfig::compute_covariance>(), kNoRange,
+     "per-pose covariance of the corrected trajectory"},
+};
+inline constexpr ParamTable<CorrectorConfig> kCorrectorParams{"corrector", kCorrectorParamRows};
+
+}  // namespace driftcorr
