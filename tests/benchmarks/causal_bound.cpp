@@ -6,7 +6,8 @@
 // error, the gap is the information only later epochs carry (a turn that fixes the along-track
 // position), not the online machinery.
 // Run: build/tests/causal_bound [scenario dir ...]  (default: the 7 KITTI scenarios)
-//      CAUSAL_STRIDE=n samples every n-th epoch (default 25); CAUSAL_VERBOSE=1 prints each.
+//      CAUSAL_STRIDE=n samples every n-th epoch (default 25); CAUSAL_VERBOSE=1 prints each;
+//      CAUSAL_CONFIG=params.yaml sets the parameters of all three (as `driftcorr eval --config`).
 // Every solve uses the scenario's mode settings and map field as `driftcorr eval` does
 // (road2d or indoor3d; the online corrector with the same corrector settings).
 #include <algorithm>
@@ -35,6 +36,9 @@ PlanarTrajectory Prefix(const PlanarTrajectory& t, std::size_t n) {
 void Evaluate(const std::string& dir) {
     // Batch and online causal output exactly as `driftcorr eval` runs them (its per-pose errors).
     eval::EvalConfig ec;
+    if (const char* path = std::getenv("CAUSAL_CONFIG")) {
+        ec.pipeline = pipeline::LoadPipelineConfig(path);
+    }
     ec.methods = {eval::Method::kDriftcorr, eval::Method::kOnline};
     const eval::ScenarioEvaluation ev = eval::EvaluateScenario(dir, ec);
     const eval::MethodResult* batch = ev.Find(eval::Method::kDriftcorr);
@@ -58,7 +62,8 @@ void Evaluate(const std::string& dir) {
     double s_prefix = 0.0, s_online = 0.0, s_batch = 0.0;
     std::size_t count = 0, failed = 0;
     const std::size_t n = std::min(batch->errors_m.size(), online->errors_m.size());
-    for (std::size_t i = stride; i < n && i < est.size(); i += stride) {
+    // A prefix needs 3 poses (CorrectTrajectory's precondition).
+    for (std::size_t i = std::max<std::size_t>(stride, 2); i < n && i < est.size(); i += stride) {
         const CorrectionResult r = CorrectTrajectory(Prefix(est, i + 1), &ps.field, corrector);
         if (!Usable(r.status)) {
             ++failed;
