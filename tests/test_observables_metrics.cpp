@@ -6,9 +6,11 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/frames.h"
 #include "driftcorr/core/metrics.h"
 #include "driftcorr/core/observables.h"
@@ -29,6 +31,20 @@ PlanarTrajectory MakePlanar(const std::vector<Eigen::Vector2d>& p, std::vector<d
 }
 
 // ---- Observations ----------------------------------------------------------------------------
+
+// A broken invariant is an exception naming the file, the line, the condition and the message (no
+// output from core); a kept one costs nothing.
+TEST(Check, ABrokenInvariantThrowsWithFileLineAndCondition) {
+    EXPECT_NO_THROW(DRIFTCORR_CHECK(1 + 1 == 2, "arithmetic"));
+    try {
+        DRIFTCORR_CHECK(1 + 1 == 3, "arithmetic");
+        FAIL() << "no exception";
+    } catch (const InvariantError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("test_observables_metrics.cpp:"), std::string::npos) << what;
+        EXPECT_NE(what.find("1 + 1 == 3: arithmetic"), std::string::npos) << what;
+    }
+}
 
 TEST(Observables, SquareWithYawHasKnownLengthsTurnsAndUnwrappedHeadings) {
     // A 10 m square driven counter-clockwise, facing along each side; the yaw of pose 3 is given

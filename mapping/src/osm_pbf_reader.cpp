@@ -21,6 +21,7 @@
 #include <iterator>
 #include <string>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/errors.h"
 #include "osm_ways.h"
 
@@ -142,6 +143,8 @@ OsmRoads ReadOsmPbf(const std::string& path) {
         osmium::apply(reader, handler);
         reader.close();
     } catch (const InputError&) {
+        throw;
+    } catch (const InvariantError&) {
         throw;
     } catch (const std::exception& e) {
         // libosmium reports a truncated or foreign file as osmium::pbf_error / io_error.

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
 
 namespace driftcorr {
@@ -224,9 +224,9 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
 
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
                               const PlanarTrajectory& smoothed) {
-    if (input.size() != causal.size() || causal.size() != smoothed.size() || input.size() == 0) {
-        throw std::logic_error("CheckCausalOutput: the trajectories must have the same poses");
-    }
+    DRIFTCORR_CHECK(input.size() == causal.size() && causal.size() == smoothed.size() &&
+                        input.size() > 0,
+                    "CheckCausalOutput: the trajectories must have the same poses");
     CausalCheck c;
     double causal_sq = 0.0, input_sq = 0.0;
     for (std::size_t i = 0; i < smoothed.size(); ++i) {

@@ -25,6 +25,7 @@
 #include <map>
 #include <vector>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/errors.h"
 #include "driftcorr/mapping/atomic_file.h"
 #include "driftcorr/mapping/surface_io.h"
@@ -60,6 +61,8 @@ int CallPcl(const std::string& path, const std::string& kind, F&& read) {
         return read();
     } catch (const std::bad_alloc&) {
         throw InputError(path, 0, "", kind + " file declares more data than can be held in memory");
+    } catch (const InvariantError&) {
+        throw;
     } catch (const std::exception& e) {
         throw InputError(path, 0, "", "cannot be parsed as a " + kind + " point cloud: " + e.what());
     }
