@@ -121,8 +121,13 @@ using Clock = std::chrono::steady_clock;
 // The stream's state: the corrector and the accepted inputs (for the smoothed output).
 class StreamSession {
 public:
-    StreamSession(const pipeline::StreamSetup& setup, const OnlineConfig& cfg, bool status_column)
-        : setup_(setup), cfg_(cfg), corrector_(&setup.field, cfg), status_column_(status_column) {}
+    StreamSession(const pipeline::StreamSetup& setup, const OnlineConfig& cfg,
+                  const VerdictConfig& verdict_config, bool status_column)
+        : setup_(setup),
+          cfg_(cfg),
+          verdict_config_(verdict_config),
+          corrector_(&setup.field, cfg),
+          status_column_(status_column) {}
 
     // One input line (without newline), read at `arrived` after waiting `pause_s` for it (the
     // producer's pause, not this program's own work); `complete` is false for a last line without
@@ -169,30 +174,25 @@ public:
         const OnlineStatistics st = corrector_.Statistics();
         if (!quiet) Summarise(st);
         const CorrectionResult result = corrector_.Finish();
-        std::optional<Verdict> verdict;
+        std::optional<OnlineVerdict> judged;
         if (Usable(result.status)) {
-            verdict = JudgeCorrection(reference_, &setup_.field, cfg_.corrector.model, result,
-                                      nullptr, false, true, VerdictConfig{});
-        }
-        std::optional<CausalCheck> causal;
-        if (Usable(result.status)) {
-            causal = CheckCausalOutput(reference_, causal_, result.corrected);
-            verdict = JudgeOnline(*verdict, *causal);
+            judged = JudgeOnline(reference_, causal_, &setup_.field, cfg_.corrector.model, result,
+                                 verdict_config_);
         }
         if (!quiet) {
             std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
-            if (verdict) {
+            if (judged) {
                 std::string reasons;
-                for (const std::string& why : verdict->reasons) reasons += "; " + why;
+                for (const std::string& why : judged->verdict.reasons) reasons += "; " + why;
                 std::fprintf(stderr, "driftcorr stream: verdict %s%s\n",
-                             ToString(verdict->level).c_str(), reasons.c_str());
+                             ToString(judged->verdict.level).c_str(), reasons.c_str());
+                ReportCausal(judged->check);
             }
-            if (causal) ReportCausal(*causal);
         }
         // Outputs already written cannot be taken back: what the program cannot vouch for is
         // said, and the exit code says it too.
-        const bool vouched = verdict && verdict->level != VerdictLevel::kFailed;
+        const bool vouched = judged && judged->verdict.level != VerdictLevel::kFailed;
         if (smoothed_out.empty()) return vouched ? 0 : kExitSolver;
         if (!Usable(result.status)) {
             std::fprintf(stderr, "driftcorr stream: no smoothed trajectory (%s); nothing written\n",
@@ -280,6 +280,7 @@ private:
 
     const pipeline::StreamSetup& setup_;
     OnlineConfig cfg_;
+    VerdictConfig verdict_config_;
     OnlineCorrector corrector_;
     bool status_column_;
     Trajectory accepted_;
@@ -334,7 +335,7 @@ int RunStream(const StreamArgs& a) {
     online.synchronous = a.sync;
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
-    StreamSession session(setup, online, a.status_column);
+    StreamSession session(setup, online, cfg.verdict, a.status_column);
     if (!a.quiet) {
         // Poses a producer writes before this line wait in the pipe and arrive as one burst.
         std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",

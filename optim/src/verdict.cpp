@@ -242,8 +242,14 @@ CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTraject
     return c;
 }
 
-Verdict JudgeOnline(Verdict v, const CausalCheck& c) {
-    if (!c.disagree) return v;
+OnlineVerdict JudgeOnline(const PlanarTrajectory& input, const PlanarTrajectory& causal,
+                          const TraversableField* field, const ModelConfig& model,
+                          const CorrectionResult& smoothed, const VerdictConfig& config) {
+    OnlineVerdict out{JudgeCorrection(input, field, model, smoothed, nullptr, false, true, config),
+                      CheckCausalOutput(input, causal, smoothed.corrected)};
+    const CausalCheck& c = out.check;
+    if (!c.disagree) return out;
+    Verdict& v = out.verdict;
     v.level = VerdictLevel::kFailed;
     v.reasons.push_back("failed: the causal outputs and the smoothed trajectory lie " +
                         FormatFixed(c.causal_rms_m, 2) +
@@ -251,7 +257,7 @@ Verdict JudgeOnline(Verdict v, const CausalCheck& c) {
                         "trajectory (" +
                         FormatFixed(c.input_rms_m, 2) +
                         " m): one of them followed a wrong branch of the map");
-    return v;
+    return out;
 }
 
 }  // namespace driftcorr

@@ -112,6 +112,10 @@ class StreamResult:
     scale_min: float
     scale_max: float
     warnings: List[str]
+    #: ok | degraded | failed, as ``driftcorr stream`` judges it (the smoothed trajectory and the
+    #: causal outputs against each other); None when not usable
+    verdict: Optional[str]
+    reasons: List[str]
 
 
 def load_scenario(path) -> Scenario:

@@ -172,9 +172,11 @@ py::dict Metrics(const py::object& trajectory_en, const py::object& ground_truth
 /// StreamSession, it keeps the accepted inputs to turn the smoothed result back into the frame.
 class Stream {
 public:
-    Stream(pipeline::StreamSetup setup, const OnlineConfig& cfg)
+    Stream(pipeline::StreamSetup setup, const OnlineConfig& cfg, const VerdictConfig& verdict)
         : setup_(std::make_unique<pipeline::StreamSetup>(std::move(setup))),
           corrector_(std::make_unique<OnlineCorrector>(&setup_->field, cfg)),
+          model_(cfg.corrector.model),
+          verdict_config_(verdict),
           synchronous_(cfg.synchronous) {}
 
     ~Stream() {
@@ -199,7 +201,7 @@ public:
         if (!r.Accepted()) throw py::value_error("pose: " + r.message);
         const auto [p, q] = pipeline::FromPlanarPose(r.corrected, planar, in.p_frame,
                                                      in.q_frame_body, axes, setup_->anchor);
-        Record(in, planar);
+        Record(in, planar, r.corrected);
         py::dict d;
         d["index"] = r.index;
         d["pose"] = FramePoseToArray(in.t_s, p, q);
@@ -235,13 +237,25 @@ public:
         d["scale_min"] = result.scale_min;
         d["scale_max"] = result.scale_max;
         d["warnings"] = Strings(result.warnings);
+        // The stream's verdict (optim/verdict.h JudgeOnline, as `driftcorr stream` prints it).
+        d["verdict"] = py::none();
+        d["reasons"] = py::list();
+        if (usable) {
+            const OnlineVerdict v = JudgeOnline(reference_, causal_, &setup_->field, model_,
+                                                result, verdict_config_);
+            d["verdict"] = ToString(v.verdict.level);
+            d["reasons"] = Strings(v.verdict.reasons);
+        }
         return d;
     }
 
     std::size_t size() const { return corrector_->size(); }
 
 private:
-    void Record(const FramePose& in, const PlanarPose& planar) {
+    void Record(const FramePose& in, const PlanarPose& planar, const PlanarPose& corrected) {
+        causal_.t_s.push_back(corrected.t_s);
+        causal_.p_en.push_back(corrected.p_en);
+        causal_.up_m.push_back(corrected.up_m);
         accepted_.t_s.push_back(in.t_s);
         accepted_.p_frame.push_back(in.p_frame);
         accepted_.q_frame_body.push_back(in.q_frame_body);
@@ -253,10 +267,13 @@ private:
 
     std::unique_ptr<pipeline::StreamSetup> setup_;  ///< owns the field the corrector points to
     std::unique_ptr<OnlineCorrector> corrector_;
+    ModelConfig model_;
+    VerdictConfig verdict_config_;
     bool synchronous_;
     bool finished_ = false;
     Trajectory accepted_;
     PlanarTrajectory reference_;
+    PlanarTrajectory causal_;  ///< every causal output, in the world plane
 };
 
 std::unique_ptr<Stream> MakeStream(pipeline::StreamSetup setup, const pipeline::PipelineConfig& cfg,
@@ -265,7 +282,7 @@ std::unique_ptr<Stream> MakeStream(pipeline::StreamSetup setup, const pipeline::
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = synchronous;
     if (std::string m = online.Validate(); !m.empty()) throw py::value_error("config: " + m);
-    return std::make_unique<Stream>(std::move(setup), online);
+    return std::make_unique<Stream>(std::move(setup), online, cfg.verdict);
 }
 
 std::unique_ptr<Stream> StreamFromScenario(const py::object& scenario, const py::object& config,

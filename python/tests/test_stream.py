@@ -28,6 +28,7 @@ def test_stream_same_as_cli(cli, synthetic_short, workdir):
     assert result.usable and result.poses == len(sc.estimate)
     np.testing.assert_allclose(result.corrected, np.loadtxt(smoothed_file), rtol=0, atol=2e-6)
     assert result.covariance.shape == (len(sc.estimate), 8)
+    assert result.verdict == "ok", result.reasons
 
 
 def test_stream_from_map_and_anchor(synthetic_short):

@@ -66,10 +66,9 @@ MethodResult RunOnline(const pipeline::PreparedScenario& ps, const pipeline::Pip
         causal.yaw_rad.push_back(*pushed.corrected.yaw_rad);
     }
     const CorrectionResult smoothed = online.Finish();
-    if (Usable(smoothed.status)) {  // the stream's verdict: the smoothed one and the causal check
-        const Verdict v = JudgeCorrection(est, &ps.field, oc.corrector.model, smoothed, nullptr,
-                                          false, true, VerdictConfig{});
-        r.verdict = JudgeOnline(v, CheckCausalOutput(est, causal, smoothed.corrected));
+    if (Usable(smoothed.status)) {
+        r.verdict =
+            JudgeOnline(est, causal, &ps.field, oc.corrector.model, smoothed, base.verdict).verdict;
     }
     r.wall_s = Since(t0);
     r.poses_per_s = est.size() / std::max(1e-9, r.wall_s);

@@ -142,8 +142,18 @@ struct CausalCheck {
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
                               const PlanarTrajectory& smoothed);
 
-/// The verdict on an online run: `smoothed_verdict` (JudgeCorrection of its smoothed trajectory)
-/// with the causal check's finding; a disagreement fails both.
-Verdict JudgeOnline(Verdict smoothed_verdict, const CausalCheck& check);
+/// The verdict on an online run and the check behind it.
+struct OnlineVerdict {
+    Verdict verdict;
+    CausalCheck check;
+};
+
+/// The verdict on an online run (the stream, eval's online method, the Python Stream): its
+/// `smoothed` result judged as a correction of `input` (JudgeCorrection: the start given, the
+/// scale estimated), with CheckCausalOutput's finding on its `causal` outputs; a disagreement
+/// fails both. Precondition: `smoothed` is usable and has the poses of `input` and `causal`.
+OnlineVerdict JudgeOnline(const PlanarTrajectory& input, const PlanarTrajectory& causal,
+                          const TraversableField* field, const ModelConfig& model,
+                          const CorrectionResult& smoothed, const VerdictConfig& config);
 
 }  // namespace driftcorr
