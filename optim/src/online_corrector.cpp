@@ -167,19 +167,12 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
             for (Entry& e : entries_) e.initial.yaw_rad = last_yaw_u_;
             for (PoseState& s : current_) s.yaw_rad = last_yaw_u_;
         }
-        if (r.index > 0) {
-            chain_sigma_ = PropagateStep(chain_sigma_, current_.back(), entry.step,
-                                         FrontScale(segment), fix_height_, cfg_.corrector.model);
-        }
-        current_.push_back(r.index == 0
-                               ? entry.initial
-                               : ComposeStep(current_.back(), entry.step, FrontScale(segment),
-                                             fix_height_, entry.initial.p.z(),
-                                             FrontBias(bias_segment)));
+        current_.push_back(entry.initial);
         pending_.push_back(entry);
         steps_.push_back(entry.step);
         segment_.push_back(segment);
         bias_segment_.push_back(bias_segment);
+        if (r.index > 0) ChainPose(r.index);
     }
     entries_.push_back(entry);
     t_s_.push_back(pose.t_s);
@@ -394,12 +387,18 @@ void OnlineCorrector::Merge(const FixedLagSolution& sol, double solve_s) {
 // Re-composes the causal estimates after `end` onto the (newly solved) pose `end`, and carries
 // its covariance (chain_sigma_, set to pose end's) to the newest pose. Caller holds mutex_.
 void OnlineCorrector::Recompose(std::size_t end) {
-    for (std::size_t i = end + 1; i < current_.size(); ++i) {
-        chain_sigma_ = PropagateStep(chain_sigma_, current_[i - 1], steps_[i],
-                                     FrontScale(segment_[i]), fix_height_, cfg_.corrector.model);
-        current_[i] = ComposeStep(current_[i - 1], steps_[i], FrontScale(segment_[i]), fix_height_,
-                                  current_[i].p.z(), FrontBias(bias_segment_[i]));
-    }
+    for (std::size_t i = end + 1; i < current_.size(); ++i) ChainPose(i);
+}
+
+// Pose i's estimate composed onto pose i-1's with the newest solved scale and heading-rate bias,
+// and chain_sigma_ carried through that step (current_[i] holds its height in planar mode).
+// Caller holds mutex_.
+void OnlineCorrector::ChainPose(std::size_t i) {
+    const double scale = FrontScale(segment_[i]);
+    chain_sigma_ = PropagateStep(chain_sigma_, current_[i - 1], steps_[i], scale, fix_height_,
+                                 cfg_.corrector.model);
+    current_[i] = ComposeStep(current_[i - 1], steps_[i], scale, fix_height_, current_[i].p.z(),
+                              FrontBias(bias_segment_[i]));
 }
 
 OnlineStatistics OnlineCorrector::Statistics() const {

@@ -226,6 +226,7 @@ private:
     void RunSolve(std::size_t end, bool restarts);
     void Merge(const FixedLagSolution& solution, double solve_s);
     void Recompose(std::size_t end);
+    void ChainPose(std::size_t i);
 
     const TraversableField* field_;
     OnlineConfig cfg_;
