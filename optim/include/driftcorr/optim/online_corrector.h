@@ -41,8 +41,9 @@
 // one step late. Do not mix poses with and without heading in one stream.
 //
 // Threading model (synchronous = false): one worker thread owns the FixedLagSmoother and runs the
-// window solves, at a lower scheduling priority than the caller (Linux: nice + 10), so that an
-// arriving pose pre-empts a running solve on a busy core. Push (the caller's thread) and the worker share, under one mutex: the poses not
+// window solves, at a lower scheduling priority than the caller (Linux: SCHED_BATCH, nice + 10),
+// so that an arriving pose pre-empts a running solve on a busy core and the solve never pre-empts
+// a Push. Push (the caller's thread) and the worker share, under one mutex: the poses not
 // yet handed to the solver, the request flag, and the causal estimates with the latest scales.
 // Push holds the mutex for O(1) work; the worker holds it only to take the queued poses and to
 // merge a solution (O(window + poses pushed during the solve)), never while solving. Push and
