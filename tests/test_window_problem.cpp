@@ -1,6 +1,8 @@
-// Tests of the window NLP (optim/src/window_problem.cpp) and its Ipopt adapter
-// (optim/src/ipopt_solver.cpp): every solver callback against central differences of the one it
-// differentiates, the objective at the truth, and a small constrained solve.
+// Tests of the window NLP (optim/src/window_problem.cpp), its Ipopt adapter
+// (optim/src/ipopt_solver.cpp) and the Newton solver of its soft terms
+// (optim/src/newton_solver.cpp): every solver callback against central differences of the one it
+// differentiates, the objective at the truth, a small constrained solve, and the Newton solver
+// against Ipopt on the same windows.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -12,10 +14,13 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/covariance.h"
+#include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/ipopt_solver.h"
+#include "driftcorr/optim/newton_solver.h"
 #include "driftcorr/optim/window_problem.h"
 
 #include "test_state.h"
@@ -355,6 +360,47 @@ TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kBoundaryPrior)] > 0, c.boundary_prior);
 }
 
+// The Newton solver and Ipopt on the same soft window of a drifting estimate (heading bias
+// 4 mrad per step, steps 3 % too long) reach the same minimum; held heights stay put.
+TEST_P(WindowDerivatives, NewtonReachesIpoptsMinimum) {
+    const WindowCase c = GetParam();
+    const TrajectoryState start = StateFrom(Curve(0.004, 1.03), model_, c.fix_height);
+    std::optional<PosePriorTerm> prior;
+    if (c.boundary_prior) prior = PriorOn(start, c.first - 1);
+    const std::vector<std::uint8_t> soft(c.last - c.first + 1, 0);
+    TrajectoryState by_newton = start, by_ipopt = start;
+    WindowProblem pn(by_newton, &field_, model_, c.first, c.last, soft, WindowUse::kSolve, prior);
+    WindowProblem pi(by_ipopt, &field_, model_, c.first, c.last, soft, WindowUse::kSolve, prior);
+    std::vector<double> x0(pn.NumVariables());
+    pn.InitialPoint(x0.data());
+    const double f0 = pn.Objective(x0.data());
+    std::vector<double> g0(pn.NumVariables());
+    pn.Gradient(x0.data(), g0.data());
+    double g0_max = 0.0;
+    for (double g : g0) g0_max = std::max(g0_max, std::abs(g));
+    const SolveReport rn = SolveWithNewton(pn, NewtonOptions{});
+    IpoptOptions opt;
+    opt.max_iterations = 200;
+    const SolveReport ri = SolveWithIpopt(pi, opt);
+    ASSERT_TRUE(Usable(rn.status)) << rn.message;
+    ASSERT_TRUE(Usable(ri.status)) << ri.message;
+    ASSERT_GT(g0_max, 0.01) << "the window must start away from its minimum";
+    EXPECT_LT(rn.objective, f0);
+    EXPECT_NEAR(rn.objective, ri.objective, 1e-6 * (1.0 + std::abs(ri.objective)));
+    EXPECT_LE(rn.iterations, 20);
+    for (std::size_t i = 0; i < start.poses.size(); ++i) {
+        EXPECT_LT((by_newton.poses[i].p - by_ipopt.poses[i].p).norm(), 1e-3) << "pose " << i;
+        EXPECT_NEAR(by_newton.poses[i].yaw_rad, by_ipopt.poses[i].yaw_rad, 1e-4) << "pose " << i;
+        if (c.fix_height) EXPECT_EQ(by_newton.poses[i].p.z(), start.poses[i].p.z()) << "pose " << i;
+    }
+    for (std::size_t g = 0; g < start.scales.size(); ++g) {
+        EXPECT_NEAR(by_newton.scales[g], by_ipopt.scales[g], 1e-4) << "scale " << g;
+    }
+    for (std::size_t g = 0; g < start.biases.size(); ++g) {
+        EXPECT_NEAR(by_newton.biases[g], by_ipopt.biases[g], 1e-5) << "bias " << g;
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Windows, WindowDerivatives,
     ::testing::Values(WindowCase{1, 29, true, 101u}, WindowCase{1, 29, false, 102u},
@@ -540,6 +586,78 @@ TEST(IpoptSolver, ConstrainedWindowEndsInsideTheCorridor) {
     const double before = (est.p_en.back() - truth.p_en.back()).norm();
     const double after = (s.poses.back().p.head<2>() - truth.p_en.back()).norm();
     EXPECT_LT(after, 0.5 * before) << "before " << before << " m, after " << after << " m";
+}
+
+// ---- Newton ---------------------------------------------------------------------------------
+
+// Odometry 4.5x too long, the poses starting on the true curve: the map asks for scales of
+// 1/4.5, below kScaleMin. Newton keeps them at the bound (the projected method), where Ipopt
+// ends too, with the same objective.
+TEST(NewtonSolver, KeepsScalesAtTheirBoundLikeIpopt) {
+    ModelConfig model = Model();
+    model.scale_range_sigma = 0.0;  // no prior pulling the scales back into the plausible range
+    const TraversableField field = Field(3.5);
+    TrajectoryState start = StateFrom(Curve(0.0, 4.5), model, true);
+    start.poses = StateFrom(Curve(), model, true).poses;
+    TrajectoryState by_newton = start, by_ipopt = start;
+    const std::vector<std::uint8_t> soft(kPoses - 1, 0);
+    WindowProblem pn(by_newton, &field, model, 1, kPoses - 1, soft);
+    WindowProblem pi(by_ipopt, &field, model, 1, kPoses - 1, soft);
+    const SolveReport rn = SolveWithNewton(pn, NewtonOptions{});
+    const SolveReport ri = SolveWithIpopt(pi, IpoptOptions{});
+    ASSERT_TRUE(Usable(rn.status)) << rn.message;
+    ASSERT_TRUE(Usable(ri.status)) << ri.message;
+    const double lowest = *std::min_element(by_newton.scales.begin(), by_newton.scales.end());
+    EXPECT_EQ(lowest, kScaleMin) << "the case must press a scale against its bound";
+    for (std::size_t g = 0; g < start.scales.size(); ++g) {
+        EXPECT_GE(by_newton.scales[g], kScaleMin);
+        EXPECT_LE(by_newton.scales[g], kScaleMax);
+        EXPECT_NEAR(by_newton.scales[g], by_ipopt.scales[g], 1e-4) << "scale " << g;
+    }
+    EXPECT_NEAR(rn.objective, ri.objective, 1e-5 * (1.0 + std::abs(ri.objective)));
+}
+
+// The final solve with refine_newton against Ipopt alone, on a drifting estimate (heading bias
+// 4 mrad per step, steps 2 % too long): on wide roads (3.5 m) no corridor constraint is active
+// at the soft minimum, which is then the answer (Ipopt's within its tolerance); on narrow ones
+// (1 m) some are, and Ipopt solves the constrained program from the same start as without the
+// Newton step (the same answer exactly).
+TEST(NewtonSolver, FinalSolveIsIpoptsWithOrWithoutActiveConstraints) {
+    for (const double half_width_m : {3.5, 1.0}) {
+        SCOPED_TRACE("half width " + std::to_string(half_width_m));
+        const TraversableField field = Field(half_width_m);
+        const PlanarTrajectory est = Curve(0.004, 1.02);
+        CorrectorConfig cfg;
+        cfg.model = Model();
+        cfg.chunk_m = 20.0;
+        cfg.window_m = 40.0;
+        cfg.compute_covariance = false;
+        std::vector<CorrectionResult> results;
+        for (const bool newton : {true, false}) {
+            cfg.refine_newton = newton;
+            IncrementalCorrector c(InitialState(est, cfg, true), &field, cfg);
+            c.SolveRemaining();
+            results.push_back(c.Finish(est.t_s));
+            ASSERT_TRUE(Usable(results.back().status)) << results.back().message;
+            EXPECT_GT(results.back().constrained_poses, 0u);
+        }
+        const bool inactive =
+            results[0].message.find("no corridor constraint active") != std::string::npos;
+        EXPECT_EQ(inactive, half_width_m > 2.0) << results[0].message;
+        EXPECT_LE(results[0].refine_report.max_violation_m, cfg.refine_ipopt.constraint_tolerance);
+        for (std::size_t i = 0; i < est.size(); ++i) {
+            const double d = (results[0].corrected.p_en[i] - results[1].corrected.p_en[i]).norm();
+            EXPECT_LT(d, inactive ? 1e-3 : 1e-9) << "pose " << i;
+        }
+    }
+}
+
+TEST(NewtonSolver, RefusesAConstrainedProblem) {
+    const ModelConfig model = Model();
+    const TraversableField field = Field(3.5);
+    TrajectoryState s = StateFrom(Curve(), model, true);
+    WindowProblem p(s, &field, model, 1, kPoses - 1, EveryThird(1, kPoses - 1));
+    EXPECT_THROW(SolveWithNewton(p, NewtonOptions{}), InvariantError);
 }
 
 }  // namespace

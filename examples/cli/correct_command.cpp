@@ -219,7 +219,7 @@ void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
         std::printf("solver     paper: %s (%s)\n", ToString(r.status).c_str(),
                     r.message.c_str());
     } else {
-        std::printf("solver     %s (%s); %zu windows, %d Ipopt iterations, %zu poses on hard corridor,"
+        std::printf("solver     %s (%s); %zu windows, %d solver iterations, %zu poses on hard corridor,"
                     " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
     }

@@ -29,6 +29,12 @@ struct CorrectorConfig {
     double restart_offroad_share = 0.05;  ///< [-]
     double restart_nll_per_pose = 0.3;    ///< [-]
     double stationary_m = 1e-3;           ///< steps shorter than this are stops [m]
+    /// The windows' soft solves by the banded Newton solver (optim/newton_solver.h, with
+    /// window_ipopt's iteration limit and tolerances); false: by Ipopt.
+    bool window_newton = true;
+    /// The final solve starts from its soft terms' minimum (Newton); Ipopt solves the constrained
+    /// program only when a constrained pose lies outside its corridor there.
+    bool refine_newton = true;
     IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0};
     IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
     /// Per-pose covariance of the corrected trajectory (optim/covariance.h) into
@@ -64,15 +70,19 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
      "a window whose NLL per pose exceeds this restarts"},
     {"stationary_m", Field<&CorrectorConfig::stationary_m>(), kNonNegative,
      "steps shorter than this are stops"},
+    {"window_newton", Field<&CorrectorConfig::window_newton>(), kNoRange,
+     "soft window solves by the banded Newton solver (false: Ipopt)"},
+    {"refine_newton", Field<&CorrectorConfig::refine_newton>(), kNoRange,
+     "final solve from its soft minimum; Ipopt only where a corridor is left"},
     {"window_max_iterations",
      Field<&CorrectorConfig::window_ipopt, &IpoptOptions::max_iterations>(), kNonNegative,
-     "Ipopt iterations per window solve"},
+     "iterations per window solve"},
     {"window_max_cpu_time_s",
      Field<&CorrectorConfig::window_ipopt, &IpoptOptions::max_cpu_time_s>(), kPositive,
-     "Ipopt time limit per window solve"},
+     "Ipopt time limit per window solve (window_newton false)"},
     {"refine_max_iterations",
      Field<&CorrectorConfig::refine_ipopt, &IpoptOptions::max_iterations>(), kNonNegative,
-     "Ipopt iterations of the final solve"},
+     "iterations of the final solve (Newton, then Ipopt)"},
     {"refine_max_cpu_time_s",
      Field<&CorrectorConfig::refine_ipopt, &IpoptOptions::max_cpu_time_s>(), kPositive,
      "Ipopt time limit of the final solve"},

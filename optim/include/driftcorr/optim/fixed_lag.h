@@ -47,7 +47,7 @@ struct FixedLagSolution {
     /// Heading-rate bias of bias segments [0, bias segment of end] [rad/s]; empty: the model
     /// has none.
     std::vector<double> biases;
-    bool usable = false;           ///< Ipopt returned a usable solution (else the state is kept)
+    bool usable = false;           ///< the solver returned a usable solution (else the state is kept)
     bool boundary_prior = false;   ///< the boundary pose carried a marginalised prior
     /// Covariance of pose `end`: the batch's covariance model (ComputeCovariance) over the
     /// window relative to its boundary, plus the boundary's marginalised uncertainty carried

@@ -6,8 +6,10 @@
 // One chunk step (SolveChunk): the scale segments first entered by the new poses start from the
 // latest scale estimate, the new poses are dead-reckoned by composing the odometry observations
 // onto the corrected end, and a trailing window of about window_m of path is re-solved with the
-// soft terms (Ipopt), restarting from other step-length scale hypotheses when the solution lands in
-// a poor basin. Finish() then solves the whole trajectory with the hard corridor constraints.
+// soft terms (the Newton solver, or Ipopt with window_newton false), restarting from other
+// step-length scale hypotheses when the solution lands in a poor basin. Finish() then solves the
+// whole trajectory with the hard corridor constraints (Ipopt; with refine_newton, only when a
+// constrained pose lies outside its corridor at the soft terms' minimum).
 //
 // What a window keeps of the poses before it (they are not re-solved): pose first-1 is held fixed
 // and anchors the window through the step and heading terms of step `first`; the step-length scale
@@ -104,7 +106,7 @@ void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to);
 /// latest estimate.
 void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to);
 
-/// One trailing-window solve with the soft terms (Ipopt; window_ipopt), written into `s`: poses
+/// One trailing-window solve with the soft terms (window_newton, window_ipopt), written into `s`: poses
 /// [first, last] (and first-1 with a boundary prior) and the window's scales. With `restarts`,
 /// a solution that leaves many poses off the roads or explains the window poorly (a wrong basin)
 /// is re-solved from the restart_scale_factors hypotheses and the lowest NLL wins. Counts its

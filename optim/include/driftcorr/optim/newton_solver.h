@@ -1,0 +1,30 @@
+#pragma once
+// Solves a WindowProblem without constraints (the incremental and fixed-lag windows' soft terms)
+// by a damped Newton method on its exact Hessian: the Hessian of a window is a band (each term
+// couples consecutive poses) bordered by its few scale and heading-rate bias variables, so one
+// sparse LDL^T factorisation (Eigen, fill-reducing ordering analysed once per window) costs
+// O(poses). Where the Hessian is not positive definite (the map term is not convex) a multiple of
+// its diagonal is added, as Ipopt corrects the inertia of its own system; steps are accepted by a
+// backtracking (Armijo) line search on the objective. Variables whose bounds coincide (heights in
+// planar mode) are held; the scale variables are kept inside their bounds by projection.
+//
+// Convergence is Ipopt's test for an unconstrained problem: the gradient's largest component,
+// with the objective scaled as Ipopt scales it (to a gradient of at most 100 at the start),
+// below `tolerance`; `acceptable_tolerance` where the line search can no longer decrease the
+// objective. The constrained program (the hard corridor) stays with Ipopt (ipopt_solver.h).
+#include "driftcorr/optim/solve_status.h"
+#include "driftcorr/optim/window_problem.h"
+
+namespace driftcorr {
+
+struct NewtonOptions {
+    int max_iterations = 50;
+    double tolerance = 1e-6;
+    double acceptable_tolerance = 1e-4;
+};
+
+/// Solves and, when the outcome is usable, stores the solution into the problem's state.
+/// Precondition: problem.NumConstraints() == 0 and the problem was built with WindowUse::kSolve.
+SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options);
+
+}  // namespace driftcorr

@@ -1,0 +1,183 @@
+#include "driftcorr/optim/newton_solver.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "driftcorr/core/check.h"
+
+namespace driftcorr {
+namespace {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// Armijo's sufficient decrease, the damping's first value and growth, the backtracking's
+// halvings before the damping grows instead, and the damping beyond which the solve gives up.
+constexpr double kArmijo = 1e-4, kDampingFirst = 1e-4, kDampingGrowth = 8.0, kDampingMax = 1e10;
+constexpr int kHalvings = 12;
+
+// The Hessian's lower triangle with the problem's pattern and a full diagonal, and where each
+// entry of HessianValues lands in it.
+struct Pattern {
+    SparseMatrix matrix;
+    std::vector<int> slot;      ///< per HessianStructure entry: index into matrix.valuePtr()
+    std::vector<int> diagonal;  ///< per variable: index of its diagonal entry
+    std::vector<int> column;    ///< per entry: its column (the row is the inner index)
+};
+
+Pattern BuildPattern(const WindowProblem& p) {
+    const auto& structure = p.HessianStructure();
+    const int n = p.NumVariables();
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(structure.size() + n);
+    for (const auto& [r, c] : structure) t.emplace_back(r, c, 0.0);
+    for (int k = 0; k < n; ++k) t.emplace_back(k, k, 0.0);
+    Pattern out;
+    out.matrix.resize(n, n);
+    out.matrix.setFromTriplets(t.begin(), t.end());
+    out.matrix.makeCompressed();
+    const int* outer = out.matrix.outerIndexPtr();
+    const int* inner = out.matrix.innerIndexPtr();
+    auto index = [&](int r, int c) {
+        return static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], r) - inner);
+    };
+    out.slot.reserve(structure.size());
+    for (const auto& [r, c] : structure) out.slot.push_back(index(r, c));
+    for (int k = 0; k < n; ++k) out.diagonal.push_back(index(k, k));
+    out.column.resize(out.matrix.nonZeros());
+    for (int c = 0; c < n; ++c) std::fill(&out.column[outer[c]], &out.column[outer[c + 1]], c);
+    return out;
+}
+
+double MaxAbs(const std::vector<double>& v) {
+    double m = 0.0;
+    for (double e : v) m = std::max(m, std::abs(e));
+    return m;
+}
+
+}  // namespace
+
+SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options) {
+    DRIFTCORR_CHECK(problem.NumConstraints() == 0, "the Newton solver takes no constraints");
+    DRIFTCORR_CHECK(!problem.HessianStructure().empty(), "a problem built with WindowUse::kSolve");
+    const int n = problem.NumVariables();
+    std::vector<double> lower(n), upper(n), x(n);
+    problem.Bounds(lower.data(), upper.data(), nullptr, nullptr);
+    problem.InitialPoint(x.data());
+    std::vector<bool> held(n);
+    for (int k = 0; k < n; ++k) {
+        held[k] = lower[k] == upper[k];
+        x[k] = std::clamp(x[k], lower[k], upper[k]);
+    }
+    Pattern pattern = BuildPattern(problem);
+    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
+    ldlt.analyzePattern(pattern.matrix);
+
+    std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
+    // The active set: held variables and those pressed against a bound by the gradient; they
+    // stay where they are for the next step (projected Newton), and their gradient is left out.
+    std::vector<bool> active(n);
+    auto projected_gradient = [&] {
+        problem.Gradient(x.data(), grad.data());
+        for (int k = 0; k < n; ++k) {
+            active[k] = held[k] || (x[k] <= lower[k] && grad[k] > 0.0) ||
+                        (x[k] >= upper[k] && grad[k] < 0.0);
+            if (active[k]) grad[k] = 0.0;
+        }
+    };
+    SolveReport report;
+    double f = problem.Objective(x.data());
+    if (!std::isfinite(f)) {
+        report.message = "objective not finite at the starting point";
+        return report;
+    }
+    projected_gradient();
+    // Ipopt's scaling of the objective: its gradient at the start at most 100.
+    const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
+    double damping = 0.0;
+    Eigen::VectorXd step(n);
+    report.status = SolveStatus::kMaxIterations;
+    report.message = "Maximum_Iterations_Exceeded";
+    for (int it = 0;; ++it) {
+        const double error = scale * MaxAbs(grad);
+        if (error <= options.tolerance) {
+            report.status = SolveStatus::kSuccess;
+            report.message = "Solve_Succeeded";
+            break;
+        }
+        if (it >= options.max_iterations) {
+            if (error <= options.acceptable_tolerance) {
+                report.status = SolveStatus::kAcceptable;
+                report.message = "Solved_To_Acceptable_Level";
+            }
+            break;
+        }
+        report.iterations = it + 1;
+        problem.HessianValues(x.data(), 1.0, nullptr, hessian.data());
+        double* values = pattern.matrix.valuePtr();
+        std::fill(values, values + pattern.matrix.nonZeros(), 0.0);
+        for (std::size_t e = 0; e < hessian.size(); ++e) values[pattern.slot[e]] += hessian[e];
+        const int* row = pattern.matrix.innerIndexPtr();
+        for (int e = 0; e < pattern.matrix.nonZeros(); ++e) {
+            if (active[row[e]] || active[pattern.column[e]]) values[e] = 0.0;
+        }
+        std::vector<double> diagonal(n);
+        for (int k = 0; k < n; ++k) {
+            diagonal[k] = active[k] ? 1.0 : values[pattern.diagonal[k]];
+            values[pattern.diagonal[k]] = diagonal[k];
+        }
+        // Newton's step, damped (H + damping * max(|diag H|, 1)) until the system is positive
+        // definite and the line search finds a decrease.
+        bool moved = false;
+        while (!moved) {
+            for (int k = 0; k < n; ++k) {
+                values[pattern.diagonal[k]] =
+                    diagonal[k] + (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
+            }
+            ldlt.factorize(pattern.matrix);
+            const bool definite =
+                ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
+            if (definite) {
+                step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(grad.data(), n));
+                for (int alpha_k = 0; alpha_k < kHalvings && !moved; ++alpha_k) {
+                    const double alpha = std::ldexp(1.0, -alpha_k);
+                    double decrease = 0.0;  // the model's, along the projected step
+                    for (int k = 0; k < n; ++k) {
+                        trial[k] = std::clamp(x[k] + alpha * step[k], lower[k], upper[k]);
+                        decrease += grad[k] * (trial[k] - x[k]);
+                    }
+                    if (!(decrease < 0.0)) break;
+                    const double f_trial = problem.Objective(trial.data());
+                    if (std::isfinite(f_trial) && f_trial <= f + kArmijo * decrease) {
+                        x.swap(trial);
+                        f = f_trial;
+                        moved = true;
+                        if (alpha_k == 0) damping = damping / kDampingGrowth < 1e-8 ? 0.0
+                                                                              : damping / kDampingGrowth;
+                    }
+                }
+                if (moved) break;
+            }
+            damping = damping == 0.0 ? kDampingFirst : damping * kDampingGrowth;
+            if (damping > kDampingMax) break;
+        }
+        if (!moved) {  // no decrease along any damped step: as far as this method goes
+            if (error <= options.acceptable_tolerance) {
+                report.status = SolveStatus::kAcceptable;
+                report.message = "Solved_To_Acceptable_Level";
+            } else {
+                report.status = SolveStatus::kFailed;
+                report.message = "Search_Direction_Becomes_Too_Small";
+            }
+            break;
+        }
+        projected_gradient();
+    }
+    report.objective = f;
+    if (Usable(report.status)) problem.Store(x.data());
+    return report;
+}
+
+}  // namespace driftcorr
