@@ -106,9 +106,9 @@ void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to);
 /// latest estimate.
 void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to);
 
-/// One trailing-window solve with the soft terms (window_newton, window_ipopt), written into `s`: poses
-/// [first, last] (and first-1 with a boundary prior) and the window's scales. With `restarts`,
-/// a solution that leaves many poses off the roads or explains the window poorly (a wrong basin)
+/// One trailing-window solve with the soft terms (window_newton, window_ipopt), written into
+/// `s`: poses [first, last] (and first-1 with a boundary prior) and the window's scales. With
+/// `restarts`, a solution that leaves many poses off the roads or explains the window poorly (a wrong basin)
 /// is re-solved from the restart_scale_factors hypotheses and the lowest NLL wins. Counts its
 /// iterations and restarts into `stats`. Time and memory bounded by the window, not by the
 /// trajectory. Precondition: 1 <= first <= last < s.poses.size().
