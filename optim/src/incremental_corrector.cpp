@@ -58,14 +58,14 @@ NewtonOptions NewtonFrom(const IpoptOptions& opt) {
 }
 
 // The largest excess of a flagged pose's corridor distance over corridor_slack_m (0 if none).
-double CorridorExcess(const TrajectoryState& s, const TraversableField& field,
-                      const ModelConfig& m, std::size_t first,
-                      const std::vector<std::uint8_t>& flags) {
+double CorridorExcess(const TrajectoryState& s, const TraversableField& field, const ModelConfig& m,
+                      std::size_t first, const std::vector<std::uint8_t>& flags) {
     double excess = 0.0;
     for (std::size_t k = 0; k < flags.size(); ++k) {
         if (!flags[k]) continue;
         const auto q = field.Query(s.poses[first + k].p);
-        excess = std::max(excess, (q ? q->corridor.value : field.truncation_m()) - m.corridor_slack_m);
+        excess =
+            std::max(excess, (q ? q->corridor.value : field.truncation_m()) - m.corridor_slack_m);
     }
     return excess;
 }
@@ -84,7 +84,8 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
                         std::size_t last, CorrectionResult& result, bool hard,
                         const std::optional<PosePriorTerm>& prior = std::nullopt) {
     const std::vector<std::uint8_t> none(last - first + 1, 0);
-    std::vector<std::uint8_t> flags = hard ? GateConstraints(s, field, cfg.model, first, last) : none;
+    std::vector<std::uint8_t> flags =
+        hard ? GateConstraints(s, field, cfg.model, first, last) : none;
     const std::size_t constrained = std::count(flags.begin(), flags.end(), std::uint8_t(1));
     if (hard) result.constrained_poses = constrained;
     if (!hard || constrained == 0) {
@@ -146,7 +147,8 @@ SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
     const double nll_per_pose = best.objective / double(last - first + 1);
     if (!restarts || !field || cfg.restart_scale_factors.empty() ||
         (Usable(best.status) && nll_per_pose <= cfg.restart_nll_per_pose &&
-         OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <= cfg.restart_offroad_share)) {
+         OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <=
+             cfg.restart_offroad_share)) {
         return best;
     }
     SavedPoses best_poses(s, first - 1, last);
@@ -294,7 +296,8 @@ void AppendStep(TrajectoryState& s, const PoseState& initial, const StepObservat
     if (s.bias_segment.empty()) return;
     const int bias_segment = static_cast<int>(elapsed_before_s / model.heading_bias_segment_s);
     s.bias_segment.push_back(bias_segment);
-    if (bias_segment + 1 > static_cast<int>(s.biases.size())) s.biases.resize(bias_segment + 1, 0.0);
+    if (bias_segment + 1 > static_cast<int>(s.biases.size()))
+        s.biases.resize(bias_segment + 1, 0.0);
 }
 
 IncrementalCorrector::IncrementalCorrector(const PoseState& pose0, bool fix_height,

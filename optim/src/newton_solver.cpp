@@ -41,7 +41,8 @@ Pattern BuildPattern(const WindowProblem& p) {
     const int* outer = out.matrix.outerIndexPtr();
     const int* inner = out.matrix.innerIndexPtr();
     auto index = [&](int r, int c) {
-        return static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], r) - inner);
+        return static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], r) -
+                                inner);
     };
     out.slot.reserve(structure.size());
     for (const auto& [r, c] : structure) out.slot.push_back(index(r, c));
@@ -134,11 +135,11 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         while (!moved) {
             for (int k = 0; k < n; ++k) {
                 values[pattern.diagonal[k]] =
-                    diagonal[k] + (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
+                    diagonal[k] +
+                    (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
             }
             ldlt.factorize(pattern.matrix);
-            const bool definite =
-                ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
+            const bool definite = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
             if (definite) {
                 step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(grad.data(), n));
                 for (int alpha_k = 0; alpha_k < kHalvings && !moved; ++alpha_k) {
@@ -154,8 +155,9 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
                         x.swap(trial);
                         f = f_trial;
                         moved = true;
-                        if (alpha_k == 0) damping = damping / kDampingGrowth < 1e-8 ? 0.0
-                                                                              : damping / kDampingGrowth;
+                        if (alpha_k == 0)
+                            damping =
+                                damping / kDampingGrowth < 1e-8 ? 0.0 : damping / kDampingGrowth;
                     }
                 }
                 if (moved) break;
