@@ -18,37 +18,77 @@ using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 constexpr double kArmijo = 1e-4, kDampingFirst = 1e-4, kDampingGrowth = 8.0, kDampingMax = 1e10;
 constexpr int kHalvings = 12;
 
-// The Hessian's lower triangle with the problem's pattern and a full diagonal, and where each
-// entry of HessianValues lands in it.
+// The order the factorisation takes the variables in: the problem's, except for the variables
+// after the poses' (scale and heading-rate bias segments), each of which goes right after the
+// last pose variable it is coupled with. The Hessian is then a band with a few short arrows, and
+// its LDL^T fills in only within them, without a graph analysis per window.
+std::vector<int> BandOrder(const WindowProblem& p) {
+    const int n = p.NumVariables(), poses = p.PoseVar(p.last(), 3) + 1;
+    std::vector<int> key(n);
+    for (int k = 0; k < n; ++k) key[k] = k < poses ? k : -1;
+    for (const auto& [r, c] : p.HessianStructure()) {
+        if (r >= poses && c < poses) key[r] = std::max(key[r], c);
+    }
+    std::vector<int> order(n);  // order[position] = variable
+    for (int k = 0; k < n; ++k) order[k] = k;
+    // Ties: a pose variable before the segments placed after it, segments in their own order.
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+        return std::make_pair(key[a], a >= poses) < std::make_pair(key[b], b >= poses);
+    });
+    std::vector<int> position(n);
+    for (int k = 0; k < n; ++k) position[order[k]] = k;
+    return position;
+}
+
+// The Hessian's lower triangle in BandOrder with the problem's pattern and a full diagonal, and
+// where each entry of HessianValues lands in it.
 struct Pattern {
     SparseMatrix matrix;
+    std::vector<int> position;  ///< per variable: its row and column in the matrix
     std::vector<int> slot;      ///< per HessianStructure entry: index into matrix.valuePtr()
     std::vector<int> diagonal;  ///< per variable: index of its diagonal entry
-    std::vector<int> column;    ///< per entry: its column (the row is the inner index)
+    std::vector<int> row_var, column_var;  ///< per entry: the variables of its row and column
 };
 
 Pattern BuildPattern(const WindowProblem& p) {
     const auto& structure = p.HessianStructure();
     const int n = p.NumVariables();
+    Pattern out;
+    out.position = BandOrder(p);
+    auto lower = [&](int r, int c) {
+        const int a = out.position[r], b = out.position[c];
+        return a >= b ? std::make_pair(a, b) : std::make_pair(b, a);
+    };
     std::vector<Eigen::Triplet<double>> t;
     t.reserve(structure.size() + n);
-    for (const auto& [r, c] : structure) t.emplace_back(r, c, 0.0);
+    for (const auto& [r, c] : structure) {
+        const auto [a, b] = lower(r, c);
+        t.emplace_back(a, b, 0.0);
+    }
     for (int k = 0; k < n; ++k) t.emplace_back(k, k, 0.0);
-    Pattern out;
     out.matrix.resize(n, n);
     out.matrix.setFromTriplets(t.begin(), t.end());
     out.matrix.makeCompressed();
     const int* outer = out.matrix.outerIndexPtr();
     const int* inner = out.matrix.innerIndexPtr();
     auto index = [&](int r, int c) {
-        return static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], r) -
+        const auto [a, b] = lower(r, c);
+        return static_cast<int>(std::lower_bound(inner + outer[b], inner + outer[b + 1], a) -
                                 inner);
     };
     out.slot.reserve(structure.size());
     for (const auto& [r, c] : structure) out.slot.push_back(index(r, c));
     for (int k = 0; k < n; ++k) out.diagonal.push_back(index(k, k));
-    out.column.resize(out.matrix.nonZeros());
-    for (int c = 0; c < n; ++c) std::fill(&out.column[outer[c]], &out.column[outer[c + 1]], c);
+    std::vector<int> var(n);
+    for (int k = 0; k < n; ++k) var[out.position[k]] = k;
+    out.row_var.resize(out.matrix.nonZeros());
+    out.column_var.resize(out.matrix.nonZeros());
+    for (int c = 0; c < n; ++c) {
+        for (int e = outer[c]; e < outer[c + 1]; ++e) {
+            out.row_var[e] = var[inner[e]];
+            out.column_var[e] = var[c];
+        }
+    }
     return out;
 }
 
@@ -73,7 +113,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         x[k] = std::clamp(x[k], lower[k], upper[k]);
     }
     Pattern pattern = BuildPattern(problem);
-    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
+    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt;
     ldlt.analyzePattern(pattern.matrix);
 
     std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
@@ -98,7 +138,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     // Ipopt's scaling of the objective: its gradient at the start at most 100.
     const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
     double damping = 0.0;
-    Eigen::VectorXd step(n);
+    Eigen::VectorXd step(n), rhs(n), solved(n);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
     for (int it = 0;; ++it) {
@@ -120,9 +160,8 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         double* values = pattern.matrix.valuePtr();
         std::fill(values, values + pattern.matrix.nonZeros(), 0.0);
         for (std::size_t e = 0; e < hessian.size(); ++e) values[pattern.slot[e]] += hessian[e];
-        const int* row = pattern.matrix.innerIndexPtr();
         for (int e = 0; e < pattern.matrix.nonZeros(); ++e) {
-            if (active[row[e]] || active[pattern.column[e]]) values[e] = 0.0;
+            if (active[pattern.row_var[e]] || active[pattern.column_var[e]]) values[e] = 0.0;
         }
         std::vector<double> diagonal(n);
         for (int k = 0; k < n; ++k) {
@@ -141,7 +180,9 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             ldlt.factorize(pattern.matrix);
             const bool definite = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
             if (definite) {
-                step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(grad.data(), n));
+                for (int k = 0; k < n; ++k) rhs[pattern.position[k]] = -grad[k];
+                solved = ldlt.solve(rhs);
+                for (int k = 0; k < n; ++k) step[k] = solved[pattern.position[k]];
                 for (int alpha_k = 0; alpha_k < kHalvings && !moved; ++alpha_k) {
                     const double alpha = std::ldexp(1.0, -alpha_k);
                     double decrease = 0.0;  // the model's, along the projected step

@@ -1,8 +1,8 @@
 #include "driftcorr/optim/window_problem.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
-#include <unordered_map>
 
 #include "driftcorr/core/check.h"
 
@@ -15,6 +15,42 @@ template <class Term, int N>
 std::unique_ptr<TermBlock> Core(TermFamily family, const Term& term) {
     return std::make_unique<CoreTermBlock<Term, N>>(family, term);
 }
+
+// The Hessian's slots by (row, column), row >= column: per row one entry for each column of the
+// span [lo, hi] it couples with (-1: no slot yet). A window's terms couple a pose with the two
+// before it and with its scale and bias segments, so the spans are short (a few hundred entries
+// for a scale or bias row). Two passes: Note every pair, Allocate, then Slot them.
+class SlotTable {
+public:
+    explicit SlotTable(int n) : lo_(n, INT_MAX), hi_(n, -1) {}
+    void Note(int r, int c) {
+        if (r < c) std::swap(r, c);
+        lo_[r] = std::min(lo_[r], c);
+        hi_[r] = std::max(hi_[r], c);
+    }
+    void Allocate() {
+        offset_.assign(lo_.size() + 1, 0);
+        for (std::size_t r = 0; r < lo_.size(); ++r) {
+            offset_[r + 1] = offset_[r] + (hi_[r] >= lo_[r] ? std::size_t(hi_[r] - lo_[r] + 1) : 0);
+        }
+        entries_.assign(offset_.back(), -1);
+    }
+    /// The slot of (r, c) in `hess` (appended on first use). Precondition: (r, c) was noted.
+    int Slot(int r, int c, std::vector<std::pair<int, int>>& hess) {
+        if (r < c) std::swap(r, c);
+        int& e = entries_[offset_[r] + std::size_t(c - lo_[r])];
+        if (e < 0) {
+            e = static_cast<int>(hess.size());
+            hess.emplace_back(r, c);
+        }
+        return e;
+    }
+
+private:
+    std::vector<int> lo_, hi_;
+    std::vector<std::size_t> offset_;
+    std::vector<int> entries_;
+};
 
 }  // namespace
 
@@ -86,14 +122,6 @@ int WindowProblem::BiasVar(int segment) const {
     return bias_var0_ + (segment - bias_first_);
 }
 
-int WindowProblem::Slot(std::unordered_map<std::int64_t, int>& slots, int r, int c) {
-    if (r < c) std::swap(r, c);
-    const std::int64_t key = (std::int64_t(r) << 32) | std::int64_t(c);
-    auto [it, inserted] = slots.emplace(key, static_cast<int>(hess_.size()));
-    if (inserted) hess_.emplace_back(r, c);
-    return it->second;
-}
-
 bool WindowProblem::IsJump(std::size_t i) const {
     const StepObservation& o = state_.obs[i];
     return o.length_m > cfg_.max_speed_mps * std::max(o.dt_s, 1e-9);
@@ -111,8 +139,8 @@ void WindowProblem::BindPose(TermBlock& block, int k0, std::size_t pose) const {
 
 StepNoise StepNoiseOf(const ModelConfig& m, const StepObservation& o) {
     StepNoise n;
-    const double len_rel = o.repaired ? std::max(m.step_sigma_rel, m.outlier_sigma_rel)
-                                      : m.step_sigma_rel;
+    const double len_rel =
+        o.repaired ? std::max(m.step_sigma_rel, m.outlier_sigma_rel) : m.step_sigma_rel;
     n.length_m = m.step_sigma_m + len_rel * o.length_m;
     n.lateral_m = m.lateral_sigma_m + m.lateral_sigma_rel * o.length_m;
     const double rw = m.heading_rw_rad_per_sqrt_s, rel = m.heading_sigma_rel * o.dheading_rad;
@@ -136,7 +164,8 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
         TermFamily::kStepLength,
         StepLengthTerm{o.length_m, o.direction_rad, len_sigma, cfg_.step_weight, robust_k}));
     blocks_.push_back(Core<StepDirectionTerm, 9>(
-        TermFamily::kStepDirection, StepDirectionTerm{o.direction_rad, lat_sigma, cfg_.step_weight}));
+        TermFamily::kStepDirection,
+        StepDirectionTerm{o.direction_rad, lat_sigma, cfg_.step_weight}));
     if (!HasBias()) {
         blocks_.push_back(Core<HeadingChangeTerm, 9>(
             TermFamily::kHeadingChange,
@@ -159,9 +188,8 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
     if (HasBias()) {  // heading change with the bias: [yaw_a, yaw_b, bias]
         const int segment = state_.bias_segment[i];
         blocks_.push_back(Core<HeadingChangeBiasTerm, 3>(
-            TermFamily::kHeadingChange,
-            HeadingChangeBiasTerm{o.dheading_rad, std::max(o.dt_s, 0.0), head_sigma,
-                                  cfg_.heading_weight}));
+            TermFamily::kHeadingChange, HeadingChangeBiasTerm{o.dheading_rad, std::max(o.dt_s, 0.0),
+                                                              head_sigma, cfg_.heading_weight}));
         blocks_.back()->Bind(0, PoseVar(i - 1, 3), state_.poses[i - 1].yaw_rad);
         blocks_.back()->Bind(1, PoseVar(i, 3), 0.0);
         blocks_.back()->Bind(2, BiasVar(segment), state_.biases[segment]);
@@ -180,10 +208,9 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
 // (robust) random walk from the one before; each the plausible range (ModelConfig).
 void WindowProblem::AddScaleBlocks() {
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
-        const RandomWalkTerm walk = sgm == 0
-                                        ? RandomWalkTerm{cfg_.scale_prior_sigma, 1.0, 0.0}
-                                        : RandomWalkTerm{cfg_.scale_rw_sigma, 1.0,
-                                                         cfg_.scale_rw_robust_k};
+        const RandomWalkTerm walk =
+            sgm == 0 ? RandomWalkTerm{cfg_.scale_prior_sigma, 1.0, 0.0}
+                     : RandomWalkTerm{cfg_.scale_rw_sigma, 1.0, cfg_.scale_rw_robust_k};
         blocks_.push_back(Core<RandomWalkTerm, 2>(TermFamily::kScaleWalk, walk));
         const int a = ScaleVar(sgm - 1);
         blocks_.back()->Bind(0, a, a >= 0 ? 0.0 : (sgm > 0 ? state_.scales[sgm - 1] : 1.0));
@@ -222,29 +249,45 @@ void WindowProblem::BuildStructure(WindowUse use) {
     AddScaleBlocks();
     if (HasBias()) AddBiasBlocks();
     if (prior_) {
-        blocks_.push_back(std::make_unique<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
+        blocks_.push_back(
+            std::make_unique<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
         for (int c = 0; c < 4; ++c) blocks_.back()->Bind(c, PoseVar(first_ - 1, c), 0.0);
     }
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
-        for (int c = 0; c < 3; ++c) jac_.emplace_back(static_cast<int>(k), PoseVar(constraint_pose_[k], c));
+        for (int c = 0; c < 3; ++c)
+            jac_.emplace_back(static_cast<int>(k), PoseVar(constraint_pose_[k], c));
     }
     if (use != WindowUse::kSolve) return;
-    std::unordered_map<std::int64_t, int> slots;
+    // Pass 1 notes every pair the blocks and the constraints' Hessians touch, pass 2 numbers
+    // them in the order they are met.
+    SlotTable slots(n_vars_);
     block_slot_begin_.reserve(blocks_.size());
-    for (const auto& block : blocks_) {
-        block_slot_begin_.push_back(static_cast<int>(block_slots_.size()));
-        for (int r = 0; r < block->size(); ++r) {
-            for (int c = 0; c <= r; ++c) {
-                const int vr = block->var(r), vc = block->var(c);
-                block_slots_.push_back(vr >= 0 && vc >= 0 ? Slot(slots, vr, vc) : -1);
+    for (int pass = 0; pass < 2; ++pass) {
+        auto slot = [&](int r, int c) {
+            if (pass == 0) {
+                slots.Note(r, c);
+                return -1;
+            }
+            return slots.Slot(r, c, hess_);
+        };
+        for (const auto& block : blocks_) {
+            if (pass == 1) block_slot_begin_.push_back(static_cast<int>(block_slots_.size()));
+            for (int r = 0; r < block->size(); ++r) {
+                for (int c = 0; c <= r; ++c) {
+                    const int vr = block->var(r), vc = block->var(c);
+                    const int e = vr >= 0 && vc >= 0 ? slot(vr, vc) : -1;
+                    if (pass == 1) block_slots_.push_back(e);
+                }
             }
         }
-    }
-    pose_hess_slot_.resize(last_ - first_ + 1);
-    for (std::size_t i = first_; i <= last_; ++i) {
-        const int x = PoseVar(i, 0), y = PoseVar(i, 1), z = PoseVar(i, 2);
-        pose_hess_slot_[i - first_] = {Slot(slots, x, x), Slot(slots, y, x), Slot(slots, y, y),
-                                       Slot(slots, z, x), Slot(slots, z, y), Slot(slots, z, z)};
+        if (pass == 1) pose_hess_slot_.resize(last_ - first_ + 1);
+        for (std::size_t i = first_; i <= last_; ++i) {
+            const int x = PoseVar(i, 0), y = PoseVar(i, 1), z = PoseVar(i, 2);
+            const std::array<int, 6> e = {slot(x, x), slot(y, x), slot(y, y),
+                                          slot(z, x), slot(z, y), slot(z, z)};
+            if (pass == 1) pose_hess_slot_[i - first_] = e;
+        }
+        if (pass == 0) slots.Allocate();
     }
 }
 
@@ -274,7 +317,8 @@ void WindowProblem::Bounds(double* x_l, double* x_u, double* g_l, double* g_u) c
 
 const std::vector<std::optional<TraversableSample>>& WindowProblem::Samples(const double* x) const {
     const std::size_t n = static_cast<std::size_t>(n_vars_);
-    if (cache_x_.size() == n && std::equal(cache_x_.begin(), cache_x_.end(), x)) return cache_samples_;
+    if (cache_x_.size() == n && std::equal(cache_x_.begin(), cache_x_.end(), x))
+        return cache_samples_;
     cache_x_.assign(x, x + n);
     cache_samples_.resize(last_ - first_ + 1);
     for (std::size_t i = first_; i <= last_; ++i) {

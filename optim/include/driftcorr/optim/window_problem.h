@@ -13,7 +13,6 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -136,7 +135,6 @@ private:
     /// objective, gradient, constraints and Hessians at the same point).
     const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
     void BuildStructure(WindowUse use);
-    int Slot(std::unordered_map<std::int64_t, int>& slots, int r, int c);
 
     TrajectoryState& state_;
     const TraversableField* field_;
