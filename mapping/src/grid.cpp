@@ -42,26 +42,58 @@ void Edt1d(const float* f, int n, float* d, int* v, float* z, float w = 1.0f) {
     }
 }
 
-// Applies Edt1d along one axis of the grid, in place.
+// The first pass, along x, on the feature mask itself: in a row the squared distance (in cells)
+// to the nearest feature is that to the last one before or the next one after, two sweeps (the
+// lower envelope is only needed once distances differ from 0 and infinity).
+void FeatureRows(const std::vector<std::uint8_t>& feature, const GridSpec& s,
+                 std::vector<float>& g) {
+    const int n = s.nx;
+    for (std::size_t base = 0; base < g.size(); base += std::size_t(n)) {
+        const std::uint8_t* f = feature.data() + base;
+        float* d = g.data() + base;
+        int last = -1;
+        for (int q = 0; q < n; ++q) {
+            if (f[q]) last = q;
+            d[q] = last < 0 ? kInf : float(q - last);
+        }
+        int next = -1;
+        for (int q = n - 1; q >= 0; --q) {
+            if (f[q]) next = q;
+            if (next >= 0) d[q] = std::min(d[q], float(next - q));
+            d[q] *= d[q];
+        }
+    }
+}
+
+// Applies Edt1d along axis 1 (y) or 2 (z) of the grid, in place. The lines along these axes are
+// strided in memory; kBlock neighbouring lines (neighbours along x) are gathered and scattered
+// together, a row of kBlock contiguous samples at a time.
 void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
-    const int n = axis == 0 ? s.nx : (axis == 1 ? s.ny : s.nz);
-    const std::size_t stride = axis == 0 ? 1 : (axis == 1 ? std::size_t(s.nx)
-                                                           : std::size_t(s.nx) * s.ny);
-    const int lines_a = axis == 0 ? s.ny : s.nx;
+    constexpr int kBlock = 16;
+    const int n = axis == 1 ? s.ny : s.nz;
+    const std::size_t stride = axis == 1 ? std::size_t(s.nx) : std::size_t(s.nx) * s.ny;
     const int lines_b = axis == 2 ? s.ny : s.nz;
-    std::vector<float> f(n), d(n), z(n + 1);
+    std::vector<float> f(std::size_t(n) * kBlock), d(n), z(n + 1);
     std::vector<int> v(n);
     const float ratio = axis == 2 ? float(s.dz() / s.resolution_m) : 1.0f;
     const float w = ratio * ratio;
     for (int b = 0; b < lines_b; ++b) {
-        for (int a = 0; a < lines_a; ++a) {
-            std::size_t base;
-            if (axis == 0) base = s.Index(0, a, b);
-            else if (axis == 1) base = s.Index(a, 0, b);
-            else base = s.Index(a, b, 0);
-            for (int q = 0; q < n; ++q) f[q] = g[base + q * stride];
-            Edt1d(f.data(), n, d.data(), v.data(), z.data(), w);
-            for (int q = 0; q < n; ++q) g[base + q * stride] = d[q];
+        for (int a0 = 0; a0 < s.nx; a0 += kBlock) {
+            const int width = std::min(kBlock, s.nx - a0);
+            const std::size_t base = axis == 1 ? s.Index(a0, 0, b) : s.Index(a0, b, 0);
+            for (int q = 0; q < n; ++q) {
+                const float* row = &g[base + q * stride];
+                for (int a = 0; a < width; ++a) f[std::size_t(a) * n + q] = row[a];
+            }
+            for (int a = 0; a < width; ++a) {
+                float* line = &f[std::size_t(a) * n];
+                Edt1d(line, n, d.data(), v.data(), z.data(), w);
+                std::copy(d.begin(), d.end(), line);
+            }
+            for (int q = 0; q < n; ++q) {
+                float* row = &g[base + q * stride];
+                for (int a = 0; a < width; ++a) row[a] = f[std::size_t(a) * n + q];
+            }
         }
     }
 }
@@ -72,8 +104,7 @@ std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
                                               const std::vector<std::uint8_t>& feature) {
     DRIFTCORR_CHECK(feature.size() == spec.size(), "feature mask does not match the grid");
     std::vector<float> g(spec.size());
-    for (std::size_t i = 0; i < g.size(); ++i) g[i] = feature[i] ? 0.0f : kInf;
-    EdtAxis(g, spec, 0);
+    FeatureRows(feature, spec, g);
     EdtAxis(g, spec, 1);
     if (spec.nz > 1) EdtAxis(g, spec, 2);
     const float res = static_cast<float>(spec.resolution_m);

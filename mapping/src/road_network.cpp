@@ -1,11 +1,13 @@
 #include "driftcorr/mapping/road_network.h"
 
 #include <algorithm>
-#include <iomanip>
 #include <cmath>
+#include <future>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "driftcorr/mapping/grid.h"
 
@@ -133,8 +135,13 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
                              config.exact_band_m);
         }
     }
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    const bool side_by_side = (config.threads == 0 ? cores : unsigned(config.threads)) >= 2;
+    std::future<std::vector<float>> to_corridor = std::async(
+        side_by_side ? std::launch::async : std::launch::deferred,
+        [&r] { return EuclideanDistanceTransform(r.spec, r.inside); });
     std::vector<float> centre = EuclideanDistanceTransform(r.spec, r.centre_seed);
-    std::vector<float> corridor = EuclideanDistanceTransform(r.spec, r.inside);
+    std::vector<float> corridor = to_corridor.get();
     const float trunc = float(config.truncation_m), half = float(0.5 * config.resolution_m);
     for (std::size_t i = 0; i < n; ++i) {
         const bool exact = r.centre_exact[i] < inf;

@@ -79,6 +79,9 @@ struct RoadFieldConfig {
     /// The field is built and held in square tiles of about this side, one tile at a time
     /// (RasteriseRoadCorridor keeps only the tiles its corridor touches); 0: one grid [m]
     double tile_m = 256.0;
+    /// Threads of the build: the two distance transforms (to the centre lines and to the
+    /// corridors) run side by side with 2 or more; 0: one per core.
+    int threads = 0;
 
     /// The first value kRoadFieldParams does not allow.
     std::optional<ParamProblem> FindProblem() const;
@@ -99,6 +102,8 @@ inline constexpr Param<RoadFieldConfig> kRoadFieldParamRows[] = {
      "refuse fields larger than this"},
     {"tile_m", Field<&RoadFieldConfig::tile_m>(), kNonNegative,
      "built and held in tiles of this side; 0: one grid over the bounding box"},
+    {"threads", Field<&RoadFieldConfig::threads>(), kNonNegative,
+     "threads of the field build (2: both distance transforms at once); 0: one per core"},
 };
 inline constexpr ParamTable<RoadFieldConfig> kRoadFieldParams{"field", kRoadFieldParamRows};
 
