@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <unordered_map>
 
 #include "driftcorr/core/check.h"
 
@@ -16,29 +17,33 @@ std::unique_ptr<TermBlock> Core(TermFamily family, const Term& term) {
     return std::make_unique<CoreTermBlock<Term, N>>(family, term);
 }
 
-// The Hessian's slots by (row, column), row >= column: per row one entry for each column of the
-// span [lo, hi] it couples with (-1: no slot yet). A window's terms couple a pose with the two
-// before it and with its scale and bias segments, so the spans are short (a few hundred entries
-// for a scale or bias row). Two passes: Note every pair, Allocate, then Slot them.
+// The Hessian's slots by (row, column), row >= column. Below `split` (the pose variables) a row
+// couples with a short span of columns [lo, hi] (a pose with the two before it; a scale or bias
+// segment with its poses), held as one entry per column of the span (-1: no slot yet). Pairs of
+// two variables at or above `split` (segment with segment: the random walks, a handful per
+// segment) are kept by key. Two passes: Note every pair, Allocate, then Slot them.
 class SlotTable {
 public:
-    explicit SlotTable(int n) : lo_(n, INT_MAX), hi_(n, -1) {}
+    SlotTable(int n, int split) : split_(split), lo_(n, INT_MAX), hi_(n, -1) {}
     void Note(int r, int c) {
         if (r < c) std::swap(r, c);
+        if (c >= split_) return;
         lo_[r] = std::min(lo_[r], c);
         hi_[r] = std::max(hi_[r], c);
     }
     void Allocate() {
         offset_.assign(lo_.size() + 1, 0);
         for (std::size_t r = 0; r < lo_.size(); ++r) {
-            offset_[r + 1] = offset_[r] + (hi_[r] >= lo_[r] ? std::size_t(hi_[r] - lo_[r] + 1) : 0);
+            const std::size_t span = hi_[r] >= lo_[r] ? std::size_t(hi_[r] - lo_[r] + 1) : 0;
+            offset_[r + 1] = offset_[r] + span;
         }
         entries_.assign(offset_.back(), -1);
     }
     /// The slot of (r, c) in `hess` (appended on first use). Precondition: (r, c) was noted.
     int Slot(int r, int c, std::vector<std::pair<int, int>>& hess) {
         if (r < c) std::swap(r, c);
-        int& e = entries_[offset_[r] + std::size_t(c - lo_[r])];
+        int& e = c >= split_ ? segments_.try_emplace((std::int64_t(r) << 32) | c, -1).first->second
+                             : entries_[offset_[r] + std::size_t(c - lo_[r])];
         if (e < 0) {
             e = static_cast<int>(hess.size());
             hess.emplace_back(r, c);
@@ -47,9 +52,11 @@ public:
     }
 
 private:
+    int split_;
     std::vector<int> lo_, hi_;
     std::vector<std::size_t> offset_;
     std::vector<int> entries_;
+    std::unordered_map<std::int64_t, int> segments_;
 };
 
 }  // namespace
@@ -260,7 +267,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
     if (use != WindowUse::kSolve) return;
     // Pass 1 notes every pair the blocks and the constraints' Hessians touch, pass 2 numbers
     // them in the order they are met.
-    SlotTable slots(n_vars_);
+    SlotTable slots(n_vars_, PoseVar(last_, 3) + 1);
     block_slot_begin_.reserve(blocks_.size());
     for (int pass = 0; pass < 2; ++pass) {
         auto slot = [&](int r, int c) {
