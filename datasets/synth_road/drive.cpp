@@ -348,7 +348,7 @@ double ArcLengthAt(const std::vector<ProfilePoint>& table, std::size_t& row, dou
 }  // namespace
 
 std::string DriveConfig::Validate() const {
-    if (!(duration_s > 0.0 && duration_s <= 7200.0)) return "duration_s: must be in (0, 7200]";
+    if (!(duration_s > 0.0 && duration_s <= 36000.0)) return "duration_s: must be in (0, 36000]";
     if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) return "rate_hz: must be in (0, 1000]";
     if (!std::isfinite(start_time_s)) return "start_time_s: must be finite";
     if (!(lateral_offset_m >= 0.0 && lateral_offset_m < 0.5 * kTurnRadius_m)) {

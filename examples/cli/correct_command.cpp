@@ -6,6 +6,7 @@
 // named), 3 verdict failed (nothing written unless --on-failure says so), 4 internal error.
 // Several scenarios: 0 when every one was written; otherwise the code of the worst scenario, in
 // the order 4, 2, 3.
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -204,6 +205,13 @@ void PrintHeading(const pipeline::CorrectionRun& run) {
                       "heading alone, no roll or pitch");
 }
 
+// The process's peak resident memory so far [MB] (Linux reports ru_maxrss in KiB).
+double PeakMemoryMb() {
+    rusage usage{};
+    if (getrusage(RUSAGE_SELF, &usage) != 0) return 0.0;
+    return double(usage.ru_maxrss) / 1024.0;
+}
+
 void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
                   pipeline::Solver solver) {
     const auto& r = run.result;
@@ -224,9 +232,10 @@ void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
     }
     std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
-                " incremental %.3f, refine %.3f)\n", total, run.timings.load_s, run.timings.map_s,
-                run.timings.solve_s, run.estimate.size() / std::max(1e-9, run.timings.solve_s),
-                r.incremental_s, r.refine_s);
+                " incremental %.3f, refine %.3f); peak memory %.0f MB\n", total, run.timings.load_s,
+                run.timings.map_s, run.timings.solve_s,
+                run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
+                r.refine_s, PeakMemoryMb());
     if (run.anchor_fit) PrintAnchorFit(run);
     if (run.before) PrintMetricsRow("estimate", *run.before, indoor);
     if (run.after) PrintMetricsRow("corrected", *run.after, indoor);

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Times `driftcorr correct` end to end (scenario parse, map parse, field, correction, output) on
-# one core, as a user runs it. Prints, per scenario, the best and median wall time of N runs and
-# the correction stage's poses per second from the tool's own summary.
+# one core, as a user runs it. Prints, per scenario, the best and median wall time of N runs, the
+# median of each stage the tool's own summary reports (load, map and field, correction with its
+# incremental windows and final solve), the correction stage's poses per second and the peak
+# resident memory. CPUS="0,1" gives the run two cores (the field build uses them).
 #
 #   tests/benchmarks/time_cli.sh [build_dir=build] [runs=5] [scenario dirs...]
 #
@@ -25,21 +27,28 @@ if [ ${#scenarios[@]} -eq 0 ]; then
 fi
 
 pin=()
-command -v taskset > /dev/null && pin=(taskset -c 0)
+command -v taskset > /dev/null && pin=(taskset -c "${CPUS:-0}")
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
-printf "%-32s %6s %9s %9s %14s\n" scenario poses best_s median_s correction/s
+median() { sort -g | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
+printf "%-30s %6s %7s %7s | %6s %6s %6s %6s %6s | %8s %7s\n" scenario poses best_s median_s \
+    load map corr incr refine poses/s peak_MB
 for s in "${scenarios[@]}"; do
-    times=()
+    : > "$out/times"
+    : > "$out/stages"
     for ((k = 0; k < RUNS; ++k)); do
         start=$(date +%s%N)
         "${pin[@]}" "$CLI" correct "$s" -o "$out/c.tum" --quiet > "$out/summary.txt" 2> /dev/null
         end=$(date +%s%N)
-        times+=("$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.3f", (b - a) / 1e9 }')")
+        awk -v a="$start" -v b="$end" 'BEGIN { printf "%.3f\n", (b - a) / 1e9 }' >> "$out/times"
+        # time T s (load L, map M, correction C = R poses/s: incremental I, refine F); peak memory P MB
+        grep '^time' "$out/summary.txt" | tr -d '(),;:=' |
+            awk '{ print $5, $7, $9, $10, $18, $13, $15 }' >> "$out/stages"
     done
-    sorted=($(printf "%s\n" "${times[@]}" | sort -g))
     poses=$(awk '/^scenario/ {print $(NF-1)}' "$out/summary.txt")
-    rate=$(grep -o '= [0-9]* poses/s' "$out/summary.txt" | awk '{print $2}')
-    printf "%-32s %6s %9.3f %9.3f %14s\n" "$(basename "$s")" "$poses" "${sorted[0]}" \
-        "${sorted[$((RUNS / 2))]}" "$rate"
+    cols=()
+    for c in 1 2 3 4 5 6 7; do cols+=("$(awk -v c=$c '{ print $c }' "$out/stages" | median)"); done
+    printf "%-30s %6s %7.3f %7.3f | %6.3f %6.3f %6.3f %6.3f %6.3f | %8.0f %7.0f\n" \
+        "$(basename "$s")" "$poses" "$(sort -g "$out/times" | head -1)" "$(median < "$out/times")" \
+        "${cols[0]}" "${cols[1]}" "${cols[2]}" "${cols[5]}" "${cols[6]}" "${cols[3]}" "${cols[4]}"
 done
