@@ -1,8 +1,11 @@
-// Speed of the parts that matter: distance-field build (cells/s), the whole correction (poses/s),
-// the per-pose covariance (linear in the number of poses).
+// Speed of the parts that matter: distance-field build (cells/s), the whole correction (poses/s,
+// each stage, peak memory), one window solve by the Newton solver and by Ipopt, the per-pose
+// covariance (linear in the number of poses).
 // Run: build/tests/bench_driftcorr [--benchmark_filter=...]. The correction benchmarks read the
 // real KITTI scenarios from ../shared/datasets and are skipped (with a message) when absent.
 #include <benchmark/benchmark.h>
+
+#include <sys/resource.h>
 
 #include <cmath>
 #include <filesystem>
@@ -10,6 +13,9 @@
 
 #include "driftcorr/core/observables.h"
 #include "driftcorr/optim/covariance.h"
+#include "driftcorr/optim/incremental_corrector.h"
+#include "driftcorr/optim/ipopt_solver.h"
+#include "driftcorr/optim/newton_solver.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace {
@@ -57,15 +63,28 @@ void BM_CorrectKitti(benchmark::State& state, const std::string& folder) {
         return;
     }
     std::size_t poses = 0;
-    double solve_s = 0.0;
+    double load_s = 0.0, map_s = 0.0, solve_s = 0.0, incremental_s = 0.0, refine_s = 0.0;
     for (auto _ : state) {
         pipeline::CorrectionRun run = pipeline::RunCorrection(dir, pipeline::PipelineConfig{});
         poses = run.estimate.size();
+        load_s += run.timings.load_s;
+        map_s += run.timings.map_s;
         solve_s += run.timings.solve_s;
+        incremental_s += run.result.incremental_s;
+        refine_s += run.result.refine_s;
         benchmark::DoNotOptimize(run);
     }
+    const double n = double(state.iterations());
     state.counters["poses"] = double(poses);
-    state.counters["correction_poses_per_s"] = double(poses) * state.iterations() / solve_s;
+    state.counters["load_ms"] = 1e3 * load_s / n;
+    state.counters["map_and_field_ms"] = 1e3 * map_s / n;
+    state.counters["correction_ms"] = 1e3 * solve_s / n;
+    state.counters["incremental_ms"] = 1e3 * incremental_s / n;
+    state.counters["refine_ms"] = 1e3 * refine_s / n;
+    state.counters["correction_poses_per_s"] = double(poses) * n / solve_s;
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    state.counters["peak_memory_mb"] = double(usage.ru_maxrss) / 1024.0;  // the process's so far
 }
 BENCHMARK_CAPTURE(BM_CorrectKitti, kitti00_cvo, std::string("kitti00_cvo_stereo_geometric"))
     ->Unit(benchmark::kMillisecond)->Iterations(3);
@@ -73,9 +92,13 @@ BENCHMARK_CAPTURE(BM_CorrectKitti, kitti00_orb2, std::string("kitti00_orb2_longr
     ->Unit(benchmark::kMillisecond)->Iterations(3);
 
 // A car driving laps of a circular road (radius 160 m, 2 m steps at 10 Hz) on its centre line,
-// with the road's field: the covariance of n poses of it.
-void BM_Covariance(benchmark::State& state) {
-    const auto n = static_cast<std::size_t>(state.range(0));
+// and the road's field.
+struct Lap {
+    PlanarTrajectory truth;
+    TraversableField field;
+};
+
+Lap CircleLap(std::size_t n) {
     const double radius_m = 160.0, step_m = 2.0;
     PlanarTrajectory lap;
     for (std::size_t i = 0; i < n; ++i) {
@@ -95,16 +118,66 @@ void BM_Covariance(benchmark::State& state) {
     net.roads.push_back(road);
     RoadFieldConfig field_cfg;
     field_cfg.margin_m = 30.0;
-    const TraversableField field = RasteriseRoads(net, net.Bounds(), field_cfg);
-    const CorrectorConfig cfg;
+    return {lap, RasteriseRoads(net, net.Bounds(), field_cfg)};
+}
+
+TrajectoryState StateOf(const PlanarTrajectory& lap, const CorrectorConfig& cfg) {
+    const std::size_t n = lap.size();
     TrajectoryState s;
     s.obs = ComputeObservations(lap);
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
+    s.bias_segment = BiasSegments(s.obs, cfg.model.heading_bias_segment_s);
+    if (!s.bias_segment.empty()) s.biases.assign(s.bias_segment.back() + 1, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
         s.poses.push_back(
             PoseState{Eigen::Vector3d(lap.p_en[i].x(), lap.p_en[i].y(), 0.0), lap.yaw_rad[i]});
     }
+    return s;
+}
+
+// One soft window of n poses, from a start 2 % too long and turned by 2 mrad per step (a drifting
+// dead-reckoned chain) onto the lap's road: state.range(1) 0 the Newton solver, 1 Ipopt.
+void BM_WindowSolve(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    const bool ipopt = state.range(1) == 1;
+    const Lap lap = CircleLap(n);
+    const CorrectorConfig cfg;
+    TrajectoryState start = StateOf(lap.truth, cfg);
+    for (std::size_t i = 1; i < n; ++i) {
+        start.obs[i].length_m *= 1.02;
+        start.obs[i].dheading_rad += 0.002;
+        start.poses[i] = ComposeStep(start.poses[i - 1], start.obs[i], 1.0, true, 0.0, 0.0);
+    }
+    int iterations = 0;
+    for (auto _ : state) {
+        TrajectoryState s = start;
+        WindowProblem p(s, &lap.field, cfg.model, 1, n - 1, std::vector<std::uint8_t>(n - 1, 0));
+        const SolveReport r = ipopt ? SolveWithIpopt(p, cfg.window_ipopt)
+                                    : SolveWithNewton(p, NewtonOptions{});
+        if (!Usable(r.status)) state.SkipWithError(r.message.c_str());
+        iterations = r.iterations;
+        benchmark::DoNotOptimize(s);
+    }
+    state.SetLabel(ipopt ? "Ipopt" : "Newton");
+    state.counters["iterations"] = iterations;
+    state.counters["poses_per_s"] =
+        benchmark::Counter(double(n) * state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_WindowSolve)
+    ->Args({300, 0})
+    ->Args({300, 1})
+    ->Args({3000, 0})
+    ->Args({3000, 1})
+    ->Unit(benchmark::kMillisecond);
+
+// The covariance of n poses of the lap.
+void BM_Covariance(benchmark::State& state) {
+    const auto n = static_cast<std::size_t>(state.range(0));
+    const Lap lap = CircleLap(n);
+    const CorrectorConfig cfg;
+    const TrajectoryState s = StateOf(lap.truth, cfg);
+    const TraversableField& field = lap.field;
     std::size_t unknowns = 0;
     for (auto _ : state) {
         const CovarianceResult r = ComputeCovariance(s, &field, cfg.model, cfg.covariance);
