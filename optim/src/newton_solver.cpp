@@ -13,11 +13,9 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-// Armijo's sufficient decrease, the damping's first value, smallest value and growth (Ipopt's
-// defaults), the backtracking's halvings before the damping grows instead, and the damping beyond
-// which the solve gives up.
-constexpr double kArmijo = 1e-4, kDampingFirst = 1e-4, kDampingMin = 1e-20, kDampingGrowth = 8.0,
-                 kDampingMax = 1e40;
+// Armijo's sufficient decrease, the damping's first value and growth, the backtracking's
+// halvings before the damping grows instead, and the damping beyond which the solve gives up.
+constexpr double kArmijo = 1e-4, kDampingFirst = 1e-4, kDampingGrowth = 8.0, kDampingMax = 1e10;
 constexpr int kHalvings = 12;
 
 // The order the factorisation takes the variables in: the problem's, except for the variables
@@ -139,7 +137,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     projected_gradient();
     // Ipopt's scaling of the objective: its gradient at the start at most 100.
     const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
-    double last_damping = 0.0;
+    double damping = 0.0;
     Eigen::VectorXd step(n), rhs(n), solved(n);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
@@ -170,15 +168,14 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             diagonal[k] = active[k] ? 1.0 : values[pattern.diagonal[k]];
             values[pattern.diagonal[k]] = diagonal[k];
         }
-        // Newton's step; where the system is not positive definite, or the line search finds no
-        // decrease along it, damped as Ipopt corrects the inertia of its system: H + delta I (on
-        // the scaled objective), delta from a third of the last iteration's (1e-4 at first),
-        // growing 8-fold (100-fold when the last iteration needed none).
+        // Newton's step, damped (H + damping * max(|diag H|, 1)) until the system is positive
+        // definite and the line search finds a decrease.
         bool moved = false;
-        double damping = 0.0;
         while (!moved) {
             for (int k = 0; k < n; ++k) {
-                values[pattern.diagonal[k]] = diagonal[k] + (active[k] ? 0.0 : damping / scale);
+                values[pattern.diagonal[k]] =
+                    diagonal[k] +
+                    (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
             }
             ldlt.factorize(pattern.matrix);
             const bool definite = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
@@ -199,19 +196,16 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
                         x.swap(trial);
                         f = f_trial;
                         moved = true;
+                        if (alpha_k == 0)
+                            damping =
+                                damping / kDampingGrowth < 1e-8 ? 0.0 : damping / kDampingGrowth;
                     }
                 }
                 if (moved) break;
             }
-            if (damping == 0.0) {
-                damping =
-                    last_damping == 0.0 ? kDampingFirst : std::max(kDampingMin, last_damping / 3.0);
-            } else {
-                damping *= last_damping == 0.0 ? 100.0 : kDampingGrowth;
-            }
+            damping = damping == 0.0 ? kDampingFirst : damping * kDampingGrowth;
             if (damping > kDampingMax) break;
         }
-        last_damping = moved ? damping : last_damping;
         if (!moved) {  // no decrease along any damped step: as far as this method goes
             if (error <= options.acceptable_tolerance) {
                 report.status = SolveStatus::kAcceptable;
