@@ -40,8 +40,9 @@ std::vector<int> BandOrder(const WindowProblem& p) {
     return position;
 }
 
-// The Hessian's lower triangle in BandOrder with the problem's pattern and a full diagonal, and
-// where each entry of HessianValues lands in it.
+// The Hessian's upper triangle (Eigen's LDL^T factorises it in place, without the copy it makes
+// of a lower one) in BandOrder, with the problem's pattern and a full diagonal, and where each
+// entry of HessianValues lands in it.
 struct Pattern {
     SparseMatrix matrix;
     std::vector<int> position;  ///< per variable: its row and column in the matrix
@@ -55,14 +56,14 @@ Pattern BuildPattern(const WindowProblem& p) {
     const int n = p.NumVariables();
     Pattern out;
     out.position = BandOrder(p);
-    auto lower = [&](int r, int c) {
+    auto upper = [&](int r, int c) {  // (row, column) with row <= column
         const int a = out.position[r], b = out.position[c];
-        return a >= b ? std::make_pair(a, b) : std::make_pair(b, a);
+        return a <= b ? std::make_pair(a, b) : std::make_pair(b, a);
     };
     std::vector<Eigen::Triplet<double>> t;
     t.reserve(structure.size() + n);
     for (const auto& [r, c] : structure) {
-        const auto [a, b] = lower(r, c);
+        const auto [a, b] = upper(r, c);
         t.emplace_back(a, b, 0.0);
     }
     for (int k = 0; k < n; ++k) t.emplace_back(k, k, 0.0);
@@ -72,7 +73,7 @@ Pattern BuildPattern(const WindowProblem& p) {
     const int* outer = out.matrix.outerIndexPtr();
     const int* inner = out.matrix.innerIndexPtr();
     auto index = [&](int r, int c) {
-        const auto [a, b] = lower(r, c);
+        const auto [a, b] = upper(r, c);
         return static_cast<int>(std::lower_bound(inner + outer[b], inner + outer[b + 1], a) -
                                 inner);
     };
@@ -113,7 +114,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         x[k] = std::clamp(x[k], lower[k], upper[k]);
     }
     Pattern pattern = BuildPattern(problem);
-    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt;
+    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
     ldlt.analyzePattern(pattern.matrix);
 
     std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
