@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -1353,6 +1354,90 @@ TEST_F(CliFormats, BatchUsageErrors) {
         root);
     EXPECT_EQ(m.exit_code, kExitBadInput);
     EXPECT_NE(m.err.find("none.txt: --manifest: cannot open file"), std::string::npos) << m.err;
+}
+
+// ---- map extract ------------------------------------------------------------------------------
+
+// An ASCII PCD of `points`.
+void WritePcd(const fs::path& path, const std::vector<std::array<double, 3>>& points) {
+    std::ostringstream o;
+    o << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH "
+      << points.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points.size()
+      << "\nDATA ascii\n";
+    for (const auto& p : points) o << p[0] << " " << p[1] << " " << p[2] << "\n";
+    WriteFile(path, o.str());
+}
+
+// A 6 m x 5 m room scanned at 0.1 m: floor, four walls and a ceiling 2.7 m up, times `scale`.
+std::vector<std::array<double, 3>> Room(double scale) {
+    std::vector<std::array<double, 3>> p;
+    for (double y = 0.05; y < 5.0; y += 0.1) {
+        for (double x = 0.05; x < 6.0; x += 0.1) p.push_back({x, y, 0.0}), p.push_back({x, y, 2.7});
+    }
+    for (double z = 0.0; z < 2.7; z += 0.1) {
+        for (double x = 0.0; x < 6.0; x += 0.1) p.push_back({x, -0.05, z}), p.push_back({x, 5.05, z});
+        for (double y = 0.0; y < 5.0; y += 0.1) p.push_back({-0.05, y, z}), p.push_back({6.05, y, z});
+    }
+    for (auto& q : p) q = {q[0] * scale, q[1] * scale, q[2] * scale};
+    return p;
+}
+
+TEST(CliMap, ExtractWritesTheSurfaceAndAPicturePerFloor) {
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "map_extract";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    WritePcd(dir / "room.pcd", Room(1.0));
+    const RunResult r = RunProgram(
+        kCli, {"map", "extract", (dir / "room.pcd").string(), "-o", (dir / "walk.ply").string()},
+        dir);
+    ASSERT_EQ(r.exit_code, kExitOk) << r.err;
+    EXPECT_NE(r.out.find("walkable   30.0 m^2 in 1 region(s)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("ceiling or roof seen from below"), std::string::npos) << r.out;
+    EXPECT_TRUE(fs::exists(dir / "walk.ply"));
+    ASSERT_TRUE(fs::exists(dir / "walk_floor_0.00.svg")) << r.out;
+    EXPECT_NE(ReadFile(dir / "walk_floor_0.00.svg").find("30.0 m^2 walkable"), std::string::npos);
+}
+
+TEST(CliMap, BadRawMapsAreNamedWithWhatWasFound) {
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "map_extract_bad";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::vector<std::array<double, 3>> wall;
+    for (double z = 0.0; z < 3.0; z += 0.1) {
+        for (double x = 0.0; x < 8.0; x += 0.1) wall.push_back({x, 0.0, z}), wall.push_back({x, 0.1, z});
+    }
+    WritePcd(dir / "wall.pcd", wall);
+    WritePcd(dir / "room_mm.pcd", Room(1000.0));
+    const std::string out = (dir / "walk.pcd").string();
+    struct Case {
+        std::vector<std::string> args;
+        int code;
+        std::string message;
+    };
+    const std::vector<Case> cases = {
+        {{"map", "extract", (dir / "wall.pcd").string(), "-o", out}, kExitBadInput,
+         "wall.pcd: no walkable surface: the largest horizontal surface with 1.80 m free above "
+         "it is "},
+        {{"map", "extract", (dir / "room_mm.pcd").string(), "-o", out}, kExitBadInput,
+         "room_mm.pcd: the cloud spans 6"},
+        {{"map", "extract", (dir / "room_mm.pcd").string(), "-o", out}, kExitBadInput,
+         "not a building in metres (millimetres or centimetres?"},
+        {{"map", "extract", (dir / "none.pcd").string(), "-o", out}, kExitBadInput, "none.pcd"},
+        {{"map", "extract", (dir / "wall.pcd").string(), "-o", (dir / "walk.txt").string()},
+         kExitBadInput, "written as .pcd or .ply"},
+        {{"map", "extract", (dir / "wall.pcd").string(), "-o", out, "--lifts", "1,2,3"},
+         kExitBadInput, "--lifts: a shaft is x0,y0,x1,y1"},
+        {{"map", "extract", (dir / "wall.pcd").string()}, kExitUsage,
+         "-o walkable.pcd|.ply is required"},
+        {{"map", "carve", (dir / "wall.pcd").string(), "-o", out}, kExitUsage,
+         "expected 'extract'"},
+    };
+    for (const Case& c : cases) {
+        const RunResult r = RunProgram(kCli, c.args, dir);
+        EXPECT_EQ(r.exit_code, c.code) << c.args[2] << ": " << r.err;
+        EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out)) << c.args[2];
+    }
 }
 
 }  // namespace

@@ -62,6 +62,7 @@ int RunCorrectCommand(int argc, char** argv);
 int RunStreamCommand(int argc, char** argv);
 int RunEvalCommand(int argc, char** argv);
 int RunParamsCommand(int argc, char** argv);
+int RunMapCommand(int argc, char** argv);
 /// The usage text of `correct` (driftcorr --help prints it).
 void PrintCorrectUsage(std::FILE* out);
 

@@ -19,22 +19,23 @@ const char* kAbout =
     "  eval      the estimate, the paper's method and driftcorr against ground truth\n"
     "            (driftcorr eval -h)\n"
     "  params    every params.yaml key at its default, with its allowed values\n"
+    "  map       the walkable surface of a raw 3D map of a building (driftcorr map -h)\n"
     "\n";
 const char* kOtherUsage =
     "       driftcorr eval <scenario dirs...> [-o report_dir] [--config params.yaml] [--quiet]\n"
     "       driftcorr stream <scenario dir | scenario.yaml> [--replay] [--rate-hz R] [--sync]\n"
     "                        [--config params.yaml] [--smoothed-out smoothed.tum]\n"
-    "       driftcorr params\n";
+    "       driftcorr params\n"
+    "       driftcorr map extract <raw .pcd | .ply | .bt | .ot> -o walkable.pcd [--lifts ...]\n";
 
 struct Command {
     const char* name;
     int (*run)(int argc, char** argv);
 };
 const Command kCommands[] = {
-    {"correct", &driftcorr::cli::RunCorrectCommand},
-    {"eval", &driftcorr::cli::RunEvalCommand},
-    {"stream", &driftcorr::cli::RunStreamCommand},
-    {"params", &driftcorr::cli::RunParamsCommand},
+    {"correct", &driftcorr::cli::RunCorrectCommand}, {"eval", &driftcorr::cli::RunEvalCommand},
+    {"stream", &driftcorr::cli::RunStreamCommand},   {"params", &driftcorr::cli::RunParamsCommand},
+    {"map", &driftcorr::cli::RunMapCommand},
 };
 
 void PrintUsage(std::FILE* out) {
@@ -57,8 +58,9 @@ int main(int argc, char** argv) {
             if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 1, argv + 1);
         }
     }
-    std::fprintf(stderr, "driftcorr: %s\n\n",
-                 argc < 2 ? "missing command" : ("unknown command '" + std::string(argv[1]) + "'").c_str());
+    std::fprintf(
+        stderr, "driftcorr: %s\n\n",
+        argc < 2 ? "missing command" : ("unknown command '" + std::string(argv[1]) + "'").c_str());
     PrintUsage(stderr);
     return driftcorr::cli::kExitUsage;
 }

@@ -4,17 +4,17 @@
 
 #include <cctype>
 #include <cmath>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <iostream>
+#include <iterator>
+#include <limits>
 #include <memory>
 #include <sstream>
-#include <limits>
-#include <streambuf>
 #include <stdexcept>
+#include <streambuf>
 #include <string>
 
 #include "driftcorr/core/errors.h"
@@ -97,9 +97,7 @@ TreeHeader ParseTreeHeader(const std::string& text, const std::string& first_lin
     const std::size_t pos = text.find('\n');
     if (pos == std::string::npos) return header;
     std::istringstream in(text.substr(pos + 1));
-    auto skip_line = [&] {
-        in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
-    };
+    auto skip_line = [&] { in.ignore(std::numeric_limits<std::streamsize>::max(), '\n'); };
     for (std::string token; in.good() && in >> token;) {
         if (token == "data") {
             // When no newline follows, OctoMap's stream ends up at the end of the file and its
@@ -171,9 +169,9 @@ void CheckFullTreeFile(const std::string& path) {
                          "OcTree file' and the header end with a 'data' line");
     }
     if (header.id != "OcTree" && header.id != "1") {
-        throw InputError(path, 0, "",
-                         "OctoMap file holds a tree of type '" + header.id.substr(0, 40) +
-                             "', not an OcTree");
+        throw InputError(
+            path, 0, "",
+            "OctoMap file holds a tree of type '" + header.id.substr(0, 40) + "', not an OcTree");
     }
     if (!(header.res >= kMinResolutionM && header.res <= kMaxResolutionM)) {
         throw InputError(path, 0, "",
@@ -231,12 +229,13 @@ std::unique_ptr<octomap::OcTree> ReadTree(const std::string& path) {
 // Which of the n x n finest voxels in the layer centred at height z_m, over the leaf centred at
 // c of size `size`, are occupied (index a * n + b along x, y). One pass over the occupied leaves
 // that layer touches instead of a search per voxel: a pruned leaf stands for up to 4 M voxels.
-std::vector<bool> OccupiedAbove(const octomap::OcTree& tree, const octomap::point3d& c,
-                                double size, double res, int n, double z_m) {
+std::vector<bool> OccupiedAbove(const octomap::OcTree& tree, const octomap::point3d& c, double size,
+                                double res, int n, double z_m) {
     std::vector<bool> blocked(std::size_t(n) * n, false);
     const double x0 = c.x() - 0.5 * size, y0 = c.y() - 0.5 * size;
     const octomap::point3d lo(float(x0 + 0.5 * res), float(y0 + 0.5 * res), float(z_m));
-    const octomap::point3d hi(float(x0 + size - 0.5 * res), float(y0 + size - 0.5 * res), float(z_m));
+    const octomap::point3d hi(float(x0 + size - 0.5 * res), float(y0 + size - 0.5 * res),
+                              float(z_m));
     for (auto it = tree.begin_leafs_bbx(lo, hi), end = tree.end_leafs_bbx(); it != end; ++it) {
         const double s = it.getSize();
         const octomap::point3d lc = it.getCoordinate();
@@ -245,7 +244,8 @@ std::vector<bool> OccupiedAbove(const octomap::OcTree& tree, const octomap::poin
         if (!tree.isNodeOccupied(*it) || std::abs(lc.z() - z_m) >= 0.5 * s) continue;
         auto cells = [&](double lo_m, double origin_m) {
             const long first = std::lround((lo_m - origin_m) / res);
-            return std::make_pair(std::max(0L, first), std::min(long(n), first + std::lround(s / res)));
+            return std::make_pair(std::max(0L, first),
+                                  std::min(long(n), first + std::lround(s / res)));
         };
         const auto [a0, a1] = cells(lc.x() - 0.5 * s, x0);
         const auto [b0, b1] = cells(lc.y() - 0.5 * s, y0);
@@ -260,6 +260,8 @@ std::vector<bool> OccupiedAbove(const octomap::OcTree& tree, const octomap::poin
 
 // 4 M floor voxels: 100 m x 100 m of floor at 0.05 m, or 4 floors of it at 0.1 m.
 constexpr std::size_t kMaxFloorVoxels = 4'000'000;
+// The most occupied voxels a raw map may expand to (about 0.8 GB of points).
+constexpr std::size_t kMaxOccupiedVoxels = 30'000'000;
 
 std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
     const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
@@ -293,7 +295,8 @@ std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
         // top face is floor and needs no search per finest voxel.
         const octomap::OcTreeNode* above =
             tree->search(c.x(), c.y(), c.z() + size, static_cast<unsigned>(it.getDepth()));
-        const bool open_above = !above || (!tree->nodeHasChildren(above) && !tree->isNodeOccupied(above));
+        const bool open_above =
+            !above || (!tree->nodeHasChildren(above) && !tree->isNodeOccupied(above));
         // Empty when open above: most leaves are single voxels, no allocation per leaf.
         const std::vector<bool> blocked =
             open_above ? std::vector<bool>()
@@ -313,6 +316,42 @@ std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
                          "space above it)");
     }
     return floor;
+}
+
+std::vector<Eigen::Vector3d> ReadOccupiedVoxelsOctomap(const std::string& path,
+                                                       double* resolution_m) {
+    const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
+    const double res = tree->getResolution();
+    if (resolution_m) *resolution_m = res;
+    if (!(res >= kMinResolutionM && res <= kMaxResolutionM)) {
+        throw InputError(path, 0, "",
+                         "OctoMap resolution " + std::to_string(res) + " m is outside [" +
+                             std::to_string(kMinResolutionM) + ", " +
+                             std::to_string(kMaxResolutionM) + "] m");
+    }
+    std::vector<Eigen::Vector3d> voxels;
+    for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+        if (!tree->isNodeOccupied(*it)) continue;
+        const double size = it.getSize();
+        const int n = std::max(1, int(std::lround(size / res)));
+        if (double(voxels.size()) + double(n) * n * n > double(kMaxOccupiedVoxels)) {
+            throw InputError(path, 0, "",
+                             "OctoMap has more than " + std::to_string(kMaxOccupiedVoxels) +
+                                 " occupied voxels at its resolution; coarsen or crop the map");
+        }
+        const octomap::point3d c = it.getCoordinate();
+        for (int a = 0; a < n; ++a) {
+            for (int b = 0; b < n; ++b) {
+                for (int d = 0; d < n; ++d) {
+                    voxels.emplace_back(c.x() - 0.5 * size + res * (a + 0.5),
+                                        c.y() - 0.5 * size + res * (b + 0.5),
+                                        c.z() - 0.5 * size + res * (d + 0.5));
+                }
+            }
+        }
+    }
+    if (voxels.empty()) throw InputError(path, 0, "", "OctoMap has no occupied voxel");
+    return voxels;
 }
 
 void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Vector3d>& points,

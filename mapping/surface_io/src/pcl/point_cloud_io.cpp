@@ -15,14 +15,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <new>
 #include <optional>
+#include <set>
 #include <sstream>
-#include <fstream>
 #include <stdexcept>
 #include <string>
-#include <set>
-#include <map>
 #include <vector>
 
 #include "driftcorr/core/check.h"
@@ -64,7 +64,8 @@ int CallPcl(const std::string& path, const std::string& kind, F&& read) {
     } catch (const InvariantError&) {
         throw;
     } catch (const std::exception& e) {
-        throw InputError(path, 0, "", "cannot be parsed as a " + kind + " point cloud: " + e.what());
+        throw InputError(path, 0, "",
+                         "cannot be parsed as a " + kind + " point cloud: " + e.what());
     }
 }
 
@@ -74,9 +75,9 @@ void RequireDeclaredPointsFit(const std::string& path, const std::string& kind, 
     std::error_code ec;
     const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
     if (!ec && count > bytes) {
-        throw InputError(path, 0, "", kind + " header declares " + std::to_string(count) +
-                                          " points but the file has only " +
-                                          std::to_string(bytes) + " bytes");
+        throw InputError(path, 0, "",
+                         kind + " header declares " + std::to_string(count) +
+                             " points but the file has only " + std::to_string(bytes) + " bytes");
     }
 }
 
@@ -132,9 +133,9 @@ void PrecheckPcdAsciiBody(const std::string& path, std::istream& in, long header
         }
     }
     if (seen != points) {
-        throw InputError(path, n, "", "PCD data: " + std::to_string(seen) +
-                                          " point lines, the header declares " +
-                                          std::to_string(points));
+        throw InputError(path, n, "",
+                         "PCD data: " + std::to_string(seen) +
+                             " point lines, the header declares " + std::to_string(points));
     }
 }
 
@@ -150,8 +151,7 @@ void PrecheckPcdCompressedBody(const std::string& path, std::istream& in,
     }
     std::error_code ec;
     const std::uintmax_t file = std::filesystem::file_size(path, ec);
-    if (sizes[1] != bytes ||
-        (!ec && static_cast<std::uintmax_t>(start) + 8 + sizes[0] > file)) {
+    if (sizes[1] != bytes || (!ec && static_cast<std::uintmax_t>(start) + 8 + sizes[0] > file)) {
         throw InputError(path, 0, "",
                          "PCD data: binary_compressed sizes (" + std::to_string(sizes[0]) +
                              " compressed, " + std::to_string(sizes[1]) +
@@ -197,8 +197,9 @@ void PrecheckPcdHeader(const std::string& path) {
         }
         const std::vector<std::string> words = internal::SplitWords(line);
         const std::string& key = words.front();  // the line is not empty and starts with a word
-        static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",      "TYPE", "COUNT",
-                                                    "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+        static const std::set<std::string> kKeys = {"VERSION", "FIELDS", "SIZE",   "TYPE",
+                                                    "COUNT",   "WIDTH",  "HEIGHT", "VIEWPOINT",
+                                                    "POINTS",  "DATA"};
         if (!kKeys.count(key)) bad(n, "unknown line '" + line.substr(0, 40) + "'");
         if (keys.count(key)) bad(n, key + " given twice");
         keys[key] = std::vector<std::string>(words.begin() + 1, words.end());
@@ -253,7 +254,8 @@ void PrecheckPcdHeader(const std::string& path) {
         bad(0, "POINTS must be a whole number equal to WIDTH * HEIGHT");
     }
     const auto& data = keys["DATA"];
-    if (data.size() != 1 || (data[0] != "ascii" && data[0] != "binary" && data[0] != "binary_compressed")) {
+    if (data.size() != 1 ||
+        (data[0] != "ascii" && data[0] != "binary" && data[0] != "binary_compressed")) {
         bad(0, "DATA must be ascii, binary or binary_compressed");
     }
     RequireDeclaredDataFits(path, std::size_t(points), std::size_t(step));
@@ -277,15 +279,24 @@ double Load(const std::uint8_t* at) {
 
 std::optional<double> FieldValue(const std::uint8_t* at, std::uint8_t datatype) {
     switch (datatype) {
-        case pcl::PCLPointField::INT8: return Load<std::int8_t>(at);
-        case pcl::PCLPointField::UINT8: return Load<std::uint8_t>(at);
-        case pcl::PCLPointField::INT16: return Load<std::int16_t>(at);
-        case pcl::PCLPointField::UINT16: return Load<std::uint16_t>(at);
-        case pcl::PCLPointField::INT32: return Load<std::int32_t>(at);
-        case pcl::PCLPointField::UINT32: return Load<std::uint32_t>(at);
-        case pcl::PCLPointField::FLOAT32: return Load<float>(at);
-        case pcl::PCLPointField::FLOAT64: return Load<double>(at);
-        default: return std::nullopt;
+        case pcl::PCLPointField::INT8:
+            return Load<std::int8_t>(at);
+        case pcl::PCLPointField::UINT8:
+            return Load<std::uint8_t>(at);
+        case pcl::PCLPointField::INT16:
+            return Load<std::int16_t>(at);
+        case pcl::PCLPointField::UINT16:
+            return Load<std::uint16_t>(at);
+        case pcl::PCLPointField::INT32:
+            return Load<std::int32_t>(at);
+        case pcl::PCLPointField::UINT32:
+            return Load<std::uint32_t>(at);
+        case pcl::PCLPointField::FLOAT32:
+            return Load<float>(at);
+        case pcl::PCLPointField::FLOAT64:
+            return Load<double>(at);
+        default:
+            return std::nullopt;
     }
 }
 
@@ -306,10 +317,11 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
         throw InputError(path, 0, "", kind + " file holds less point data than its header says");
     }
     for (const pcl::PCLPointField& f : blob.fields) {
-        const std::size_t end = std::size_t(f.offset) +
-                                std::size_t(pcl::getFieldSize(f.datatype)) * std::max<std::size_t>(1, f.count);
+        const std::size_t end = std::size_t(f.offset) + std::size_t(pcl::getFieldSize(f.datatype)) *
+                                                            std::max<std::size_t>(1, f.count);
         if (end > blob.point_step) {
-            throw InputError(path, 0, "", kind + " file field '" + f.name + "' lies outside its point");
+            throw InputError(path, 0, "",
+                             kind + " file field '" + f.name + "' lies outside its point");
         }
     }
     // Converted here, not by pcl::fromPCLPointCloud2: that one matches fields by type as well as
@@ -330,8 +342,8 @@ std::vector<Eigen::Vector3d> ToSurfacePoints(const pcl::PCLPointCloud2& blob,
         for (int k = 0; k < 3; ++k) {
             const std::optional<double> v = FieldValue(point + xyz[k]->offset, xyz[k]->datatype);
             if (!v) {
-                throw InputError(path, 0, "", kind + " field '" + xyz[k]->name +
-                                                  "' has an unsupported type");
+                throw InputError(path, 0, "",
+                                 kind + " field '" + xyz[k]->name + "' has an unsupported type");
             }
             p[k] = *v;
         }
@@ -440,6 +452,16 @@ std::vector<Eigen::Vector3d> ReadSurfacePoints(const std::string& path) {
     if (ext == ".bt" || ext == ".ot") return ReadFloorVoxelsOctomap(path);
     throw InputError(path, 0, "",
                      "unknown surface map extension '" + ext + "' (expected .pcd, .ply, .bt, .ot)");
+}
+
+std::vector<Eigen::Vector3d> ReadRawPoints(const std::string& path, double* voxel_m) {
+    const std::string ext = LowerExtension(path);
+    if (voxel_m) *voxel_m = 0.0;
+    if (ext == ".pcd") return ReadSurfacePointsPcd(path);
+    if (ext == ".ply") return ReadSurfacePointsPly(path);
+    if (ext == ".bt" || ext == ".ot") return ReadOccupiedVoxelsOctomap(path, voxel_m);
+    throw InputError(path, 0, "",
+                     "unknown map extension '" + ext + "' (expected .pcd, .ply, .bt, .ot)");
 }
 
 void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points) {

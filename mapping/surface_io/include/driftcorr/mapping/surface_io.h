@@ -34,6 +34,19 @@ std::vector<Eigen::Vector3d> ReadSurfacePoints(const std::string& path);
 /// cannot be read or parsed as an OcTree, or has no floor voxel.
 std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path);
 
+/// The centres of every occupied voxel of an OctoMap (a pruned occupied leaf expanded to its
+/// finest voxels): a raw map of walls, floors, ceilings and furniture for
+/// ExtractWalkableSurface (walkable_surface.h). Throws InputError naming the file when it cannot
+/// be read, has no occupied voxel, or would expand to more than 30 M voxels. `resolution_m`, when
+/// given, receives the map's voxel size.
+std::vector<Eigen::Vector3d> ReadOccupiedVoxelsOctomap(const std::string& path,
+                                                       double* resolution_m = nullptr);
+
+/// A raw 3D map's points by extension: .pcd and .ply every point (as ReadSurfacePointsPcd /
+/// Ply), .bt and .ot the occupied voxels' centres (ReadOccupiedVoxelsOctomap). `voxel_m`, when
+/// given, receives an OctoMap's voxel size (0 for a point cloud).
+std::vector<Eigen::Vector3d> ReadRawPoints(const std::string& path, double* voxel_m = nullptr);
+
 /// Writers (used by the synthetic building generator and the tests). Each writes through a
 /// temporary file renamed when complete (atomic_file.h); throws std::runtime_error naming the file when
 /// it cannot be written. Points are stored as 32-bit floats (keep coordinates local: a float has
