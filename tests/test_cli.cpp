@@ -1440,4 +1440,20 @@ TEST(CliMap, BadRawMapsAreNamedWithWhatWasFound) {
     }
 }
 
+TEST(CliMap, AWalkThatStartsOffTheWalkableSurfaceIsBadInput) {
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "walk_off_surface";
+    fs::remove_all(dir);
+    const RunResult g = RunProgram(DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario",
+                                   {dir.string()}, fs::path(DRIFTCORR_TEST_TMPDIR));
+    ASSERT_EQ(g.exit_code, 0) << g.err;
+    // The anchor 2.5 m lower: the walk's heights no longer meet the map's floors.
+    Replace(dir / "scenario.yaml", "  z_m: 0.0", "  z_m: -2.5");
+    const fs::path out = dir / "corrected.tum";
+    const RunResult r = RunProgram(kCli, {"correct", dir.string(), "-o", out.string()}, dir);
+    EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+    EXPECT_NE(r.err.find("scenario.yaml: estimate: the walk starts"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("map and walk are not in one frame"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
+#include "driftcorr/core/format.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/geodesy.h"
@@ -257,6 +258,29 @@ std::string ToString(Solver solver) {
     return solver == Solver::kPaper ? "paper" : "driftcorr";
 }
 
+namespace {
+
+// An indoor walk starts on the walkable surface: a start farther than kStartOffSurfaceM from it
+// (in 3D) means that map and walk are not in one frame (another origin or floor height, a map
+// whose z points down), which no correction can repair: reported, not snapped onto the map.
+void CheckWalkStart(const PreparedScenario& ps) {
+    constexpr double kStartOffSurfaceM = 1.0;
+    const Eigen::Vector3d start(ps.estimate.p_en[0].x(), ps.estimate.p_en[0].y(),
+                                ps.estimate.up_m[0]);
+    const auto q = ps.field.Query(start);
+    if (q && q->corridor.value <= kStartOffSurfaceM) return;
+    const std::string where = "(" + FormatFixed(start.x(), 2) + ", " + FormatFixed(start.y(), 2) +
+                              ", " + FormatFixed(start.z(), 2) + ") m";
+    const std::string how_far = q ? FormatFixed(q->corridor.value, 2) + " m from the walkable surface"
+                                  : "outside the map's extent";
+    throw InputError(ps.scenario.yaml_path, 0, "estimate",
+                     "the walk starts " + how_far + " at " + where +
+                         " (East, North, up from the anchor): map and walk are not in one frame "
+                         "(another origin or floor height, or a map whose z points down?)");
+}
+
+}  // namespace
+
 PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config) {
     const auto t0 = std::chrono::steady_clock::now();
     io::Scenario scenario = io::LoadScenario(scenario_path);
@@ -320,6 +344,7 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
                                                           AnchorFitFor(sc, config), config.field);
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor);
+    if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
     if (!ps.anchor_fit) {
         // The anchor check: the given start, scored against every other heading and against
         // nearby positions at the given heading; the better of the two searches is kept.
