@@ -1,5 +1,6 @@
 #include "synth_common.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdarg>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 
 namespace driftcorr::synth {
 
@@ -28,6 +30,22 @@ double NormalSampler::Next() {
     spare_ = radius * std::sin(angle_rad);
     has_spare_ = true;
     return radius * std::cos(angle_rad);
+}
+
+UniformSampler::UniformSampler(std::uint64_t seed, std::uint64_t stream)
+    : engine_(seed * 0x9E3779B97F4A7C15ULL + stream) {}
+
+double UniformSampler::Next01() {
+    constexpr double kTwoPowMinus53 = 1.0 / 9007199254740992.0;
+    return static_cast<double>(engine_() >> 11) * kTwoPowMinus53;
+}
+
+double UniformSampler::Range(double lo, double hi) { return lo + (hi - lo) * Next01(); }
+
+std::size_t UniformSampler::Index(std::size_t n) {
+    DRIFTCORR_CHECK(n > 0, "UniformSampler::Index: empty range");
+    const auto k = static_cast<std::size_t>(Next01() * static_cast<double>(n));
+    return std::min(k, n - 1);
 }
 
 std::string Format(const char* fmt, ...) {

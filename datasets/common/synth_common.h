@@ -1,6 +1,7 @@
 #pragma once
-// What the synthetic scenario generators (synth_road, synth_building) share: the noise source,
+// What the synthetic scenario generators (synth_road, synth_building) share: the random sources,
 // 2D rotation, command-line parsing and atomic file writing.
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
@@ -26,6 +27,20 @@ private:
     std::mt19937_64 engine_;
     double spare_ = 0.0;
     bool has_spare_ = false;
+};
+
+/// Uniform numbers from std::mt19937_64 converted by hand (the <random> distributions differ
+/// between standard libraries; this is bit-identical for a seed everywhere). `stream` separates
+/// independent uses of one seed, so that drawing more numbers for one never changes another.
+class UniformSampler {
+public:
+    UniformSampler(std::uint64_t seed, std::uint64_t stream);
+    double Next01();                     ///< in [0, 1)
+    double Range(double lo, double hi);  ///< in [lo, hi)
+    std::size_t Index(std::size_t n);    ///< in [0, n - 1]; precondition n > 0
+
+private:
+    std::mt19937_64 engine_;
 };
 
 /// printf-style formatting into a std::string of at most 511 characters (the generators keep the
