@@ -35,6 +35,8 @@
 #include <vector>
 
 #include "driftcorr/io/trajectory_io.h"
+#include "driftcorr/mapping/surface_io.h"
+#include "driftcorr/mapping/walkable_surface.h"
 #include "test_support.h"
 
 namespace {
@@ -1454,6 +1456,51 @@ TEST(CliMap, AWalkThatStartsOffTheWalkableSurfaceIsBadInput) {
     EXPECT_NE(r.err.find("scenario.yaml: estimate: the walk starts"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("map and walk are not in one frame"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));
+}
+
+// The synthetic building's raw scan (walls, ceilings, furniture, noise, holes): the extracted
+// surface against the true walkable surface the generator knows (without the floor under the
+// furniture), and the correction on it against the correction on the clean surface.
+TEST(CliMap, RawBuildingScanGivesTheWalkableSurfaceAndTheSameCorrection) {
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "raw_building";
+    fs::remove_all(dir);
+    const RunResult g = RunProgram(DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario",
+                                   {dir.string()}, fs::path(DRIFTCORR_TEST_TMPDIR));
+    ASSERT_EQ(g.exit_code, 0) << g.err;
+    const RunResult x =
+        RunProgram(kCli,
+                   {"map", "extract", (dir / "building_raw.pcd").string(), "-o",
+                    (dir / "walkable.pcd").string(), "--lifts", "50,17.5,52,19.5"},
+                   dir);
+    ASSERT_EQ(x.exit_code, kExitOk) << x.err;
+    std::printf("%s", x.out.c_str());
+    const driftcorr::SurfaceAgreement a = driftcorr::CompareSurfaces(
+        driftcorr::ReadSurfacePointsPcd((dir / "walkable.pcd").string()),
+        driftcorr::ReadSurfacePointsPcd((dir / "building_raw_walkable.pcd").string()), 0.1, 0.3);
+    std::printf("extracted surface: precision %.4f, recall %.4f (%zu points, %zu true)\n",
+                a.precision, a.recall, a.extracted, a.truth);
+    EXPECT_GE(a.precision, 0.95);
+    EXPECT_GE(a.recall, 0.95);
+    for (const std::string floor : {"0.00", "4.00", "8.00"}) {
+        EXPECT_TRUE(fs::exists(dir / ("walkable_floor_" + floor + ".svg"))) << x.out;
+    }
+    Replace(dir / "scenario.yaml", "name: synthetic-building-pcd", "name: synthetic-building-raw");
+    std::string yaml = ReadFile(dir / "scenario.yaml");
+    WriteFile(dir / "scenario_extracted.yaml",
+              std::regex_replace(yaml, std::regex("path: building\\.pcd"), "path: walkable.pcd"));
+    auto ate = [&](const std::string& scenario) {
+        const RunResult r = RunProgram(
+            kCli, {"correct", (dir / scenario).string(), "-o", (dir / "c.tum").string()}, dir);
+        EXPECT_EQ(r.exit_code, kExitOk) << scenario << ": " << r.err;
+        std::smatch m;
+        const bool found = std::regex_search(r.out, m, std::regex("corrected  ATE +([0-9.]+) m"));
+        EXPECT_TRUE(found) << r.out;
+        EXPECT_NE(r.out.find("right floor 100.0 %"), std::string::npos) << r.out;
+        return found ? std::stod(m[1]) : 1e9;
+    };
+    const double clean = ate("scenario.yaml"), extracted = ate("scenario_extracted.yaml");
+    std::printf("corrected ATE: clean surface %.2f m, extracted %.2f m\n", clean, extracted);
+    EXPECT_LE(std::abs(extracted - clean), 0.1);
 }
 
 }  // namespace

@@ -156,6 +156,34 @@ TEST(WalkableSurface, DeclaredLiftJoinsFloors) {
     EXPECT_NEAR(z_hi, 4.0, 0.15);
 }
 
+// A hole of 0.8 m radius in the scan of the floor is closed (the surface under it is found
+// again, at the floor's height); with fill_gap_m 0 it stays open. The table is not filled under.
+TEST(WalkableSurface, GapsOfTheScanAreClosedWhereNothingStandsInTheWay) {
+    Points cloud, truth, holed;
+    Storey(cloud, &truth, 0.0);
+    for (const Eigen::Vector3d& p : cloud) {
+        if (std::abs(p.z()) < 0.01 && (p.head<2>() - Eigen::Vector2d(5.0, 4.0)).norm() < 0.8)
+            continue;
+        holed.push_back(p);
+    }
+    WalkableSurfaceConfig cfg;
+    const WalkableSurface closed = ExtractWalkableSurface(holed, cfg);
+    cfg.fill_gap_m = 0.0;
+    const WalkableSurface open = ExtractWalkableSurface(holed, cfg);
+    const SurfaceAgreement a = CompareSurfaces(closed.points, truth, 0.1, 0.15);
+    const SurfaceAgreement b = CompareSurfaces(open.points, truth, 0.1, 0.15);
+    EXPECT_GE(a.precision, 0.99);
+    EXPECT_GE(a.recall, 0.97);
+    EXPECT_LT(b.recall, a.recall - 0.02) << "the hole is about 2 m^2 of 78";
+    EXPECT_GT(closed.filled_places, 150u);
+    EXPECT_EQ(open.filled_places, 0u);
+    for (const Eigen::Vector3d& p : closed.points) {
+        EXPECT_NEAR(p.z(), 0.0, 0.05);
+        const bool under_table = p.x() > 2.05 && p.x() < 3.15 && p.y() > 2.05 && p.y() < 2.75;
+        EXPECT_FALSE(under_table) << p.transpose();
+    }
+}
+
 TEST(WalkableSurface, NoHorizontalSurfaceGivesNothing) {
     Points wall;
     for (double z = 0.0; z < 3.0; z += kSpacing) {

@@ -147,11 +147,30 @@ std::vector<std::string> YamlHeader(const Options& opt, std::size_t poses, std::
                poses, s.distance_m, points, s.ate_m, s.final_error_m, s.max_error_m,
                s.max_height_error_m),
         Format("building_raw.pcd (in no scenario): a raw scan of this building (its walkable "
-               "surface: building.pcd), %zu points, --raw-spacing-m %.15g, noise %.15g m, dropout "
+               "surface: building_raw_walkable.pcd, building.pcd without the floor under its "
+               "furniture), %zu points, --raw-spacing-m %.15g, noise %.15g m, dropout "
                "%.15g, hole share %.15g, seed %llu",
                raw_points, r.spacing_m, r.noise_sigma_m, r.dropout, r.hole_share,
                static_cast<unsigned long long>(r.seed)),
     };
+}
+
+// The walkable surface of the raw scan's building: the clean surface without the floor under
+// the tables and cabinets the scan adds (a person cannot stand there).
+std::vector<Eigen::Vector3d> WithoutFurniture(const std::vector<Eigen::Vector3d>& surface,
+                                              const BuildingLayout& building,
+                                              const RawScanConfig& raw) {
+    const std::vector<RoomFurniture> furniture = PlaceFurniture(building, raw);
+    std::vector<Eigen::Vector3d> out;
+    for (const Eigen::Vector3d& p : surface) {
+        const bool under =
+            std::any_of(furniture.begin(), furniture.end(), [&](const RoomFurniture& f) {
+                return std::abs(p.z() - building.floor_z_m[f.floor]) < 0.01 &&
+                       (f.table.Contains(p.x(), p.y()) || f.cabinet.Contains(p.x(), p.y()));
+            });
+        if (!under) out.push_back(p);
+    }
+    return out;
 }
 
 int Run(const Options& opt) {
@@ -170,6 +189,8 @@ int Run(const Options& opt) {
     WriteTumFile((dir / "estimate.tum").string(), est);
     const std::vector<Eigen::Vector3d> raw = SampleRawBuilding(building, opt.raw);
     WriteSurfacePointsPcd((dir / "building_raw.pcd").string(), raw);
+    WriteSurfacePointsPcd((dir / "building_raw_walkable.pcd").string(),
+                          WithoutFurniture(surface, building, opt.raw));
     const auto header = YamlHeader(opt, gt.size(), surface.size(), raw.size(), s);
     WriteFileAtomically((dir / "scenario_ply.yaml").string(),
                         ScenarioYaml(header, "building.ply", "ply"));
@@ -197,5 +218,6 @@ int main(int argc, char** argv) {
     Options opt;
     return GeneratorMain(
         argc, argv, "driftcorr_make_building_scenario", PrintUsage,
-        [&opt](int n, char** args) { return ParseArgs(n, args, opt); }, [&opt] { return Run(opt); });
+        [&opt](int n, char** args) { return ParseArgs(n, args, opt); },
+        [&opt] { return Run(opt); });
 }

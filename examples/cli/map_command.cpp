@@ -36,6 +36,7 @@ __attribute__((format(printf, 1, 2))) std::string Format(const char* format, ...
 const char* kMapUsage =
     "usage: driftcorr map extract <raw map: .pcd | .ply | .bt | .ot> -o walkable.pcd|.ply\n"
     "                             [--resolution M] [--headroom M] [--step M] [--min-area M2]\n"
+    "                             [--fill-gap M]\n"
     "                             [--lifts x0,y0,x1,y1[;x0,y0,x1,y1...]]\n"
     "\n"
     "Finds where a person can stand in a raw 3D map of a building (a point cloud of a mapping\n"
@@ -44,7 +45,9 @@ const char* kMapUsage =
     "apart), in regions of at least --min-area (4 m^2) connected to the largest one, in voxels\n"
     "of --resolution (0.1 m; an OctoMap's own voxel size by default). A lift does\n"
     "not show in a scan: --lifts declares each shaft's footprint [m, the map's frame], walkable\n"
-    "at every 0.25 m between the floors it touches. Writes the surface (-o, PCD or PLY; an\n"
+    "at every 0.25 m between the floors it touches. Gaps of the scan up to --fill-gap (2 m:\n"
+    "holes, a doorway lost to a hole) are closed where nothing stands in the way. Writes the\n"
+    "surface (-o, PCD or PLY; an\n"
     "indoor3d scenario names it as its map) and a picture of each floor next to it\n"
     "(<output>_floor_<z>.svg), and prints what was found and dropped.\n"
     "Exit codes: 0 written, 1 usage, 2 bad input (no walkable surface, not in metres).\n";
@@ -236,9 +239,11 @@ int Extract(const std::string& input, const std::string& output, WalkableSurface
         }
     }
     std::printf(
-        "walkable   %.1f m^2 in %zu region(s) from %zu standing places; %zu declared "
-        "lift(s), %zu lift points\n",
-        s.area_m2, kept, s.standing_places, cfg.lifts.size(), s.lift_points);
+        "walkable   %.1f m^2 in %zu region(s) from %zu standing places (%.1f m^2 of them closing "
+        "gaps of the scan); %zu declared lift(s), %zu lift points\n",
+        s.area_m2, kept, s.standing_places + s.filled_places,
+        double(s.filled_places) * cfg.resolution_m * cfg.resolution_m, cfg.lifts.size(),
+        s.lift_points);
     for (std::size_t l = 0; l < levels.size(); ++l) {
         const auto count = std::count(level_of.begin(), level_of.end(), int(l));
         std::printf("floor      z %.2f m: about %.1f m^2 (%s)\n", levels[l],
@@ -264,12 +269,13 @@ int Extract(const std::string& input, const std::string& output, WalkableSurface
 }  // namespace
 
 int RunMapCommand(int argc, char** argv) {
-    std::string output, resolution, headroom, step, min_area, lifts;
+    std::string output, resolution, headroom, step, min_area, lifts, fill_gap;
     std::vector<std::string> positional;
     OptionTable table;
-    table.values = {{"-o", &output},           {"--output", &output}, {"--resolution", &resolution},
-                    {"--headroom", &headroom}, {"--step", &step},     {"--min-area", &min_area},
-                    {"--lifts", &lifts}};
+    table.values = {
+        {"-o", &output},           {"--output", &output},    {"--resolution", &resolution},
+        {"--headroom", &headroom}, {"--step", &step},        {"--min-area", &min_area},
+        {"--lifts", &lifts},       {"--fill-gap", &fill_gap}};
     std::string err;
     const bool ok = ParseOptions(
         argc, argv, 1, table,
@@ -299,6 +305,7 @@ int RunMapCommand(int argc, char** argv) {
         if (!step.empty()) cfg.step_m = ParseNumber(step, "--step");
         if (!min_area.empty()) cfg.min_region_m2 = ParseNumber(min_area, "--min-area");
         if (!lifts.empty()) cfg.lifts = ParseLifts(lifts);
+        if (!fill_gap.empty()) cfg.fill_gap_m = ParseNumber(fill_gap, "--fill-gap");
         if (std::string m = cfg.Validate(); !m.empty()) throw InputError("", 0, "", m);
         return Extract(positional[1], output, cfg, !resolution.empty());
     } catch (const InputError& e) {

@@ -131,6 +131,86 @@ std::vector<Place> StandingPlaces(const Grid& g, const WalkableSurfaceConfig& c,
     return places;
 }
 
+// Closes the gaps of a scan (holes in a floor, a doorway lost to a hole) up to fill_gap_m long:
+// between two places at most step_m apart in height, along one of four directions, across
+// columns with no place near that height and no occupied voxel from step_m below it to
+// headroom_m above it (so never through a wall, under a table or into furniture). The new places
+// get heights interpolated along the gap; `places`, `height` and the column index `first` are
+// rebuilt with them. Returns how many were added.
+std::size_t FillGaps(const Grid& g, const WalkableSurfaceConfig& c, std::vector<Place>& places,
+                     std::vector<double>& height, std::vector<int>& first) {
+    if (!(c.fill_gap_m > 0.0)) return 0;
+    const int head = int(std::ceil(c.headroom_m / g.res - 1e-9));
+    const int step = int(std::floor(c.step_m / g.res + 1e-9));
+    auto near = [&](int col, double z) {
+        for (int m = first[col]; m < first[col + 1]; ++m) {
+            if (std::abs(height[m] - z) <= c.step_m) return m;
+        }
+        return -1;
+    };
+    auto clear = [&](int col, int k) {
+        for (int kk = std::max(0, k - step); kk <= std::min(g.nz - 1, k + head); ++kk) {
+            if (g.Occupied(col, kk)) return false;
+        }
+        return true;
+    };
+    struct Fill {
+        int i, j, k;
+        double z;
+    };
+    std::vector<Fill> fills;
+    std::unordered_map<std::int64_t, int> filled;  // (column, k) already filled
+    const std::size_t given = places.size();
+    for (std::size_t n = 0; n < given; ++n) {
+        const Place p = places[n];
+        for (const auto& [di, dj] : {std::pair{1, 0}, {0, 1}, {1, 1}, {-1, 1}}) {
+            const int reach = int(std::floor(c.fill_gap_m / (g.res * std::hypot(di, dj))));
+            const int i1 = p.i + di, j1 = p.j + dj;
+            if (i1 < 0 || i1 >= g.nx || j1 >= g.ny || near(g.Column(i1, j1), height[n]) >= 0) {
+                continue;  // no gap next to this place in this direction
+            }
+            for (int t = 1; t <= reach + 1; ++t) {
+                const int i = p.i + t * di, j = p.j + t * dj;
+                if (i < 0 || i >= g.nx || j >= g.ny) break;
+                const int col = g.Column(i, j);
+                const int end = near(col, height[n]);
+                if (end >= 0) {  // the far side: fill cells 1 .. t - 1
+                    for (int u = 1; u < t; ++u) {
+                        const double z = height[n] + (height[end] - height[n]) * u / t;
+                        const int fi = p.i + u * di, fj = p.j + u * dj;
+                        const int k = int(std::floor((z - g.origin.z()) / g.res));
+                        const std::int64_t key = std::int64_t(g.Column(fi, fj)) * g.nz + k;
+                        if (filled.emplace(key, 1).second) fills.push_back({fi, fj, k, z});
+                    }
+                    break;
+                }
+                if (t > reach) break;
+                const int k = int(std::floor((height[n] - g.origin.z()) / g.res));
+                if (!clear(col, k)) break;
+            }
+        }
+    }
+    if (fills.empty()) return 0;
+    std::vector<std::pair<Place, double>> all;
+    all.reserve(places.size() + fills.size());
+    for (std::size_t n = 0; n < places.size(); ++n) all.emplace_back(places[n], height[n]);
+    for (const Fill& f : fills) all.push_back({{f.i, f.j, f.k, false}, f.z});
+    std::stable_sort(all.begin(), all.end(), [&](const auto& a, const auto& b) {
+        const int ca = g.Column(a.first.i, a.first.j), cb = g.Column(b.first.i, b.first.j);
+        return ca != cb ? ca < cb : a.first.k < b.first.k;
+    });
+    places.clear();
+    height.clear();
+    std::fill(first.begin(), first.end(), 0);
+    for (const auto& [p, z] : all) {
+        ++first[g.Column(p.i, p.j) + 1];
+        places.push_back(p);
+        height.push_back(z);
+    }
+    for (std::size_t col = 1; col < first.size(); ++col) first[col] += first[col - 1];
+    return fills.size();
+}
+
 }  // namespace
 
 std::string WalkableSurfaceConfig::Validate() const {
@@ -149,6 +229,7 @@ std::string WalkableSurfaceConfig::Validate() const {
     if (!(std::isfinite(min_region_m2) && min_region_m2 >= 0.0))
         return "min_region_m2: must be >= 0";
     if (!(std::isfinite(lift_reach_m) && lift_reach_m >= 0.0)) return "lift_reach_m: must be >= 0";
+    if (!(std::isfinite(fill_gap_m) && fill_gap_m >= 0.0)) return "fill_gap_m: must be >= 0";
     for (const LiftShaft& l : lifts) {
         if (!(l.x1 > l.x0 && l.y1 > l.y0)) return "lifts: a shaft needs x1 > x0 and y1 > y0";
     }
@@ -163,7 +244,7 @@ WalkableSurface ExtractWalkableSurface(const std::vector<Eigen::Vector3d>& cloud
     WalkableSurface out;
     out.input_points = cloud.size();
     std::vector<int> first;
-    const std::vector<Place> places = StandingPlaces(g, config, first, out.occupied_voxels);
+    std::vector<Place> places = StandingPlaces(g, config, first, out.occupied_voxels);
     out.standing_places = places.size();
 
     // Each place's height: the mean height of the cloud's points in its voxel.
@@ -185,9 +266,9 @@ WalkableSurface ExtractWalkableSurface(const std::vector<Eigen::Vector3d>& cloud
         ++height_count[it->second];
     }
     for (std::size_t n = 0; n < places.size(); ++n) height[n] /= std::max(height_count[n], 1);
+    out.filled_places = FillGaps(g, config, places, height, first);
 
     // Regions: neighbouring columns' places at most step_m apart in height.
-    const int step = int(std::floor(config.step_m / g.res + 1e-9));
     DisjointSets sets(places.size());
     for (std::size_t n = 0; n < places.size(); ++n) {
         const Place& p = places[n];
@@ -196,7 +277,7 @@ WalkableSurface ExtractWalkableSurface(const std::vector<Eigen::Vector3d>& cloud
             if (i < 0 || i >= g.nx || j >= g.ny) continue;
             const int col = g.Column(i, j);
             for (int m = first[col]; m < first[col + 1]; ++m) {
-                if (std::abs(places[m].k - p.k) <= step) sets.Join(int(n), m);
+                if (std::abs(height[m] - height[n]) <= config.step_m) sets.Join(int(n), m);
             }
         }
     }

@@ -14,9 +14,11 @@
 // region: a floor, a floor with its stairs (a flight is a sequence of treads a riser apart), a
 // table top. Regions smaller than min_region_m2 are dropped (furniture, shelves, noise); so are
 // regions not connected to the largest one by steps or by a declared lift (the outside of a roof,
-// an isolated top of a large cabinet), which are reported. A lift is a vertical connection a scan
-// does not show (the cabin stands at one level): each declared shaft becomes walkable surface at
-// every lift_level_step_m between the lowest and the highest region it touches.
+// an isolated top of a large cabinet), which are reported. Before that, gaps of the scan up to
+// fill_gap_m (holes, a doorway lost to a hole) are closed where nothing stands in the way. A lift
+// is a vertical connection a scan does not show (the cabin stands at one level): each declared
+// shaft becomes walkable surface at every lift_level_step_m between the lowest and the highest
+// region it touches.
 #include <Eigen/Core>
 #include <cstddef>
 #include <optional>
@@ -35,6 +37,10 @@ struct WalkableSurfaceConfig {
     double headroom_m = 1.8;     ///< free height a person needs above where they stand [m]
     double step_m = 0.25;        ///< largest height step within a region (a stair riser) [m]
     double min_region_m2 = 4.0;  ///< smaller regions are dropped [m^2]
+    /// Gaps of the scan up to this long (holes in a floor, a doorway lost to a hole) are closed
+    /// between places at most step_m apart in height, across columns free of occupied voxels
+    /// from step_m below to headroom_m above (never through a wall or under furniture); 0: off [m]
+    double fill_gap_m = 2.0;
     std::vector<LiftShaft> lifts;
     double lift_level_step_m = 0.25;  ///< height spacing of a lift shaft's surface points [m]
     /// A lift shaft touches the regions within this horizontal distance of its footprint [m].
@@ -61,7 +67,8 @@ struct WalkableSurface {
     /// Every region of at least one standing place, kept ones and dropped ones, largest first.
     std::vector<WalkableRegion> regions;
     std::size_t input_points = 0, occupied_voxels = 0, standing_places = 0, lift_points = 0;
-    double area_m2 = 0.0;  ///< kept area (lifts not counted)
+    std::size_t filled_places = 0;  ///< standing places added by closing gaps (fill_gap_m)
+    double area_m2 = 0.0;           ///< kept area (lifts not counted)
 };
 
 /// Throws std::invalid_argument when the config is invalid, the cloud is empty or has a
