@@ -131,6 +131,51 @@ std::vector<Place> StandingPlaces(const Grid& g, const WalkableSurfaceConfig& c,
     return places;
 }
 
+// The regions of the places: neighbouring columns' places at most step_m apart in height.
+struct Regions {
+    std::vector<int> of;  ///< per place
+    std::vector<WalkableRegion> list;
+    std::vector<std::size_t> open_places, all_places;  ///< per region
+    bool MostlyOpen(std::size_t r) const { return 2 * open_places[r] > all_places[r]; }
+};
+
+Regions FindRegions(const Grid& g, const WalkableSurfaceConfig& c, const std::vector<Place>& places,
+                    const std::vector<double>& height, const std::vector<int>& first) {
+    DisjointSets sets(places.size());
+    for (std::size_t n = 0; n < places.size(); ++n) {
+        const Place& p = places[n];
+        for (const auto& [di, dj] : {std::pair{1, 0}, {0, 1}, {1, 1}, {-1, 1}}) {
+            const int i = p.i + di, j = p.j + dj;
+            if (i < 0 || i >= g.nx || j >= g.ny) continue;
+            const int col = g.Column(i, j);
+            for (int m = first[col]; m < first[col + 1]; ++m) {
+                if (std::abs(height[m] - height[n]) <= c.step_m) sets.Join(int(n), m);
+            }
+        }
+    }
+    Regions out;
+    out.of.resize(places.size());
+    std::unordered_map<int, int> index_of_root;
+    const double cell_m2 = g.res * g.res;
+    for (std::size_t n = 0; n < places.size(); ++n) {
+        auto [it, added] = index_of_root.try_emplace(sets.Find(int(n)), int(out.list.size()));
+        if (added) {
+            out.list.push_back({});
+            out.list.back().z_min_m = 1e300, out.list.back().z_max_m = -1e300;
+            out.open_places.push_back(0), out.all_places.push_back(0);
+        }
+        const int r = it->second;
+        out.open_places[r] += places[n].open ? 1 : 0;
+        ++out.all_places[r];
+        out.of[n] = r;
+        WalkableRegion& reg = out.list[r];
+        reg.area_m2 += cell_m2;
+        reg.z_min_m = std::min(reg.z_min_m, height[n]),
+        reg.z_max_m = std::max(reg.z_max_m, height[n]);
+    }
+    return out;
+}
+
 // Closes the gaps of a scan (holes in a floor, a doorway lost to a hole) up to fill_gap_m long:
 // between two places at most step_m apart in height, along one of four directions, across
 // columns with no place near that height and no occupied voxel from step_m below it to
@@ -140,9 +185,17 @@ std::vector<Place> StandingPlaces(const Grid& g, const WalkableSurfaceConfig& c,
 std::size_t FillGaps(const Grid& g, const WalkableSurfaceConfig& c, std::vector<Place>& places,
                      std::vector<double>& height, std::vector<int>& first) {
     if (!(c.fill_gap_m > 0.0)) return 0;
+    // Only floors close gaps: places of regions of at least min_region_m2 that are not mostly
+    // open (a ceiling seen from below, scattered tops of clutter are not bridged).
+    const Regions before = FindRegions(g, c, places, height, first);
+    std::vector<bool> floor(places.size());
+    for (std::size_t n = 0; n < places.size(); ++n) {
+        const int r = before.of[n];
+        floor[n] = before.list[r].area_m2 >= c.min_region_m2 && !before.MostlyOpen(r);
+    }
     const int head = int(std::ceil(c.headroom_m / g.res - 1e-9));
     const int step = int(std::floor(c.step_m / g.res + 1e-9));
-    auto near = [&](int col, double z) {
+    auto near = [&](int col, double z) {  // any place near z, or -1
         for (int m = first[col]; m < first[col + 1]; ++m) {
             if (std::abs(height[m] - z) <= c.step_m) return m;
         }
@@ -162,6 +215,7 @@ std::size_t FillGaps(const Grid& g, const WalkableSurfaceConfig& c, std::vector<
     std::unordered_map<std::int64_t, int> filled;  // (column, k) already filled
     const std::size_t given = places.size();
     for (std::size_t n = 0; n < given; ++n) {
+        if (!floor[n]) continue;
         const Place p = places[n];
         for (const auto& [di, dj] : {std::pair{1, 0}, {0, 1}, {1, 1}, {-1, 1}}) {
             const int reach = int(std::floor(c.fill_gap_m / (g.res * std::hypot(di, dj))));
@@ -174,7 +228,8 @@ std::size_t FillGaps(const Grid& g, const WalkableSurfaceConfig& c, std::vector<
                 if (i < 0 || i >= g.nx || j >= g.ny) break;
                 const int col = g.Column(i, j);
                 const int end = near(col, height[n]);
-                if (end >= 0) {  // the far side: fill cells 1 .. t - 1
+                if (end >= 0 && !floor[end]) break;  // clutter or a ceiling: no bridge
+                if (end >= 0) {                      // the far side: fill cells 1 .. t - 1
                     for (int u = 1; u < t; ++u) {
                         const double z = height[n] + (height[end] - height[n]) * u / t;
                         const int fi = p.i + u * di, fj = p.j + u * dj;
@@ -268,43 +323,10 @@ WalkableSurface ExtractWalkableSurface(const std::vector<Eigen::Vector3d>& cloud
     for (std::size_t n = 0; n < places.size(); ++n) height[n] /= std::max(height_count[n], 1);
     out.filled_places = FillGaps(g, config, places, height, first);
 
-    // Regions: neighbouring columns' places at most step_m apart in height.
-    DisjointSets sets(places.size());
-    for (std::size_t n = 0; n < places.size(); ++n) {
-        const Place& p = places[n];
-        for (const auto& [di, dj] : {std::pair{1, 0}, {0, 1}, {1, 1}, {-1, 1}}) {
-            const int i = p.i + di, j = p.j + dj;
-            if (i < 0 || i >= g.nx || j >= g.ny) continue;
-            const int col = g.Column(i, j);
-            for (int m = first[col]; m < first[col + 1]; ++m) {
-                if (std::abs(height[m] - height[n]) <= config.step_m) sets.Join(int(n), m);
-            }
-        }
-    }
-    std::vector<int> region_of(places.size());
-    std::unordered_map<int, int> index_of_root;
-    std::vector<WalkableRegion> regions;
-    std::vector<std::size_t> open_places, all_places;  // per region
-    const double cell_m2 = g.res * g.res;
-    for (std::size_t n = 0; n < places.size(); ++n) {
-        const int root = sets.Find(int(n));
-        auto [it, added] = index_of_root.try_emplace(root, int(regions.size()));
-        if (added) {
-            regions.push_back({});
-            regions.back().z_min_m = 1e300, regions.back().z_max_m = -1e300;
-            open_places.push_back(0), all_places.push_back(0);
-        }
-        const int r = it->second;
-        open_places[r] += places[n].open ? 1 : 0;
-        ++all_places[r];
-        region_of[n] = r;
-        WalkableRegion& reg = regions[r];
-        const double z = height[n];
-        reg.area_m2 += cell_m2;
-        reg.z_min_m = std::min(reg.z_min_m, z), reg.z_max_m = std::max(reg.z_max_m, z);
-    }
-
-    auto mostly_open = [&](std::size_t r) { return 2 * open_places[r] > all_places[r]; };
+    const Regions found = FindRegions(g, config, places, height, first);
+    const std::vector<int>& region_of = found.of;
+    std::vector<WalkableRegion> regions = found.list;
+    auto mostly_open = [&](std::size_t r) { return found.MostlyOpen(r); };
     // Lifts join the large regions that come within lift_reach_m of their shaft (floors, not
     // ceilings seen from below) and span the heights of their places there.
     const int reach = int(std::ceil(config.lift_reach_m / g.res));
