@@ -7,21 +7,9 @@
 
 namespace driftcorr::stress {
 
-UniformSource::UniformSource(std::uint64_t seed, std::uint64_t stream)
-    : engine_(seed * 0x9E3779B97F4A7C15ULL + stream) {}
-
-double UniformSource::Next01() {
-    constexpr double kTwoPowMinus53 = 1.0 / 9007199254740992.0;
-    return static_cast<double>(engine_() >> 11) * kTwoPowMinus53;
-}
-
-double UniformSource::Range(double lo, double hi) { return lo + (hi - lo) * Next01(); }
-
-std::size_t UniformSource::Index(std::size_t lo, std::size_t hi) {
+std::size_t IndexIn(UniformSource& random, std::size_t lo, std::size_t hi) {
     DRIFTCORR_CHECK(lo <= hi, "empty interval");
-    const double span = static_cast<double>(hi - lo + 1);
-    const auto offset = static_cast<std::size_t>(std::floor(Next01() * span));
-    return std::min(hi, lo + offset);
+    return lo + random.Index(hi - lo + 1);
 }
 
 std::string DropStepsConfig::Validate() const {
@@ -43,7 +31,7 @@ std::vector<DropEpisode> PlanDropEpisodes(std::size_t poses, const DropStepsConf
     const auto fits = static_cast<std::size_t>(std::floor(
         config.max_share * static_cast<double>(steps) / static_cast<double>(config.max_steps)));
     const std::size_t count =
-        std::min(random.Index(config.min_episodes, config.max_episodes), fits);
+        std::min(IndexIn(random, config.min_episodes, config.max_episodes), fits);
     std::vector<DropEpisode> episodes;
     if (count == 0) return episodes;
     // Segment k holds steps [1 + k * steps / count, 1 + (k + 1) * steps / count); it is at least
@@ -52,8 +40,8 @@ std::vector<DropEpisode> PlanDropEpisodes(std::size_t poses, const DropStepsConf
         const std::size_t begin = 1 + k * steps / count;
         const std::size_t end = 1 + (k + 1) * steps / count;
         DropEpisode e;
-        e.steps = random.Index(config.min_steps, config.max_steps);
-        e.first_step = random.Index(begin, end - e.steps);
+        e.steps = IndexIn(random, config.min_steps, config.max_steps);
+        e.first_step = IndexIn(random, begin, end - e.steps);
         e.ratio = random.Range(config.min_ratio, config.max_ratio);
         episodes.push_back(e);
     }

@@ -8,28 +8,21 @@
 // from above, i.e. the rotation R(angle) of the frame's horizontal (u, v) plane in frames.h.
 #include <cstddef>
 #include <cstdint>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "driftcorr/core/frames.h"
 #include "driftcorr/core/types.h"
+#include "synth_common.h"
 
 namespace driftcorr::stress {
 
-/// Uniform numbers from std::mt19937_64 converted by hand (the <random> distributions differ
-/// between standard libraries; this is bit-identical for a seed everywhere). `stream` separates
-/// the variants, so that drawing more numbers in one variant never changes another.
-class UniformSource {
-public:
-    UniformSource(std::uint64_t seed, std::uint64_t stream);
-    double Next01();                                    ///< in [0, 1)
-    double Range(double lo, double hi);                 ///< in [lo, hi)
-    std::size_t Index(std::size_t lo, std::size_t hi);  ///< in [lo, hi], both included
-
-private:
-    std::mt19937_64 engine_;
-};
+/// Uniform numbers of one seeded stream (the generators' shared sampler, bit-identical for a seed
+/// everywhere). `stream` separates the variants, so that drawing more numbers in one variant
+/// never changes another.
+using UniformSource = synth::UniformSampler;
+/// In [lo, hi], both included.
+std::size_t IndexIn(UniformSource& random, std::size_t lo, std::size_t hi);
 
 /// One stretch of consecutive steps whose translations are shortened.
 struct DropEpisode {
