@@ -263,17 +263,28 @@ constexpr std::size_t kMaxFloorVoxels = 4'000'000;
 // The most occupied voxels a raw map may expand to (about 0.8 GB of points).
 constexpr std::size_t kMaxOccupiedVoxels = 30'000'000;
 
-std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
-    const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
+namespace {
+
+// The tree of `path` with a resolution within [kMinResolutionM, kMaxResolutionM]: a garbled header
+// can carry any double as the resolution; OctoMap then converts infinite coordinates to keys
+// (UBSan: inf to int, found by fuzzing).
+std::unique_ptr<octomap::OcTree> ReadCheckedTree(const std::string& path) {
+    std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
     const double res = tree->getResolution();
-    // A garbled header can carry any double as the resolution; OctoMap then converts infinite
-    // coordinates to keys (UBSan: inf to int, found by fuzzing).
     if (!(res >= kMinResolutionM && res <= kMaxResolutionM)) {
         throw InputError(path, 0, "",
                          "OctoMap resolution " + std::to_string(res) + " m is outside [" +
                              std::to_string(kMinResolutionM) + ", " +
                              std::to_string(kMaxResolutionM) + "] m");
     }
+    return tree;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
+    const std::unique_ptr<octomap::OcTree> tree = ReadCheckedTree(path);
+    const double res = tree->getResolution();
     std::vector<Eigen::Vector3d> floor;
     for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
         if (!tree->isNodeOccupied(*it)) continue;
@@ -320,15 +331,9 @@ std::vector<Eigen::Vector3d> ReadFloorVoxelsOctomap(const std::string& path) {
 
 std::vector<Eigen::Vector3d> ReadOccupiedVoxelsOctomap(const std::string& path,
                                                        double* resolution_m) {
-    const std::unique_ptr<octomap::OcTree> tree = ReadTree(path);
+    const std::unique_ptr<octomap::OcTree> tree = ReadCheckedTree(path);
     const double res = tree->getResolution();
     if (resolution_m) *resolution_m = res;
-    if (!(res >= kMinResolutionM && res <= kMaxResolutionM)) {
-        throw InputError(path, 0, "",
-                         "OctoMap resolution " + std::to_string(res) + " m is outside [" +
-                             std::to_string(kMinResolutionM) + ", " +
-                             std::to_string(kMaxResolutionM) + "] m");
-    }
     std::vector<Eigen::Vector3d> voxels;
     for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
         if (!tree->isNodeOccupied(*it)) continue;
