@@ -7,10 +7,10 @@
 // with the library's message naming file, line and key. Solver outcomes are never exceptions:
 // they are the result's status and verdict.
 //
-// Threads: every call that solves releases the GIL; the solver's calls into Ipopt take turns
-// (a process-wide lock in optim/ipopt_solver.cpp: Debian 12's Ipopt 3.11 with MUMPS is not
-// thread-safe), so to correct several drives at once use several processes (the Dask recipe,
-// python/examples/dask_correct.py).
+// Threads: every call that solves releases the GIL; the solver's calls into Ipopt (a final solve
+// with an active corridor constraint) take turns (a process-wide lock in optim/ipopt_solver.cpp:
+// Debian 12's Ipopt 3.11 with MUMPS is not thread-safe), so to correct several drives at once
+// use several processes (the Dask recipe, python/examples/dask_correct.py).
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
