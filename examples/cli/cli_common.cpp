@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -20,6 +22,42 @@ namespace driftcorr::cli {
 
 // An output path must be creatable before any work is done: an existing folder, a missing or
 // read-only parent folder are bad input (exit 2), not an internal error after the correction.
+std::string Format(const char* format, ...) {
+    va_list args, again;
+    va_start(args, format);
+    va_copy(again, args);
+    const int n = std::vsnprintf(nullptr, 0, format, args);
+    va_end(args);
+    std::string out(std::size_t(std::max(n, 0)), '\0');
+    std::vsnprintf(out.data(), out.size() + 1, format, again);
+    va_end(again);
+    return out;
+}
+
+std::optional<double> ParseFiniteNumber(const std::string& text) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+        value = std::stod(text, &used);
+    } catch (const std::exception&) {
+        return std::nullopt;
+    }
+    if (used == 0 || used != text.size() || !std::isfinite(value)) return std::nullopt;
+    return value;
+}
+
+int RunReportingErrors(const char* who, const std::function<int()>& work) {
+    try {
+        return work();
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "%s: %s\n", who, e.what());
+        return kExitBadInput;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: internal error: %s\n", who, e.what());
+        return kExitInternal;
+    }
+}
+
 void CheckOutputPath(const std::string& path, const std::string& option) {
     namespace fs = std::filesystem;
     std::error_code ec;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,16 @@ struct OptionTable {
 bool ParseOptions(int argc, char** argv, int first, const OptionTable& table,
                   const std::function<std::string(const std::string& arg)>& positional,
                   std::string& err);
+
+/// printf into a string (any length).
+std::string Format(const char* format, ...) __attribute__((format(printf, 1, 2)));
+
+/// `text` as a finite number, all of it (no trailing characters); nullopt otherwise.
+std::optional<double> ParseFiniteNumber(const std::string& text);
+
+/// Runs a subcommand's work and turns what it throws into its exit code and one line on stderr,
+/// "<who>: <message>": InputError is bad input (2), anything else an internal error (4).
+int RunReportingErrors(const char* who, const std::function<int()>& work);
 
 /// Throws InputError (exit 2) unless `path` can be created as an output file: not a folder, in
 /// an existing writable folder. Checked before any work is done, so nothing is lost to a typo.

@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -306,17 +305,11 @@ std::vector<std::pair<std::string, std::string>> CorrectedProperties(
 // ---- a trajectory file without a scenario file ----------------------------------------------
 
 double AnchorNumber(const std::string& text, const char* what) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-        value = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != text.size() || !std::isfinite(value)) {
+    const std::optional<double> value = ParseFiniteNumber(text);
+    if (!value) {
         throw InputError("", 0, "--anchor", std::string(what) + " '" + text + "' is not a number");
     }
-    return value;
+    return *value;
 }
 
 /// --anchor A,B,YAW (A,B: lat,lon in degrees, or easting,northing in metres with --crs).
@@ -558,16 +551,6 @@ void PrepareFolder(const std::string& dir, const char* option) {
     if (::access(dir.c_str(), W_OK) != 0) throw InputError(dir, 0, option, "folder is not writable");
 }
 
-std::string Format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
-std::string Format(const char* fmt, ...) {
-    char buf[1024];
-    va_list args;
-    va_start(args, fmt);
-    std::vsnprintf(buf, sizeof(buf), fmt, args);
-    va_end(args);
-    return buf;
-}
-
 /// One scenario of a batch: its exit code and the lines to print for it.
 ProcessOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg,
                               const BatchItem& item) {
@@ -659,15 +642,8 @@ int RunCorrectCommand(int argc, char** argv) {
         std::fputs(kCorrectUsage, err.empty() ? stdout : stderr);
         return err.empty() ? kExitOk : kExitUsage;
     }
-    try {
-        return args.Batch() ? RunBatch(args) : RunSingle(args);
-    } catch (const InputError& e) {
-        std::fprintf(stderr, "driftcorr: %s\n", e.what());
-        return kExitBadInput;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "driftcorr: internal error: %s\n", e.what());
-        return kExitInternal;
-    }
+    return RunReportingErrors("driftcorr",
+                              [&] { return args.Batch() ? RunBatch(args) : RunSingle(args); });
 }
 
 void PrintCorrectUsage(std::FILE* out) { std::fputs(kCorrectUsage, out); }

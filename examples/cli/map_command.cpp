@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -20,18 +19,6 @@
 
 namespace driftcorr::cli {
 namespace {
-
-__attribute__((format(printf, 1, 2))) std::string Format(const char* format, ...) {
-    va_list args, again;
-    va_start(args, format);
-    va_copy(again, args);
-    const int n = std::vsnprintf(nullptr, 0, format, args);
-    va_end(args);
-    std::string out(std::size_t(std::max(n, 0)), '\0');
-    std::vsnprintf(out.data(), out.size() + 1, format, again);
-    va_end(again);
-    return out;
-}
 
 const char* kMapUsage =
     "usage: driftcorr map extract <raw map: .pcd | .ply | .bt | .ot> -o walkable.pcd|.ply\n"
@@ -53,17 +40,9 @@ const char* kMapUsage =
     "Exit codes: 0 written, 1 usage, 2 bad input (no walkable surface, not in metres).\n";
 
 double ParseNumber(const std::string& text, const std::string& option) {
-    std::size_t used = 0;
-    double v = 0.0;
-    try {
-        v = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != text.size() || !std::isfinite(v)) {
-        throw InputError("", 0, option, "not a number: '" + text + "'");
-    }
-    return v;
+    const std::optional<double> value = ParseFiniteNumber(text);
+    if (!value) throw InputError("", 0, option, "not a number: '" + text + "'");
+    return *value;
 }
 
 std::vector<LiftShaft> ParseLifts(const std::string& text) {
@@ -298,7 +277,7 @@ int RunMapCommand(int argc, char** argv) {
         std::fprintf(stderr, "driftcorr: %s\n\n%s", err.c_str(), kMapUsage);
         return kExitUsage;
     }
-    try {
+    return RunReportingErrors("driftcorr", [&] {
         WalkableSurfaceConfig cfg;
         if (!resolution.empty()) cfg.resolution_m = ParseNumber(resolution, "--resolution");
         if (!headroom.empty()) cfg.headroom_m = ParseNumber(headroom, "--headroom");
@@ -308,13 +287,7 @@ int RunMapCommand(int argc, char** argv) {
         if (!fill_gap.empty()) cfg.fill_gap_m = ParseNumber(fill_gap, "--fill-gap");
         if (std::string m = cfg.Validate(); !m.empty()) throw InputError("", 0, "", m);
         return Extract(positional[1], output, cfg, !resolution.empty());
-    } catch (const InputError& e) {
-        std::fprintf(stderr, "driftcorr: %s\n", e.what());
-        return kExitBadInput;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "driftcorr: internal error: %s\n", e.what());
-        return kExitInternal;
-    }
+    });
 }
 
 }  // namespace driftcorr::cli

@@ -358,15 +358,7 @@ int RunStreamCommand(int argc, char** argv) {
         std::fputs(kStreamUsage, err.empty() ? stdout : stderr);
         return err.empty() ? 0 : kExitUsage;
     }
-    try {
-        return RunStream(args);
-    } catch (const InputError& e) {
-        std::fprintf(stderr, "driftcorr stream: %s\n", e.what());
-        return kExitBadInput;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "driftcorr stream: internal error: %s\n", e.what());
-        return kExitInternal;
-    }
+    return RunReportingErrors("driftcorr stream", [&] { return RunStream(args); });
 }
 
 }  // namespace driftcorr::cli
