@@ -1,9 +1,10 @@
 #pragma once
 // A raw point cloud of the synthetic building, as a mapping run (lidar or visual-inertial scan)
 // would give it: floors with holes, walls, ceilings, stair treads, risers and undersides, the
-// lift shaft with its cabin at one level, and furniture; with dropout and noise. SampleSurface
-// (building.h) is its true walkable surface, except the lift shaft, which is walkable only in the
-// clean map (the cabin sweeps it; a user declares a lift). Local East-North-Up frame [m].
+// lift shaft with its cabin at one level, and furniture; with dropout and noise. Its true
+// walkable surface is SampleSurface (building.h) without the floor under the furniture
+// (PlaceFurniture); the lift shaft is walkable once a user declares the lift (the cabin sweeps
+// it). Local East-North-Up frame [m].
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
