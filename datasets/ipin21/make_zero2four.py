@@ -21,7 +21,6 @@ Python standard library only. Exit code 2 on missing or inconsistent input, noth
 import glob
 import math
 import os
-import shutil
 import sys
 
 FLOORS = (("EG", 1.3), ("1OG", 7.6), ("4OG", 19.6))
@@ -46,6 +45,32 @@ def rows(path, width):
             except ValueError:
                 fail(f"{path}:{n}: not a number: {line.strip()}")
     return out
+
+
+CRS84 = '"urn:ogc:def:crs:OGC:1.3:CRS84"'
+UTM32N = '"urn:ogc:def:crs:EPSG::32632"'
+
+
+def copy_layer(src, dst):
+    """Copies a MapMaterial layer. Two of the repository's walkway networks (RouteEG, Route1OG) declare
+    CRS84 (degrees) while their coordinates are UTM 32N metres like every other layer; driftcorr
+    rejects that contradiction, so the copy declares UTM 32N, and says so."""
+    with open(src, encoding="utf-8") as f:
+        text = f.read()
+    first = text.find('"coordinates"')
+    numbers = text[first:first + 200].replace("[", " ").replace(",", " ").split()[1:3]
+    try:
+        metres = first >= 0 and any(abs(float(v)) > 180.0 for v in numbers)
+    except ValueError:
+        metres = False
+    if CRS84 in text and metres:
+        text = text.replace(CRS84, UTM32N, 1)
+        print(f"make_zero2four: {os.path.basename(src)} declares CRS84 but its coordinates are "
+              "UTM 32N metres; the copy declares EPSG:32632", file=sys.stderr)
+    tmp = dst + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+    os.replace(tmp, dst)
 
 
 def quat(yaw):
@@ -114,7 +139,7 @@ def main(argv):
             f.writelines(fmt % p for p in poses)
         os.replace(tmp, os.path.join(out, name))
     for name, path in maps.items():
-        shutil.copyfile(path, os.path.join(out, name + ".geojson"))
+        copy_layer(path, os.path.join(out, name + ".geojson"))
     layers = "".join(
         f"  - {{path: {kind}{fl}.geojson, format: geojson, role: {role}, floor_z_m: {z}}}\n"
         for fl, z in FLOORS for kind, role in (("Route", "walkways"), ("Plan", "floorplan")))
