@@ -88,9 +88,10 @@ struct FloorRaster {
     double surface_z_m = 0.0;
     int k_surface = 0;                 // voxel layer nearest the surface
     int k_lo = 0, k_hi = 0;            // the walkable layer
-    int k_conn_lo = 0, k_conn_hi = 0;  // the stair and lift columns
+    int k_conn_lo = 0, k_conn_hi = 0;  // the stair columns
     Mask walkable;                     // traversable on the layer
-    Mask connector;                    // stairs and lifts
+    Mask connector;                    // stairs
+    Mask lift;                         // lift shafts
     std::vector<float> walkway_exact;  // exact distance to the walkway lines, kInf beyond the band
     bool has_walkways = false;
 };
@@ -100,12 +101,13 @@ FloorRaster RasteriseFloor(const GridSpec& plane, const IndoorFloor& f,
     FloorRaster r;
     r.walkable.assign(plane.size(), 0);
     r.connector.assign(plane.size(), 0);
+    r.lift.assign(plane.size(), 0);
     r.walkway_exact.assign(plane.size(), kInf);
     for (const auto& p : f.walkable) FillPolygon(plane, p, 1, r.walkable);
     for (const auto& p : f.walls) FillPolygon(plane, p, 0, r.walkable);
     for (const auto& p : f.doors) FillPolygon(plane, p, 1, r.walkable);
     for (const auto& p : f.stairs) FillPolygon(plane, p, 1, r.connector);
-    for (const auto& p : f.lifts) FillPolygon(plane, p, 1, r.connector);
+    for (const auto& p : f.lifts) FillPolygon(plane, p, 1, r.lift);
     const double reach = std::max(c.walkway_half_width_m, c.exact_band_m);
     for (const auto& line : f.walkways_en) {
         for (std::size_t k = 1; k < line.size(); ++k) {
@@ -114,7 +116,7 @@ FloorRaster RasteriseFloor(const GridSpec& plane, const IndoorFloor& f,
             r.has_walkways = true;
         }
     }
-    for (std::size_t i = 0; i < plane.size(); ++i) r.walkable[i] |= r.connector[i];
+    for (std::size_t i = 0; i < plane.size(); ++i) r.walkable[i] |= r.connector[i] | r.lift[i];
     return r;
 }
 
@@ -204,14 +206,21 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
             std::uint8_t* slice = &inside[s.Index(0, 0, k)];
             for (std::size_t i = 0; i < np; ++i) slice[i] |= r.walkable[i];
         }
-        for (int k = r.k_conn_lo; k <= r.k_conn_hi; ++k) {
-            std::uint8_t* slice = &inside[s.Index(0, 0, k)];
-            std::uint8_t* seed = &seeds[s.Index(0, 0, k)];
-            for (std::size_t i = 0; i < np; ++i) {
-                if (!r.connector[i]) continue;
-                connector_voxels += (k < r.k_lo || k > r.k_hi) && !slice[i];
-                slice[i] = 1;
-                seed[i] = 1;
+        // Stairs join a floor to its neighbours; a lift is a shaft through every floor of the map
+        // (plans mark a lift on some floors only: hcu_eight's 4th-floor lift is on no other plan).
+        const std::pair<const Mask*, std::pair<int, int>> columns[] = {
+            {&r.connector, {r.k_conn_lo, r.k_conn_hi}},
+            {&r.lift, {rasters.front().k_surface, rasters.back().k_surface}}};
+        for (const auto& [mask, range] : columns) {
+            for (int k = range.first; k <= range.second; ++k) {
+                std::uint8_t* slice = &inside[s.Index(0, 0, k)];
+                std::uint8_t* seed = &seeds[s.Index(0, 0, k)];
+                for (std::size_t i = 0; i < np; ++i) {
+                    if (!(*mask)[i]) continue;
+                    connector_voxels += (k < r.k_lo || k > r.k_hi) && !slice[i];
+                    slice[i] = 1;
+                    seed[i] = 1;
+                }
             }
         }
         std::uint8_t* seed = &seeds[s.Index(0, 0, r.k_surface)];

@@ -99,9 +99,10 @@ struct IndoorFieldStats {
 /// Traversable set: on each floor's layer (the voxels within vertical_tolerance_m of
 /// floor_z_m + device_height_m, at least the nearest one), (walkable polygons minus walls) plus
 /// doors, stairs, lifts, and every point within walkway_half_width_m of a walkway line. Stairs
-/// and lifts of floor f are traversable over the whole vertical column from the next floor below
-/// to the next floor above (a staircase is not ramped: the whole stairwell counts); nothing else
-/// joins floors.
+/// of floor f are traversable over the whole vertical column from the next floor below to the
+/// next floor above (a staircase is not ramped: the whole stairwell counts); a lift of any floor
+/// over the column from the lowest to the highest floor (a shaft serves the building, while
+/// plans often mark it on some floors only); nothing else joins floors.
 ///  - corridor: outside the set, the 3D distance to it; inside, minus the horizontal distance to
 ///    the set's edge at that height (as the planar road field: how far from the walls). Zero
 ///    level between the last inside and the first outside voxel; truncated at +/- truncation_m.
