@@ -142,6 +142,34 @@ TEST(EndToEndIndoor, HcuEightMeetsTheIndoorIssueFigures) {
 
 namespace {
 
+// A generated walk in the real HCU building (datasets/ipin21/make_hcu_walks.py, seed 13, one of
+// the seeds the pedestrian defaults were chosen on): a lift ride from the 4th floor to the ground
+// floor that the barometer reads 0.77x, so the floor nearest to the reading is the 1st. Only the
+// floor hypotheses (restart_height_gains) find the ground floor: measured 99.6 % of the poses on
+// the right floor and ATE 0.17 m with them, 59.2 % and 1.16 m without.
+TEST(EndToEndIndoor, LiftRideMisreadByTheBarometerEndsOnTheRightFloor) {
+    const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
+    if (!fs::exists(src + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << src;
+    const std::string out = TmpDir("hcu_walks");
+    const std::string cmd = "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) +
+                            "/datasets/ipin21/make_hcu_walks.py " + src + " " + out +
+                            " --seeds 13-13 > /dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    pipeline::PipelineConfig with;
+    const pipeline::CorrectionRun a = pipeline::RunCorrection(out + "/walk_13", with);
+    pipeline::PipelineConfig without;
+    without.indoor_corrector.restart_height_gains.clear();
+    const pipeline::CorrectionRun b = pipeline::RunCorrection(out + "/walk_13", without);
+    ASSERT_TRUE(a.after && b.after);
+    EXPECT_LT(b.after->floor_accuracy, 0.9) << "the walk must mislead the nearest-floor choice";
+    EXPECT_GE(a.after->floor_accuracy, 0.99);
+    EXPECT_LE(a.after->ate_m, 0.5);
+}
+
+}  // namespace
+
+namespace {
+
 // The synthetic three-floor building (stairs and a lift, heading bias, step scale error, height
 // drift) from the committed generator: the same correction whichever map format (PCD, PLY,
 // OctoMap .bt or .ot) carries the walkable surfaces, ATE <= 0.5 m and every pose on the right

@@ -136,6 +136,17 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
 // window's start, and the lowest NLL wins. Saves and restores the window's poses only (pose
 // first-1 included: with a boundary prior it is a variable), so its cost does not grow with the
 // trajectory.
+namespace {
+
+// Sum of |height change| over the steps into poses [first, last] [m].
+double HeightTravel(const TrajectoryState& s, std::size_t first, std::size_t last) {
+    double sum = 0.0;
+    for (std::size_t i = first; i <= last; ++i) sum += std::abs(s.obs[i].dup_m);
+    return sum;
+}
+
+}  // namespace
+
 SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
                             const CorrectorConfig& cfg, std::size_t first, std::size_t last,
                             const std::optional<PosePriorTerm>& prior, bool restarts,
@@ -144,21 +155,26 @@ SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
     const std::vector<double> saved_scales = s.scales, saved_biases = s.biases;  // few
     SolveReport best =
         SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false, prior);
+    if (!restarts || !field) return best;
+    // The hypotheses (scale factor, height-change gain) to start from as well.
+    std::vector<std::pair<double, double>> starts;
     const double nll_per_pose = best.objective / double(last - first + 1);
-    if (!restarts || !field || cfg.restart_scale_factors.empty() ||
-        (Usable(best.status) && nll_per_pose <= cfg.restart_nll_per_pose &&
-         OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) <=
-             cfg.restart_offroad_share)) {
-        return best;
+    if (!Usable(best.status) || nll_per_pose > cfg.restart_nll_per_pose ||
+        OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) > cfg.restart_offroad_share) {
+        for (double factor : cfg.restart_scale_factors) starts.emplace_back(factor, 1.0);
     }
+    if (!s.fix_height && HeightTravel(s, first, last) >= cfg.restart_height_change_m) {
+        for (double gain : cfg.restart_height_gains) starts.emplace_back(1.0, gain);
+    }
+    if (starts.empty()) return best;
     SavedPoses best_poses(s, first - 1, last);
     std::vector<double> best_scales = s.scales, best_biases = s.biases;
-    for (double factor : cfg.restart_scale_factors) {
+    for (const auto& [factor, gain] : starts) {
         saved.RestoreInto(s);
         s.scales = saved_scales;
         s.biases = saved_biases;
         for (int g = s.scale_segment[first]; g <= s.scale_segment[last]; ++g) s.scales[g] *= factor;
-        ComposeOdometry(s, first, last);
+        ComposeOdometry(s, first, last, gain);
         SolveReport rep =
             SolveWindow(s, field, cfg, cfg.window_ipopt, first, last, result, false, prior);
         ++result.window_restarts;
@@ -190,11 +206,13 @@ PlanarTrajectory ToTrajectory(const std::vector<double>& t_s, const TrajectorySt
 
 }  // namespace
 
-void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to) {
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to, double height_gain) {
     for (std::size_t i = from; i <= to; ++i) {
         const double bias = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[i]];
-        s.poses[i] = ComposeStep(s.poses[i - 1], s.obs[i], s.scales[s.scale_segment[i]],
-                                 s.fix_height, s.poses[i].p.z(), bias);
+        StepObservation o = s.obs[i];
+        o.dup_m *= height_gain;
+        s.poses[i] = ComposeStep(s.poses[i - 1], o, s.scales[s.scale_segment[i]], s.fix_height,
+                                 s.poses[i].p.z(), bias);
     }
 }
 

@@ -25,6 +25,12 @@ struct CorrectorConfig {
     /// re-solved from these step-length scale hypotheses
     /// (multiplying the current scale); the lowest NLL wins. Empty: no restarts.
     std::vector<double> restart_scale_factors = {1.3, 0.8, 1.7};
+    /// A window whose observed height changes add up to restart_height_change_m or more (it
+    /// changes floor; 3D modes only) is also solved from starts whose height changes are read
+    /// with these gains: a barometer reads a floor change 0.75-1.1x (the two real HCU walks), so
+    /// the floor nearest to the reading can be the wrong one; the lowest NLL wins. Empty: none.
+    std::vector<double> restart_height_gains = {0.7, 0.85, 1.2, 1.4};
+    double restart_height_change_m = 2.0;  ///< [m]
     double restart_offroad_m = 6.0;       ///< [m]
     double restart_offroad_share = 0.05;  ///< [-]
     double restart_nll_per_pose = 0.3;    ///< [-]

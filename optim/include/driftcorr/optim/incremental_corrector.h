@@ -100,16 +100,20 @@ PoseState ComposeStep(const PoseState& a, const StepObservation& step, double sc
                       bool fix_height, double up_fixed_m, double bias_rad_s);
 
 /// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1 with
-/// each step's segment scale. Precondition: 1 <= from, to < s.poses.size().
-void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to);
+/// each step's segment scale, the height changes times `height_gain`. Precondition:
+/// 1 <= from, to < s.poses.size().
+void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to,
+                     double height_gain = 1.0);
 /// Scale (and heading-rate bias) segments first entered by steps [from, to] start from the
 /// latest estimate.
 void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to);
 
 /// One trailing-window solve with the soft terms (window_newton, window_ipopt), written into
 /// `s`: poses [first, last] (and first-1 with a boundary prior) and the window's scales. With
-/// `restarts`, a solution that leaves many poses off the roads or explains the window poorly (a wrong basin)
-/// is re-solved from the restart_scale_factors hypotheses and the lowest NLL wins. Counts its
+/// `restarts`, a solution that leaves many poses off the roads or explains the window poorly (a
+/// wrong basin) is re-solved from the restart_scale_factors hypotheses, and a window that changes
+/// floor (its height changes add up to restart_height_change_m) from the restart_height_gains
+/// hypotheses (another floor's basin); the lowest NLL wins. Counts its
 /// iterations and restarts into `stats`. Time and memory bounded by the window, not by the
 /// trajectory. Precondition: 1 <= first <= last < s.poses.size().
 SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
