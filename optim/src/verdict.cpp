@@ -213,8 +213,15 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     JudgeInputJumps(estimate, config, v, f);
     if (!Usable(result.status) || result.corrected.size() != estimate.size()) return v;
     if (scale_estimated) {
-        JudgeScale(estimate, result.step_length_m, result.corrected, model.scale_segment_m, config,
-                   v, f);
+        // What the model itself calls a plausible scale (a pedestrian step model is tens of
+        // percent off) is not judged implausible here.
+        VerdictConfig c = config;
+        c.scale_plausible_min = std::min(c.scale_plausible_min, model.scale_range_min);
+        c.scale_plausible_max = std::max(c.scale_plausible_max, model.scale_range_max);
+        c.scale_failed_min = std::min(c.scale_failed_min, c.scale_plausible_min);
+        c.scale_failed_max = std::max(c.scale_failed_max, c.scale_plausible_max);
+        JudgeScale(estimate, result.step_length_m, result.corrected, model.scale_segment_m, c, v,
+                   f);
     }
     if (field && !field->empty()) {
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
