@@ -3,9 +3,15 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <ostream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -141,6 +147,51 @@ TEST(EndToEndIndoor, HcuEightMeetsTheIndoorIssueFigures) {
 }  // namespace
 
 namespace {
+
+// The numbers of each line of a text file.
+std::vector<std::vector<double>> ReadNumbers(const std::string& path) {
+    std::vector<std::vector<double>> rows;
+    std::ifstream in(path);
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream ss(line);
+        rows.emplace_back(std::istream_iterator<double>(ss), std::istream_iterator<double>());
+    }
+    return rows;
+}
+
+// The HCU walk generator (datasets/ipin21/make_hcu_walks.py): the same seed gives the same bytes,
+// another seed another walk; every walk changes floor (its ground truth leaves the start floor)
+// and starts its estimate at the ground truth's first pose.
+TEST(HcuWalkGenerator, DeterministicAndEveryWalkChangesFloor) {
+    const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
+    if (!fs::exists(src + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << src;
+    const std::string script =
+        "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) + "/datasets/ipin21/make_hcu_walks.py ";
+    const std::string a = TmpDir("hcu_gen_a"), b = TmpDir("hcu_gen_b");
+    ASSERT_EQ(std::system((script + src + " " + a + " --seeds 1-4 > /dev/null").c_str()), 0);
+    ASSERT_EQ(std::system((script + src + " " + b + " --seeds 1-4 > /dev/null").c_str()), 0);
+    auto read = [](const std::string& path) {
+        std::ifstream in(path);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    std::set<std::string> estimates;
+    for (int seed = 1; seed <= 4; ++seed) {
+        const std::string walk = "/walk_" + std::to_string(seed);
+        for (const char* f : {"/estimate.tum", "/ground_truth.tum", "/scenario.yaml"}) {
+            EXPECT_EQ(read(a + walk + f), read(b + walk + f)) << walk << f;
+        }
+        estimates.insert(read(a + walk + "/estimate.tum"));
+        const std::vector<std::vector<double>> gt = ReadNumbers(a + walk + "/ground_truth.tum");
+        const std::vector<std::vector<double>> est = ReadNumbers(a + walk + "/estimate.tum");
+        ASSERT_EQ(gt.size(), est.size()) << walk;
+        ASSERT_GT(gt.size(), 100u) << walk;
+        for (int k = 1; k <= 3; ++k) EXPECT_EQ(gt[0][k], est[0][k]) << walk;
+        double max_dz = 0.0;
+        for (const auto& row : gt) max_dz = std::max(max_dz, std::abs(row[3] - gt[0][3]));
+        EXPECT_GE(max_dz, 6.0) << walk << ": the walk must change floor (floors are 6-18 m apart)";
+    }
+    EXPECT_EQ(estimates.size(), 4u);
+}
 
 // A generated walk in the real HCU building (datasets/ipin21/make_hcu_walks.py, seed 13, one of
 // the seeds the pedestrian defaults were chosen on): a lift ride from the 4th floor to the ground
