@@ -140,6 +140,48 @@ void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, dou
     }
 }
 
+// The corrected height change against the estimate's over every height_window_s (VerdictConfig).
+void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor,
+                        const VerdictConfig& c, Verdict& v, Findings& f) {
+    std::size_t flagged = 0, episodes = 0, j = 0;
+    double worst_est = 0.0, worst_cor = 0.0, worst_excess = 0.0, worst_t0 = 0.0, worst_t1 = 0.0;
+    bool in_episode = false;
+    for (std::size_t i = 0; i + 1 < est.size(); ++i) {
+        j = std::max(j, i + 1);
+        while (j + 1 < est.size() && est.t_s[j] < est.t_s[i] + c.height_window_s) ++j;
+        const double d_est = est.up_m[j] - est.up_m[i], d_cor = cor.up_m[j] - cor.up_m[i];
+        const double excess =
+            std::abs(d_cor - d_est) - (c.height_disagree_m + c.height_disagree_rel * std::abs(d_est));
+        if (excess <= 0.0) {
+            in_episode = false;
+            continue;
+        }
+        if (!in_episode) ++episodes;
+        in_episode = true;
+        for (std::size_t k = i; k <= j; ++k) {
+            flagged += (v.pose_flags[k] & kPoseHeightDisagrees) == 0;
+            v.pose_flags[k] |= kPoseHeightDisagrees;
+        }
+        if (excess > worst_excess) {
+            worst_excess = excess, worst_est = d_est, worst_cor = d_cor;
+            worst_t0 = est.t_s[i] - est.t_s[0], worst_t1 = est.t_s[j] - est.t_s[0];
+        }
+    }
+    if (episodes == 0) return;
+    const double share = double(flagged) / double(est.size());
+    const std::string what =
+        "the corrected height changes disagree with the estimate's " + std::to_string(episodes) +
+        " time(s), over " + FormatPercent(share) + " of the walk (worst: from " +
+        FormatFixed(worst_t0, 0) + " s to " + FormatFixed(worst_t1, 0) + " s the estimate changes height by " +
+        FormatFixed(worst_est, 1) + " m, the correction by " + FormatFixed(worst_cor, 1) +
+        " m): a floor change the walk does not support, likely a wrong floor";
+    if (share > c.off_map_failed_share) {
+        f.Failed(what);
+    } else {
+        f.Degraded(what);
+    }
+}
+
 std::string Placement(const AnchorPlacement& p) {
     return FormatFixed(RadToDeg(p.dyaw_rad), 1) + " deg, (" + FormatFixed(p.offset_en.x(), 1) +
            ", " + FormatFixed(p.offset_en.y(), 1) + ") m: RMS " + FormatFixed(p.rms_m, 2) + " m";
@@ -225,6 +267,7 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     }
     if (field && !field->empty()) {
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
+        if (!field->planar()) JudgeHeightChanges(estimate, result.corrected, config, v, f);
     }
     return v;
 }

@@ -42,6 +42,7 @@ enum PoseFlag : std::uint8_t {
     kPoseOffMap = 1,            ///< farther from every traversable place than the map term reaches
     kPoseInputJump = 2,         ///< in a stretch where the estimate's speed changes abruptly
     kPoseScaleImplausible = 4,  ///< in a scale segment outside the plausible range
+    kPoseHeightDisagrees = 8,   ///< in a stretch whose corrected height change the estimate's denies
 };
 
 struct VerdictConfig {
@@ -56,6 +57,15 @@ struct VerdictConfig {
     /// walker stops faster, while frame-to-frame odometry that drops motion does so in one frame.
     double jump_window_s = 0.3;    ///< [s]
     double max_accel_mps2 = 10.0;  ///< [m/s^2]
+    /// 3D modes: over every height_window_s of the walk, the corrected height change may differ
+    /// from the estimate's (barometric) one by height_disagree_m + height_disagree_rel times the
+    /// estimate's; beyond, the correction climbed or descended where the estimate did not (or the
+    /// other way round): a floor change the walk does not support, likely a wrong floor. A
+    /// barometer reads a floor change 0.75-1.1x and drifts by centimetres a minute.
+    /// Degraded, failed beyond off_map_failed_share of the poses.
+    double height_window_s = 60.0;      ///< [s]
+    double height_disagree_m = 1.5;     ///< [m]
+    double height_disagree_rel = 0.35;  ///< [-]
     /// Off the map: share of corrected poses beyond the map's reach for degraded / failed.
     double off_map_degraded_share = 0.1;  ///< [-]
     double off_map_failed_share = 0.3;    ///< [-]
@@ -89,6 +99,12 @@ inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
      "input jumps: mean speed over this window"},
     {"max_accel_mps2", Field<&VerdictConfig::max_accel_mps2>(), kPositive,
      "input jumps: the mean speed changes faster than this"},
+    {"height_window_s", Field<&VerdictConfig::height_window_s>(), kPositive,
+     "3D: corrected and estimated height changes compared over this window"},
+    {"height_disagree_m", Field<&VerdictConfig::height_disagree_m>(), kNonNegative,
+     "3D: they may differ by this..."},
+    {"height_disagree_rel", Field<&VerdictConfig::height_disagree_rel>(), kNonNegative,
+     "...plus this share of the estimate's height change"},
     {"off_map_degraded_share", Field<&VerdictConfig::off_map_degraded_share>(), kShare,
      "share of off-map poses that is degraded; <= off_map_failed_share"},
     {"off_map_failed_share", Field<&VerdictConfig::off_map_failed_share>(), kShare,

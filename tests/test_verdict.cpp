@@ -1,0 +1,104 @@
+// The verdict's indoor checks on hand-made trajectories in a two-floor building: a corrected
+// floor change that the estimate's heights deny, and the plausible scale the model declares.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "driftcorr/mapping/indoor_field.h"
+#include "driftcorr/optim/verdict.h"
+
+namespace driftcorr {
+namespace {
+
+FloorPolygon Rect(double x0, double y0, double x1, double y1) {
+    return {{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, {}};
+}
+
+// Two 40 m x 10 m floors 4 m apart, joined by a lift at x 2..4.
+TraversableField TwoFloors() {
+    IndoorFloor ground, upper;
+    ground.walkable.push_back(Rect(0, 0, 40, 10));
+    upper.floor_z_m = 4.0;
+    upper.walkable.push_back(Rect(0, 0, 40, 10));
+    ground.lifts.push_back(Rect(2, 4, 4, 6));
+    IndoorFieldConfig c;
+    c.resolution_z_m = 0.25;
+    c.vertical_tolerance_m = 0.25;
+    return BuildIndoorField({ground, upper}, c);
+}
+
+// A 200 s walk along y = 5 at 0.15 m/s, one pose a second, at height up_m(t).
+template <class Up>
+PlanarTrajectory Walk(Up up_m, double speed_mps = 0.15) {
+    PlanarTrajectory t;
+    for (int k = 0; k <= 200; ++k) {
+        t.t_s.push_back(k);
+        t.p_en.emplace_back(5.0 + speed_mps * k, 5.0);
+        t.up_m.push_back(up_m(k));
+        t.yaw_rad.push_back(0.0);
+    }
+    return t;
+}
+
+CorrectionResult Result(PlanarTrajectory corrected) {
+    CorrectionResult r;
+    r.status = SolveStatus::kSuccess;
+    r.corrected = std::move(corrected);
+    return r;
+}
+
+bool HasReason(const Verdict& v, const std::string& text) {
+    for (const auto& r : v.reasons) {
+        if (r.find(text) != std::string::npos) return true;
+    }
+    return false;
+}
+
+TEST(VerdictIndoor, ACorrectedFloorChangeTheEstimateDeniesIsNotOk) {
+    const TraversableField field = TwoFloors();
+    const PlanarTrajectory level = Walk([](int) { return 0.0; });
+    const PlanarTrajectory climbs = Walk([](int k) { return k < 150 ? 0.0 : 4.0; });
+    const ModelConfig model;
+    const VerdictConfig config;
+    // The estimate stays on the ground floor; a correction that stays too is fine...
+    const Verdict same = JudgeCorrection(level, &field, model, Result(level), nullptr, false,
+                                         false, config);
+    EXPECT_EQ(same.level, VerdictLevel::kOk);
+    // ...one that moves the last quarter of the walk to the upper floor is not: 4 m against 0 m
+    // of height change is beyond 1.5 m + 35 % of the estimate's. Flagged: the poses of every
+    // 60 s that holds the change.
+    const Verdict up = JudgeCorrection(level, &field, model, Result(climbs), nullptr, false, false,
+                                       config);
+    EXPECT_NE(up.level, VerdictLevel::kOk);
+    EXPECT_TRUE(HasReason(up, "height changes disagree")) << up.reasons.front();
+    EXPECT_TRUE(up.pose_flags[120] & kPoseHeightDisagrees);
+    EXPECT_TRUE(up.pose_flags[170] & kPoseHeightDisagrees);
+    EXPECT_FALSE(up.pose_flags[80] & kPoseHeightDisagrees);
+    // An estimate that reads the same climb 0.8x (a barometer's gain error) supports it.
+    const PlanarTrajectory reads = Walk([](int k) { return k < 150 ? 0.0 : 3.2; });
+    const Verdict gain = JudgeCorrection(reads, &field, model, Result(climbs), nullptr, false,
+                                         false, config);
+    EXPECT_FALSE(HasReason(gain, "height changes disagree")) << gain.reasons.front();
+}
+
+TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsPlausible) {
+    const TraversableField field = TwoFloors();
+    const PlanarTrajectory estimate = Walk([](int) { return 0.0; }, 0.1);
+    const PlanarTrajectory corrected = Walk([](int) { return 0.0; }, 0.14);  // 1.4x the path
+    ModelConfig road;  // plausible 0.8..1.25
+    road.scale_segment_m = 10.0;
+    ModelConfig pedestrian = road;
+    pedestrian.scale_range_min = 0.9;
+    pedestrian.scale_range_max = 1.5;
+    const VerdictConfig config;
+    const Verdict a = JudgeCorrection(estimate, &field, road, Result(corrected), nullptr, false,
+                                      true, config);
+    EXPECT_TRUE(HasReason(a, "beyond the plausible scale"));
+    const Verdict b = JudgeCorrection(estimate, &field, pedestrian, Result(corrected), nullptr,
+                                      false, true, config);
+    EXPECT_FALSE(HasReason(b, "plausible scale"));
+    EXPECT_EQ(b.level, VerdictLevel::kOk);
+}
+
+}  // namespace
+}  // namespace driftcorr
