@@ -8,7 +8,7 @@ network of a floor, changes floor 1-3 times by stairs or by lift where the plans
 (they are not part of this repository).
 
     /usr/bin/python3 datasets/ipin21/make_hcu_walks.py <hcu scenario dir> <out dir> \
-        [--seeds A-B] [--lift-share X]
+        [--seeds A-B] [--lift-share X] [--lift-poses-hz R]
 
 writes <out dir>/walk_<seed>/ (scenario.yaml, estimate.tum, ground_truth.tum, the map layers) for
 every seed in A..B (default 1-10) and one summary line per walk. Same seed, same bytes (Python's
@@ -26,7 +26,9 @@ The walk (ground truth), in the scenario's local ENU frame (origin and heights o
 - lift: a lift polygon joins every pair of floors whose walkway networks come within 4 m of it;
   the walker waits 3-20 s at the door, rides at 1.0-1.6 m/s (plus 4 s of doors) and walks out.
   No step is taken in the cabin: the first step after the ride spans the whole wait and ride, as
-  in the real walks.
+  in the real walks; --lift-poses-hz R (default 0) adds a pose every 1/R s while the walker
+  stands at the door and in the cabin, as a source that reports at a fixed rate would.
+--lift-share X (default 0.5): the chance to take a lift where both stairs and a lift are at hand.
 
 The estimate is pedestrian dead reckoning with the error kinds of the two real walks of the same
 phone in this building (measured against their ground truth; Zero2four: datasets/ipin21/
@@ -230,12 +232,14 @@ def connectors(floors):
 class Walker:
     """Turns a plan (legs on floors, stairs, lifts) into timed samples of the true motion."""
 
-    def __init__(self, rng):
+    def __init__(self, rng, lift_poses_hz=0.0):
         self.rng = rng
+        self.lift_poses_hz = lift_poses_hz
         self.step_m = rng.uniform(0.60, 0.78)
         self.rate_hz = rng.uniform(1.6, 2.0)
         self.t = 0.0
-        # (t, x, y, z, kind): kind "start", "step", or "wait" / "ride" in a lift (no step taken)
+        # (t, x, y, z, kind): kind "start", "step", or "wait" / "ride" / "cabin" in a lift (no
+        # step taken; the heading jumps at the "ride" sample, the end of the ride)
         self.samples = []
 
     def at(self):
@@ -261,14 +265,24 @@ class Walker:
             self.samples.append((self.t, a[0] + r * (b[0] - a[0]), a[1] + r * (b[1] - a[1]),
                                  z + dz_total * k / n, "step"))
 
-    def ride(self, z_from, z_to):
+    def ride(self, z_from, z_to, poses_hz=0.0):
+        """Waits at the door, rides, steps out; with poses_hz > 0 also a pose every 1 / poses_hz
+        while standing (a source that reports at a fixed rate)."""
         x, y = self.samples[-1][1:3]
-        self.t += self.rng.uniform(3.0, 20.0)
+
+        def standing(duration_s, z_of):
+            if poses_hz > 0.0:
+                for k in range(1, math.ceil(duration_s * poses_hz)):
+                    self.samples.append((self.t + k / poses_hz, x, y, z_of(k / poses_hz / duration_s),
+                                         "cabin"))
+            self.t += duration_s
+
+        standing(self.rng.uniform(3.0, 20.0), lambda _: z_from)
         self.samples.append((self.t, x, y, z_from, "wait"))
         speed = self.rng.uniform(1.0, 1.6)
-        self.t += 2.0 + abs(z_to - z_from) / speed
+        standing(2.0 + abs(z_to - z_from) / speed, lambda a: z_from + a * (z_to - z_from))
         self.samples.append((self.t, x, y, z_to, "ride"))
-        self.t += 2.0
+        standing(2.0, lambda _: z_to)
         self.samples.append((self.t, x, y, z_to, "wait"))
 
 
@@ -300,7 +314,7 @@ def change_floor(w, floors, here, node, link):
     w.walk(f.path(node, entry), f.z)
     if kind == "lift":
         w.walk([w.at()[:2], c], f.z)
-        w.ride(f.z, g.z)
+        w.ride(f.z, g.z, w.lift_poses_hz)
         exit_node, _ = g.nearest(c)
         w.walk([c, g.nodes[exit_node]], g.z)
     else:
@@ -312,10 +326,10 @@ def change_floor(w, floors, here, node, link):
     return exit_node
 
 
-def plan_walk(rng, floors, links, lift_share):
+def plan_walk(rng, floors, links, lift_share, lift_poses_hz):
     """Legs along the walkway networks, 1-3 floor changes, 80-200 m on the floors, and at least
     20 m after the last floor change."""
-    w = Walker(rng)
+    w = Walker(rng, lift_poses_hz)
     here = rng.choice(sorted({c[1] for c in links}))
     node = rng.choice(sorted(floors[here].alive))
     x, y = floors[here].nodes[node]
@@ -455,7 +469,7 @@ def parse_args(argv):
     if len(argv) < 3:
         print(__doc__, file=sys.stderr)
         sys.exit(2)
-    seeds, lift_share = (1, 10), 0.5
+    seeds, lift_share, lift_poses_hz = (1, 10), 0.5, 0.0
     rest = argv[3:]
     while rest:
         key = rest.pop(0)
@@ -473,13 +487,20 @@ def parse_args(argv):
                 fail(f"--lift-share {val}: not a number")
             if not 0.0 <= lift_share <= 1.0:
                 fail(f"--lift-share {val}: outside [0, 1]")
+        elif key == "--lift-poses-hz":
+            try:
+                lift_poses_hz = float(val)
+            except ValueError:
+                fail(f"--lift-poses-hz {val}: not a number")
+            if not 0.0 <= lift_poses_hz <= 100.0:
+                fail(f"--lift-poses-hz {val}: outside [0, 100]")
         else:
             fail(f"unknown option or bad value: {key} {val}")
-    return argv[1], argv[2], seeds, lift_share
+    return argv[1], argv[2], seeds, lift_share, lift_poses_hz
 
 
 def main(argv):
-    src, out, seeds, lift_share = parse_args(argv)
+    src, out, seeds, lift_share, lift_poses_hz = parse_args(argv)
     crs, e0, n0, _, layers = read_scenario(src)
     floors = [Floor(z, v["walkways"], v["floorplan"], crs, e0, n0)
               for z, v in sorted(layers.items())]
@@ -488,7 +509,7 @@ def main(argv):
         fail(f"{src}: no stairs or lift joins two floors' walkway networks")
     for seed in range(seeds[0], seeds[1] + 1):
         rng = random.Random(seed)
-        walker, used = plan_walk(rng, floors, links, lift_share)
+        walker, used = plan_walk(rng, floors, links, lift_share, lift_poses_hz)
         est, est_yaws = Pdr(rng, walker.step_m).run(walker.samples)
         folder = os.path.join(out, f"walk_{seed}")
         write_walk(folder, seed, crs, e0, n0, floors, walker.samples, est, est_yaws, used)

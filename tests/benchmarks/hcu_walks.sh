@@ -8,7 +8,8 @@
 #   tests/benchmarks/hcu_walks.sh [build_dir=build] [seeds=1001-1030] [out_dir=<build>/hcu_walks]
 #
 # Seeds 1-40 chose the pedestrian defaults; 1001-1030 chose nothing (the figures of
-# docs/results.md). Needs ../shared/datasets/hcu_eight. JOBS=N runs N corrections at a time.
+# docs/results.md). Needs ../shared/datasets/hcu_eight. JOBS=N runs N corrections at a time;
+# GEN_ARGS="--lift-poses-hz 1" passes options to the generator.
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/../.." && pwd)"
 BUILD="${1:-$REPO/build}"
@@ -21,7 +22,7 @@ HCU="$REPO/../shared/datasets/hcu_eight"
 
 rm -rf "$OUT/walks"
 mkdir -p "$OUT/walks" "$OUT/corrected"
-/usr/bin/python3 "$REPO/datasets/ipin21/make_hcu_walks.py" "$HCU" "$OUT/walks" --seeds "$SEEDS" \
+/usr/bin/python3 "$REPO/datasets/ipin21/make_hcu_walks.py" "$HCU" "$OUT/walks" --seeds "$SEEDS" ${GEN_ARGS:-} \
     > "$OUT/generated.txt"
 
 correct_one() {
