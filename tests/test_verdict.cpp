@@ -1,7 +1,9 @@
 // The verdict's indoor checks on hand-made trajectories in a two-floor building: a corrected
-// floor change that the estimate's heights deny, and the plausible scale the model declares.
+// floor change that the estimate's heights deny, level walking between floors, and the plausible
+// scale the model declares.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "driftcorr/mapping/indoor_field.h"
@@ -79,6 +81,37 @@ TEST(VerdictIndoor, ACorrectedFloorChangeTheEstimateDeniesIsNotOk) {
     const Verdict gain = JudgeCorrection(reads, &field, model, Result(climbs), nullptr, false,
                                          false, config);
     EXPECT_FALSE(HasReason(gain, "height changes disagree")) << gain.reasons.front();
+}
+
+TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
+    const TraversableField field = TwoFloors();
+    // The estimate: level, with a barometer's 0.3 m of wobble.
+    const PlanarTrajectory level = Walk([](int k) { return 0.3 * std::sin(0.7 * k); });
+    // The correction holds the last 100 s at 2 m: between the floors (0 and 4 m), level.
+    const PlanarTrajectory between = Walk([](int k) { return k < 100 ? 0.0 : 2.0; });
+    const ModelConfig model;
+    VerdictConfig config;
+    config.height_disagree_m = 10.0;  // this test is about the other check
+    const Verdict unknown = JudgeCorrection(level, &field, model, Result(between), nullptr, false,
+                                            false, config);
+    EXPECT_FALSE(HasReason(unknown, "walk level")) << "no floor heights: no check";
+    config.floor_heights_m = {0.0, 4.0};
+    const Verdict v = JudgeCorrection(level, &field, model, Result(between), nullptr, false, false,
+                                      config);
+    EXPECT_TRUE(HasReason(v, "walk level up to 2.0 m from every floor")) << v.reasons.front();
+    EXPECT_EQ(v.level, VerdictLevel::kFailed);  // half of the poses
+    EXPECT_TRUE(v.pose_flags[150] & kPoseHeightDisagrees);
+    EXPECT_FALSE(v.pose_flags[50] & kPoseHeightDisagrees);
+    // On a floor, or changing height (a stair climb), it is fine.
+    const Verdict on_floor = JudgeCorrection(level, &field, model, Result(level), nullptr, false,
+                                             false, config);
+    EXPECT_FALSE(HasReason(on_floor, "walk level"));
+    // Stairs: 4 m in 20 s (0.2 m/s), then the upper floor.
+    const PlanarTrajectory climb =
+        Walk([](int k) { return k < 100 ? 0.0 : k < 120 ? 0.2 * (k - 100) : 4.0; });
+    const Verdict stairs = JudgeCorrection(climb, &field, model, Result(climb), nullptr, false,
+                                           false, config);
+    EXPECT_FALSE(HasReason(stairs, "walk level"));
 }
 
 TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsPlausible) {

@@ -182,6 +182,45 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
     }
 }
 
+// Level walking between floors (VerdictConfig::floor_heights_m).
+void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor,
+                        const VerdictConfig& c, Verdict& v, Findings& f) {
+    const double half_s = 0.5 * c.level_window_s;
+    std::size_t flagged = 0, lo = 0, hi = 0, run_start = 0;
+    double longest_s = 0.0, worst_m = 0.0;
+    bool in_run = false;
+    for (std::size_t i = 0; i < cor.size(); ++i) {
+        double off_m = 1e9;
+        for (double z : c.floor_heights_m) off_m = std::min(off_m, std::abs(cor.up_m[i] - z));
+        while (est.t_s[lo] < est.t_s[i] - half_s) ++lo;
+        while (hi + 1 < est.size() && est.t_s[hi + 1] <= est.t_s[i] + half_s) ++hi;
+        const auto [mn, mx] = std::minmax_element(est.up_m.begin() + lo, est.up_m.begin() + hi + 1);
+        const bool level = *mx - *mn <= c.level_height_m;
+        if (off_m <= c.off_floor_m || !level) {
+            in_run = false;
+            continue;
+        }
+        if (!in_run) run_start = i;
+        in_run = true;
+        ++flagged;
+        v.pose_flags[i] |= kPoseHeightDisagrees;
+        longest_s = std::max(longest_s, est.t_s[i] - est.t_s[run_start]);
+        worst_m = std::max(worst_m, off_m);
+    }
+    if (longest_s < half_s) return;
+    const double share = double(flagged) / double(std::max<std::size_t>(1, cor.size()));
+    const std::string what =
+        FormatPercent(share) + " of the corrected poses walk level up to " + FormatFixed(worst_m, 1) +
+        " m from every floor (" + FormatFixed(longest_s, 0) +
+        " s in a row, while the estimate's height stays level): between floors, where only "
+        "stairs or a lift could hold them; their floor is not supported";
+    if (share > c.off_map_failed_share) {
+        f.Failed(what);
+    } else {
+        f.Degraded(what);
+    }
+}
+
 std::string Placement(const AnchorPlacement& p) {
     return FormatFixed(RadToDeg(p.dyaw_rad), 1) + " deg, (" + FormatFixed(p.offset_en.x(), 1) +
            ", " + FormatFixed(p.offset_en.y(), 1) + ") m: RMS " + FormatFixed(p.rms_m, 2) + " m";
@@ -268,6 +307,9 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     if (field && !field->empty()) {
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
         if (!field->planar()) JudgeHeightChanges(estimate, result.corrected, config, v, f);
+        if (!field->planar() && !config.floor_heights_m.empty()) {
+            JudgeLevelOffFloor(estimate, result.corrected, config, v, f);
+        }
     }
     return v;
 }

@@ -392,6 +392,20 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
     }
 }
 
+VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config) {
+    VerdictConfig v = config.verdict;
+    if (sc.mode != io::ScenarioMode::kIndoor3d) return v;
+    for (const io::MapLayerSpec& layer : sc.map) {
+        if (layer.format != io::MapFormat::kGeoJson || !layer.floor_z_m) continue;
+        const double z = *layer.floor_z_m + config.indoor_field.device_height_m;
+        if (std::find(v.floor_heights_m.begin(), v.floor_heights_m.end(), z) ==
+            v.floor_heights_m.end()) {
+            v.floor_heights_m.push_back(z);
+        }
+    }
+    return v;
+}
+
 const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config) {
     return sc.mode == io::ScenarioMode::kIndoor3d ? config.indoor_corrector : config.corrector;
 }
@@ -410,7 +424,7 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
     const bool start_estimated = !a.yaw_deg || a.position_search_m > 0.0;
     return JudgeCorrection(ps.estimate, &ps.field, CorrectorFor(ps.scenario, config).model, result,
                            ps.anchor_fit ? &*ps.anchor_fit : nullptr, start_estimated,
-                           config.solver == Solver::kDriftcorr, config.verdict);
+                           config.solver == Solver::kDriftcorr, VerdictFor(ps.scenario, config));
 }
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,

@@ -42,7 +42,9 @@ enum PoseFlag : std::uint8_t {
     kPoseOffMap = 1,            ///< farther from every traversable place than the map term reaches
     kPoseInputJump = 2,         ///< in a stretch where the estimate's speed changes abruptly
     kPoseScaleImplausible = 4,  ///< in a scale segment outside the plausible range
-    kPoseHeightDisagrees = 8,   ///< in a stretch whose corrected height change the estimate's denies
+    /// a corrected height the estimate denies (a floor change it did not make, level walking
+    /// between floors)
+    kPoseHeightDisagrees = 8,
 };
 
 struct VerdictConfig {
@@ -66,6 +68,16 @@ struct VerdictConfig {
     double height_window_s = 60.0;      ///< [s]
     double height_disagree_m = 1.5;     ///< [m]
     double height_disagree_rel = 0.35;  ///< [-]
+    /// Walkers walk level only on floors (stairs change height). With the floors' heights known
+    /// (a map of discrete floors, in the trajectory's height datum; set by the pipeline; empty:
+    /// not known, no check), corrected poses farther than off_floor_m from every floor while
+    /// the estimate's height stays within level_height_m over level_window_s around them walk
+    /// level between floors (a stair hall or shaft at a height no floor has): degraded when such
+    /// poses span level_window_s / 2 in a row, failed beyond off_map_failed_share of the poses.
+    std::vector<double> floor_heights_m;
+    double off_floor_m = 1.0;       ///< [m]
+    double level_window_s = 20.0;   ///< [s]
+    double level_height_m = 1.0;    ///< [m] (a barometer reads a level walk 0.6-0.7 m peak to peak)
     /// Off the map: share of corrected poses beyond the map's reach for degraded / failed.
     double off_map_degraded_share = 0.1;  ///< [-]
     double off_map_failed_share = 0.3;    ///< [-]
@@ -105,6 +117,12 @@ inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
      "3D: they may differ by this..."},
     {"height_disagree_rel", Field<&VerdictConfig::height_disagree_rel>(), kNonNegative,
      "...plus this share of the estimate's height change"},
+    {"off_floor_m", Field<&VerdictConfig::off_floor_m>(), kPositive,
+     "3D, floors known: a pose this far from every floor..."},
+    {"level_window_s", Field<&VerdictConfig::level_window_s>(), kPositive,
+     "...while the estimate stays level over this window..."},
+    {"level_height_m", Field<&VerdictConfig::level_height_m>(), kPositive,
+     "...within this height walks level between floors"},
     {"off_map_degraded_share", Field<&VerdictConfig::off_map_degraded_share>(), kShare,
      "share of off-map poses that is degraded; <= off_map_failed_share"},
     {"off_map_failed_share", Field<&VerdictConfig::off_map_failed_share>(), kShare,

@@ -180,6 +180,9 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
 
 /// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector).
 const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config);
+/// config.verdict, with the floors' heights (`VerdictConfig::floor_heights_m`) of an indoor3d
+/// scenario whose map is GeoJSON floors: each layer's floor_z_m + indoor_field.device_height_m.
+VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config);
 
 /// Runs config.solver on a prepared scenario. Solver outcomes are in the result, never thrown.
 CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig& config,
