@@ -63,14 +63,14 @@ TEST(VerdictIndoor, ACorrectedFloorChangeTheEstimateDeniesIsNotOk) {
     const ModelConfig model;
     const VerdictConfig config;
     // The estimate stays on the ground floor; a correction that stays too is fine...
-    const Verdict same = JudgeCorrection(level, &field, model, Result(level), nullptr, false,
-                                         false, config);
+    const Verdict same =
+        JudgeCorrection(level, &field, model, Result(level), nullptr, false, false, config);
     EXPECT_EQ(same.level, VerdictLevel::kOk);
     // ...one that moves the last quarter of the walk to the upper floor is not: 4 m against 0 m
     // of height change is beyond 1.5 m + 35 % of the estimate's. Flagged: the poses of every
     // 60 s that holds the change.
-    const Verdict up = JudgeCorrection(level, &field, model, Result(climbs), nullptr, false, false,
-                                       config);
+    const Verdict up =
+        JudgeCorrection(level, &field, model, Result(climbs), nullptr, false, false, config);
     EXPECT_NE(up.level, VerdictLevel::kOk);
     EXPECT_TRUE(HasReason(up, "height changes disagree")) << up.reasons.front();
     EXPECT_TRUE(up.pose_flags[120] & kPoseHeightDisagrees);
@@ -78,8 +78,8 @@ TEST(VerdictIndoor, ACorrectedFloorChangeTheEstimateDeniesIsNotOk) {
     EXPECT_FALSE(up.pose_flags[80] & kPoseHeightDisagrees);
     // An estimate that reads the same climb 0.8x (a barometer's gain error) supports it.
     const PlanarTrajectory reads = Walk([](int k) { return k < 150 ? 0.0 : 3.2; });
-    const Verdict gain = JudgeCorrection(reads, &field, model, Result(climbs), nullptr, false,
-                                         false, config);
+    const Verdict gain =
+        JudgeCorrection(reads, &field, model, Result(climbs), nullptr, false, false, config);
     EXPECT_FALSE(HasReason(gain, "height changes disagree")) << gain.reasons.front();
 }
 
@@ -92,25 +92,26 @@ TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
     const ModelConfig model;
     VerdictConfig config;
     config.height_disagree_m = 10.0;  // this test is about the other check
-    const Verdict unknown = JudgeCorrection(level, &field, model, Result(between), nullptr, false,
-                                            false, config);
+    const Verdict unknown =
+        JudgeCorrection(level, &field, model, Result(between), nullptr, false, false, config);
     EXPECT_FALSE(HasReason(unknown, "walk level")) << "no floor heights: no check";
     config.floor_heights_m = {0.0, 4.0};
-    const Verdict v = JudgeCorrection(level, &field, model, Result(between), nullptr, false, false,
-                                      config);
+    const Verdict v =
+        JudgeCorrection(level, &field, model, Result(between), nullptr, false, false, config);
     EXPECT_TRUE(HasReason(v, "walk level up to 2.0 m from every floor")) << v.reasons.front();
     EXPECT_EQ(v.level, VerdictLevel::kFailed);  // half of the poses
     EXPECT_TRUE(v.pose_flags[150] & kPoseHeightDisagrees);
     EXPECT_FALSE(v.pose_flags[50] & kPoseHeightDisagrees);
     // On a floor, or changing height (a stair climb), it is fine.
-    const Verdict on_floor = JudgeCorrection(level, &field, model, Result(level), nullptr, false,
-                                             false, config);
+    const Verdict on_floor =
+        JudgeCorrection(level, &field, model, Result(level), nullptr, false, false, config);
     EXPECT_FALSE(HasReason(on_floor, "walk level"));
     // Stairs: 4 m in 20 s (0.2 m/s), then the upper floor.
-    const PlanarTrajectory climb =
-        Walk([](int k) { return k < 100 ? 0.0 : k < 120 ? 0.2 * (k - 100) : 4.0; });
-    const Verdict stairs = JudgeCorrection(climb, &field, model, Result(climb), nullptr, false,
-                                           false, config);
+    const PlanarTrajectory climb = Walk([](int k) {
+        return k < 100 ? 0.0 : k < 120 ? 0.2 * (k - 100) : 4.0;
+    });
+    const Verdict stairs =
+        JudgeCorrection(climb, &field, model, Result(climb), nullptr, false, false, config);
     EXPECT_FALSE(HasReason(stairs, "walk level"));
 }
 
@@ -118,14 +119,14 @@ TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsPlausible) {
     const TraversableField field = TwoFloors();
     const PlanarTrajectory estimate = Walk([](int) { return 0.0; }, 0.1);
     const PlanarTrajectory corrected = Walk([](int) { return 0.0; }, 0.14);  // 1.4x the path
-    ModelConfig road;  // plausible 0.8..1.25
+    ModelConfig road;                                                        // plausible 0.8..1.25
     road.scale_segment_m = 10.0;
     ModelConfig pedestrian = road;
     pedestrian.scale_range_min = 0.9;
     pedestrian.scale_range_max = 1.5;
     const VerdictConfig config;
-    const Verdict a = JudgeCorrection(estimate, &field, road, Result(corrected), nullptr, false,
-                                      true, config);
+    const Verdict a =
+        JudgeCorrection(estimate, &field, road, Result(corrected), nullptr, false, true, config);
     EXPECT_TRUE(HasReason(a, "beyond the plausible scale"));
     const Verdict b = JudgeCorrection(estimate, &field, pedestrian, Result(corrected), nullptr,
                                       false, true, config);

@@ -127,17 +127,6 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
     return rep2;
 }
 
-}  // namespace
-
-// One incremental window (soft terms). When its solution leaves many poses off the roads, or
-// explains the window poorly (a high NLL per pose), the window fell into a wrong basin (typically:
-// a turn before the junction is reached, with the scale collapsing to keep the poses on the road
-// they left), so it is re-solved from other step-length scale hypotheses, re-composed from the
-// window's start, and the lowest NLL wins. Saves and restores the window's poses only (pose
-// first-1 included: with a boundary prior it is a variable), so its cost does not grow with the
-// trajectory.
-namespace {
-
 // Sum of |height change| over the steps into poses [first, last] [m].
 double HeightTravel(const TrajectoryState& s, std::size_t first, std::size_t last) {
     double sum = 0.0;
@@ -147,6 +136,14 @@ double HeightTravel(const TrajectoryState& s, std::size_t first, std::size_t las
 
 }  // namespace
 
+// One incremental window (soft terms). When its solution leaves many poses off the roads, or
+// explains the window poorly (a high NLL per pose), the window fell into a wrong basin (typically:
+// a turn before the junction is reached, with the scale collapsing to keep the poses on the road
+// they left), so it is re-solved from other step-length scale hypotheses, re-composed from the
+// window's start, and the lowest NLL wins. A window that changes floor is also re-solved from
+// other readings of its height changes (restart_height_gains): another floor's basin. Saves and
+// restores the window's poses only (pose first-1 included: with a boundary prior it is a
+// variable), so its cost does not grow with the trajectory.
 SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
                             const CorrectorConfig& cfg, std::size_t first, std::size_t last,
                             const std::optional<PosePriorTerm>& prior, bool restarts,

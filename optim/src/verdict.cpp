@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/check.h"
@@ -150,8 +151,8 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
         j = std::max(j, i + 1);
         while (j + 1 < est.size() && est.t_s[j] < est.t_s[i] + c.height_window_s) ++j;
         const double d_est = est.up_m[j] - est.up_m[i], d_cor = cor.up_m[j] - cor.up_m[i];
-        const double excess =
-            std::abs(d_cor - d_est) - (c.height_disagree_m + c.height_disagree_rel * std::abs(d_est));
+        const double excess = std::abs(d_cor - d_est) -
+                              (c.height_disagree_m + c.height_disagree_rel * std::abs(d_est));
         if (excess <= 0.0) {
             in_episode = false;
             continue;
@@ -169,12 +170,13 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
     }
     if (episodes == 0) return;
     const double share = double(flagged) / double(est.size());
-    const std::string what =
-        "the corrected height changes disagree with the estimate's " + std::to_string(episodes) +
-        " time(s), over " + FormatPercent(share) + " of the walk (worst: from " +
-        FormatFixed(worst_t0, 0) + " s to " + FormatFixed(worst_t1, 0) + " s the estimate changes height by " +
-        FormatFixed(worst_est, 1) + " m, the correction by " + FormatFixed(worst_cor, 1) +
-        " m): a floor change the walk does not support, likely a wrong floor";
+    const std::string what = "the corrected height changes disagree with the estimate's " +
+                             std::to_string(episodes) + " time(s), over " + FormatPercent(share) +
+                             " of the walk (worst: from " + FormatFixed(worst_t0, 0) + " s to " +
+                             FormatFixed(worst_t1, 0) + " s the estimate changes height by " +
+                             FormatFixed(worst_est, 1) + " m, the correction by " +
+                             FormatFixed(worst_cor, 1) +
+                             " m): a floor change the walk does not support, likely a wrong floor";
     if (share > c.off_map_failed_share) {
         f.Failed(what);
     } else {
@@ -182,36 +184,49 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
     }
 }
 
-// Level walking between floors (VerdictConfig::floor_heights_m).
+// Level walking between floors (VerdictConfig::floor_heights_m): runs of poses off every floor
+// while the estimate is level; only runs of level_window_s / 2 or more count and are flagged.
 void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor,
                         const VerdictConfig& c, Verdict& v, Findings& f) {
     const double half_s = 0.5 * c.level_window_s;
-    std::size_t flagged = 0, lo = 0, hi = 0, run_start = 0;
+    std::size_t flagged = 0, lo = 0, hi = 0;
+    std::optional<std::size_t> run_start;
     double longest_s = 0.0, worst_m = 0.0;
-    bool in_run = false;
-    for (std::size_t i = 0; i < cor.size(); ++i) {
+    for (std::size_t i = 0; i <= cor.size(); ++i) {
+        bool off = false;
         double off_m = 1e9;
-        for (double z : c.floor_heights_m) off_m = std::min(off_m, std::abs(cor.up_m[i] - z));
-        while (est.t_s[lo] < est.t_s[i] - half_s) ++lo;
-        while (hi + 1 < est.size() && est.t_s[hi + 1] <= est.t_s[i] + half_s) ++hi;
-        const auto [mn, mx] = std::minmax_element(est.up_m.begin() + lo, est.up_m.begin() + hi + 1);
-        const bool level = *mx - *mn <= c.level_height_m;
-        if (off_m <= c.off_floor_m || !level) {
-            in_run = false;
+        if (i < cor.size()) {
+            for (double z : c.floor_heights_m) off_m = std::min(off_m, std::abs(cor.up_m[i] - z));
+            while (est.t_s[lo] < est.t_s[i] - half_s) ++lo;
+            while (hi + 1 < est.size() && est.t_s[hi + 1] <= est.t_s[i] + half_s) ++hi;
+            const auto range =
+                std::minmax_element(est.up_m.begin() + lo, est.up_m.begin() + hi + 1);
+            off = off_m > c.off_floor_m && *range.second - *range.first <= c.level_height_m;
+        }
+        if (off) {
+            if (!run_start) run_start = i;
             continue;
         }
-        if (!in_run) run_start = i;
-        in_run = true;
-        ++flagged;
-        v.pose_flags[i] |= kPoseHeightDisagrees;
-        longest_s = std::max(longest_s, est.t_s[i] - est.t_s[run_start]);
-        worst_m = std::max(worst_m, off_m);
+        if (run_start) {  // the run [*run_start, i) ends
+            const double run_s = est.t_s[i - 1] - est.t_s[*run_start];
+            if (run_s >= half_s) {
+                longest_s = std::max(longest_s, run_s);
+                for (std::size_t k = *run_start; k < i; ++k) {
+                    v.pose_flags[k] |= kPoseHeightDisagrees;
+                    double d = 1e9;
+                    for (double z : c.floor_heights_m) d = std::min(d, std::abs(cor.up_m[k] - z));
+                    worst_m = std::max(worst_m, d);
+                }
+                flagged += i - *run_start;
+            }
+            run_start.reset();
+        }
     }
-    if (longest_s < half_s) return;
-    const double share = double(flagged) / double(std::max<std::size_t>(1, cor.size()));
+    if (flagged == 0) return;
+    const double share = double(flagged) / double(cor.size());
     const std::string what =
-        FormatPercent(share) + " of the corrected poses walk level up to " + FormatFixed(worst_m, 1) +
-        " m from every floor (" + FormatFixed(longest_s, 0) +
+        FormatPercent(share) + " of the corrected poses walk level up to " +
+        FormatFixed(worst_m, 1) + " m from every floor (" + FormatFixed(longest_s, 0) +
         " s in a row, while the estimate's height stays level): between floors, where only "
         "stairs or a lift could hold them; their floor is not supported";
     if (share > c.off_map_failed_share) {
@@ -316,9 +331,9 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
 
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
                               const PlanarTrajectory& smoothed) {
-    DRIFTCORR_CHECK(input.size() == causal.size() && causal.size() == smoothed.size() &&
-                        input.size() > 0,
-                    "CheckCausalOutput: the trajectories must have the same poses");
+    DRIFTCORR_CHECK(
+        input.size() == causal.size() && causal.size() == smoothed.size() && input.size() > 0,
+        "CheckCausalOutput: the trajectories must have the same poses");
     CausalCheck c;
     double causal_sq = 0.0, input_sq = 0.0;
     for (std::size_t i = 0; i < smoothed.size(); ++i) {
