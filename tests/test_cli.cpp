@@ -1442,12 +1442,17 @@ TEST(CliMap, BadRawMapsAreNamedWithWhatWasFound) {
     }
 }
 
-TEST(CliMap, AWalkThatStartsOffTheWalkableSurfaceIsBadInput) {
-    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "walk_off_surface";
+// A fresh synthetic building scenario (datasets/synth_building) in `dir`.
+void MakeBuildingScenario(const fs::path& dir) {
     fs::remove_all(dir);
     const RunResult g = RunProgram(DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario",
                                    {dir.string()}, fs::path(DRIFTCORR_TEST_TMPDIR));
     ASSERT_EQ(g.exit_code, 0) << g.err;
+}
+
+TEST(CliMap, AWalkThatStartsOffTheWalkableSurfaceIsBadInput) {
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "walk_off_surface";
+    ASSERT_NO_FATAL_FAILURE(MakeBuildingScenario(dir));
     // The anchor 2.5 m lower: the walk's heights no longer meet the map's floors.
     Replace(dir / "scenario.yaml", "  z_m: 0.0", "  z_m: -2.5");
     const fs::path out = dir / "corrected.tum";
@@ -1463,10 +1468,7 @@ TEST(CliMap, AWalkThatStartsOffTheWalkableSurfaceIsBadInput) {
 // furniture), and the correction on it against the correction on the clean surface.
 TEST(CliMap, RawBuildingScanGivesTheWalkableSurfaceAndTheSameCorrection) {
     const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "raw_building";
-    fs::remove_all(dir);
-    const RunResult g = RunProgram(DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario",
-                                   {dir.string()}, fs::path(DRIFTCORR_TEST_TMPDIR));
-    ASSERT_EQ(g.exit_code, 0) << g.err;
+    ASSERT_NO_FATAL_FAILURE(MakeBuildingScenario(dir));
     const RunResult x =
         RunProgram(kCli,
                    {"map", "extract", (dir / "building_raw.pcd").string(), "-o",

@@ -465,6 +465,17 @@ def write_walk(out, seed, crs, e0, n0, floors, samples, est, est_yaws, used):
                  "map:\n" + layers)
 
 
+def number_in(key, val, lo, hi):
+    """The option's value as a number in [lo, hi], or exit 2 naming it."""
+    try:
+        x = float(val)
+    except ValueError:
+        fail(f"{key} {val}: not a number")
+    if not lo <= x <= hi:
+        fail(f"{key} {val}: outside [{lo:g}, {hi:g}]")
+    return x
+
+
 def parse_args(argv):
     if len(argv) < 3:
         print(__doc__, file=sys.stderr)
@@ -481,19 +492,9 @@ def parse_args(argv):
             if seeds[1] < seeds[0]:
                 fail(f"--seeds {val}: empty range")
         elif key == "--lift-share":
-            try:
-                lift_share = float(val)
-            except ValueError:
-                fail(f"--lift-share {val}: not a number")
-            if not 0.0 <= lift_share <= 1.0:
-                fail(f"--lift-share {val}: outside [0, 1]")
+            lift_share = number_in(key, val, 0.0, 1.0)
         elif key == "--lift-poses-hz":
-            try:
-                lift_poses_hz = float(val)
-            except ValueError:
-                fail(f"--lift-poses-hz {val}: not a number")
-            if not 0.0 <= lift_poses_hz <= 100.0:
-                fail(f"--lift-poses-hz {val}: outside [0, 100]")
+            lift_poses_hz = number_in(key, val, 0.0, 100.0)
         else:
             fail(f"unknown option or bad value: {key} {val}")
     return argv[1], argv[2], seeds, lift_share, lift_poses_hz

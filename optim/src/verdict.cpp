@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "driftcorr/core/angles.h"
@@ -189,14 +190,19 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
 void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor,
                         const VerdictConfig& c, Verdict& v, Findings& f) {
     const double half_s = 0.5 * c.level_window_s;
+    auto floor_distance = [&c](double up_m) {
+        double d = std::numeric_limits<double>::infinity();
+        for (double z : c.floor_heights_m) d = std::min(d, std::abs(up_m - z));
+        return d;
+    };
     std::size_t flagged = 0, lo = 0, hi = 0;
     std::optional<std::size_t> run_start;
-    double longest_s = 0.0, worst_m = 0.0;
+    double longest_s = 0.0, worst_m = 0.0, run_worst_m = 0.0;
     for (std::size_t i = 0; i <= cor.size(); ++i) {
         bool off = false;
-        double off_m = 1e9;
+        double off_m = 0.0;
         if (i < cor.size()) {
-            for (double z : c.floor_heights_m) off_m = std::min(off_m, std::abs(cor.up_m[i] - z));
+            off_m = floor_distance(cor.up_m[i]);
             while (est.t_s[lo] < est.t_s[i] - half_s) ++lo;
             while (hi + 1 < est.size() && est.t_s[hi + 1] <= est.t_s[i] + half_s) ++hi;
             const auto range =
@@ -204,19 +210,17 @@ void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor
             off = off_m > c.off_floor_m && *range.second - *range.first <= c.level_height_m;
         }
         if (off) {
-            if (!run_start) run_start = i;
+            if (!run_start) run_start = i, run_worst_m = 0.0;
+            run_worst_m = std::max(run_worst_m, off_m);
             continue;
         }
         if (run_start) {  // the run [*run_start, i) ends
             const double run_s = est.t_s[i - 1] - est.t_s[*run_start];
             if (run_s >= half_s) {
                 longest_s = std::max(longest_s, run_s);
-                for (std::size_t k = *run_start; k < i; ++k) {
+                worst_m = std::max(worst_m, run_worst_m);
+                for (std::size_t k = *run_start; k < i; ++k)
                     v.pose_flags[k] |= kPoseHeightDisagrees;
-                    double d = 1e9;
-                    for (double z : c.floor_heights_m) d = std::min(d, std::abs(cor.up_m[k] - z));
-                    worst_m = std::max(worst_m, d);
-                }
                 flagged += i - *run_start;
             }
             run_start.reset();
