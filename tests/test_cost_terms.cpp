@@ -539,63 +539,93 @@ TEST(MapDistanceTerm, GaussianNearTheCentreAndGivesUpFarAway) {
 
 // ---- Pose prior (marginalised poses before a fixed-lag window) ---------------------------
 
-PosePriorTerm MakePosePrior() {
+PosePriorTerm MakePosePrior(bool with_scale) {
     PosePriorTerm t;
     t.mean << 3.0, -1.5, 0.2, 0.7;
-    Eigen::Matrix4d a;
-    a << 2.0, 0.3, 0.0, 0.5,  //
-        0.1, 1.5, 0.0, -0.2,  //
-        0.0, 0.0, 0.0, 0.0,   // a height the prior says nothing about
-        0.4, -0.1, 0.0, 3.0;
-    t.information = a * a.transpose();
+    Eigen::Matrix<double, 5, 5> a;
+    a << 2.0, 0.3, 0.0, 0.5, 0.2,  //
+        0.1, 1.5, 0.0, -0.2, 0.1,  //
+        0.0, 0.0, 0.0, 0.0, 0.0,   // a height the prior says nothing about
+        0.4, -0.1, 0.0, 3.0, 0.0,  //
+        0.6, -0.3, 0.0, 0.2, 4.0;
+    const JointMatrix info = a * a.transpose();
+    t.information = info.topLeftCorner<4, 4>();
+    if (with_scale) {
+        t.scale_segment = 2;
+        t.scale_mean = 1.2;
+        t.cross = info.topRightCorner<4, 1>();
+        t.scale_information = info(4, 4);
+    }
     return t;
 }
 
 TEST(PosePriorTerm, ZeroAtTheMeanAndDerivativesMatch) {
-    const PosePriorTerm t = MakePosePrior();
-    PoseVector g;
-    PoseMatrix h;
-    EXPECT_NEAR(t.Evaluate(t.mean, &g, &h), 0.0, 1e-20);
-    EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-15);
-    std::mt19937 rng(4711u);
-    std::uniform_real_distribution<double> u(-5.0, 5.0);
-    for (int trial = 0; trial < 50; ++trial) {
-        const PoseVector x(u(rng), u(rng), u(rng), u(rng));
-        t.Evaluate(x, &g, &h);
-        for (int k = 0; k < 4; ++k) {
-            PoseVector xp = x, xm = x;
-            xp[k] += kStep;
-            xm[k] -= kStep;
-            const double num =
-                (t.Evaluate(xp, nullptr, nullptr) - t.Evaluate(xm, nullptr, nullptr)) / (2 * kStep);
-            EXPECT_PRED2(Close, g[k], num) << "trial " << trial << " k " << k;
-            PoseVector gp, gm;
-            t.Evaluate(xp, &gp, nullptr);
-            t.Evaluate(xm, &gm, nullptr);
-            for (int r = 0; r < 4; ++r) {
-                EXPECT_PRED2(Close, h(r, k), (gp[r] - gm[r]) / (2 * kStep)) << "trial " << trial;
+    for (bool with_scale : {false, true}) {
+        SCOPED_TRACE(with_scale ? "with its scale" : "pose alone");
+        const PosePriorTerm t = MakePosePrior(with_scale);
+        const int n = t.Size();
+        ASSERT_EQ(n, with_scale ? 5 : 4);
+        JointVector g;
+        JointMatrix h;
+        EXPECT_NEAR(t.Evaluate(t.JointMean(), &g, &h), 0.0, 1e-20);
+        EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-15);
+        std::mt19937 rng(4711u);
+        std::uniform_real_distribution<double> u(-5.0, 5.0);
+        for (int trial = 0; trial < 50; ++trial) {
+            JointVector x;
+            x << u(rng), u(rng), u(rng), u(rng), u(rng);
+            t.Evaluate(x, &g, &h);
+            for (int k = 0; k < n; ++k) {
+                JointVector xp = x, xm = x;
+                xp[k] += kStep;
+                xm[k] -= kStep;
+                const double num =
+                    (t.Evaluate(xp, nullptr, nullptr) - t.Evaluate(xm, nullptr, nullptr)) /
+                    (2 * kStep);
+                EXPECT_PRED2(Close, g[k], num) << "trial " << trial << " k " << k;
+                JointVector gp, gm;
+                t.Evaluate(xp, &gp, nullptr);
+                t.Evaluate(xm, &gm, nullptr);
+                for (int r = 0; r < n; ++r) {
+                    EXPECT_PRED2(Close, h(r, k), (gp[r] - gm[r]) / (2 * kStep))
+                        << "trial " << trial;
+                }
             }
         }
+        // Moving the height, which the prior does not constrain, costs nothing; without a scale,
+        // neither does the fifth entry.
+        JointVector up = t.JointMean();
+        up[2] += 10.0;
+        EXPECT_NEAR(t.Evaluate(up, nullptr, nullptr), 0.0, 1e-12);
+        JointVector scaled = t.JointMean();
+        scaled[4] += 0.3;
+        if (with_scale) {
+            EXPECT_GT(t.Evaluate(scaled, nullptr, nullptr), 0.1);
+        } else {
+            EXPECT_EQ(t.Evaluate(scaled, nullptr, nullptr), 0.0);
+        }
     }
-    // Moving the height, which the prior does not constrain, costs nothing.
-    PoseVector up = t.mean;
-    up[2] += 10.0;
-    EXPECT_NEAR(t.Evaluate(up, nullptr, nullptr), 0.0, 1e-12);
 }
 
 TEST(PosePriorTerm, LinearisationSumsToTheInformationAndTheCost) {
-    const PosePriorTerm t = MakePosePrior();
-    const PoseVector x(2.0, -1.0, 0.5, 0.4);
-    PoseMatrix sum = PoseMatrix::Zero();
-    double chi2 = 0.0;
-    for (const Linearisation<4>& l : t.Linearise(x)) {
-        EXPECT_GE(l.information, 0.0);
-        EXPECT_NEAR(l.residual, l.jacobian.dot(x - t.mean), 1e-12);
-        sum += l.information * l.jacobian * l.jacobian.transpose();
-        chi2 += l.chi2;
+    for (bool with_scale : {false, true}) {
+        SCOPED_TRACE(with_scale ? "with its scale" : "pose alone");
+        const PosePriorTerm t = MakePosePrior(with_scale);
+        JointVector x;
+        x << 2.0, -1.0, 0.5, 0.4, 1.1;
+        JointMatrix sum = JointMatrix::Zero();
+        double chi2 = 0.0;
+        for (const Linearisation<5>& l : t.Linearise(x)) {
+            EXPECT_GE(l.information, 0.0);
+            JointVector e = x - t.JointMean();
+            if (!with_scale) e[4] = 0.0;
+            EXPECT_NEAR(l.residual, l.jacobian.dot(e), 1e-12);
+            sum += l.information * l.jacobian * l.jacobian.transpose();
+            chi2 += l.chi2;
+        }
+        EXPECT_LT((sum - t.JointInformation()).cwiseAbs().maxCoeff(), 1e-10);
+        EXPECT_NEAR(0.5 * chi2, t.Evaluate(x, nullptr, nullptr), 1e-10);
     }
-    EXPECT_LT((sum - t.information).cwiseAbs().maxCoeff(), 1e-10);
-    EXPECT_NEAR(0.5 * chi2, t.Evaluate(x, nullptr, nullptr), 1e-10);
 }
 
 }  // namespace

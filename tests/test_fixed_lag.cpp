@@ -1,6 +1,7 @@
-// Tests of the fixed-lag smoother (optim/src/fixed_lag.cpp): the marginalised boundary prior is
-// the Schur complement of the window's Gauss-Newton information (against a dense inverse), grows
-// along the odometry beyond the map, and the smoother's windows stay bounded and carry it.
+// Tests of the fixed-lag smoother (optim/src/fixed_lag.cpp): the marginalised boundary prior (the
+// boundary pose and its scale) is the Schur complement of the window's Gauss-Newton information
+// (against a dense inverse), grows along the odometry beyond the map, and the smoother's windows
+// stay bounded and carry it.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -40,19 +41,26 @@ ModelConfig Model() {
     return m;
 }
 
-PosePriorTerm SomePrior(const TrajectoryState& s, std::size_t pose) {
+PosePriorTerm SomePrior(const TrajectoryState& s, std::size_t pose, bool with_scale = false) {
     PosePriorTerm t;
     const PoseState& b = s.poses[pose];
     t.mean << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad;
     t.information = Eigen::Vector4d(4.0, 2.0, 9.0, 400.0).asDiagonal();
     t.information(0, 1) = t.information(1, 0) = 0.5;
     if (s.fix_height) t.information.row(2).setZero(), t.information.col(2).setZero();
+    if (with_scale) {
+        t.scale_segment = s.scale_segment[pose];
+        t.scale_mean = s.scales[t.scale_segment] + 0.01;
+        t.cross << 0.3, -0.2, 0.0, 1.5;
+        t.scale_information = 900.0;
+    }
     return t;
 }
 
 // The dense reference: invert the Gauss-Newton information of window [first, last] (with the
-// prior on first-1) over its poses (the scales given) and read pose `last`'s block (x, y, yaw; z
-// too with free heights), and the same block of the Gauss-Newton step -H^-1 g.
+// prior on first-1) over its poses and scales (the heading-rate biases given) and read the block
+// of pose `last` and its segment's scale (x, y, yaw, scale; z too with free heights), and the same
+// block of the Gauss-Newton step -H^-1 g.
 struct DenseMarginal {
     Eigen::MatrixXd sigma;
     Eigen::VectorXd shift;
@@ -67,9 +75,10 @@ DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std:
     Eigen::MatrixXd h = DenseGaussNewtonHessian(p, x.data());
     std::vector<double> g(p.NumVariables());
     p.Gradient(x.data(), g.data());
+    const int scale = p.ScaleVar(s.scale_segment[last]);
     std::vector<int> keep;
-    for (int k = 0; k < p.PoseVar(last, 3) + 1; ++k) {
-        if (!(s.fix_height && k % 4 == 2)) keep.push_back(k);
+    for (int k = 0; k <= scale; ++k) {
+        if (!(s.fix_height && k < p.PoseVar(last, 3) + 1 && k % 4 == 2)) keep.push_back(k);
     }
     Eigen::MatrixXd hk(keep.size(), keep.size());
     for (std::size_t r = 0; r < keep.size(); ++r) {
@@ -80,10 +89,11 @@ DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std:
     for (std::size_t r = 0; r < keep.size(); ++r) gk[r] = g[keep[r]];
     const Eigen::VectorXd step = -sigma * gk;
     std::vector<int> block;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < 5; ++c) {
         if (s.fix_height && c == 2) continue;
+        const int var = c < 4 ? p.PoseVar(last, c) : scale;
         for (std::size_t k = 0; k < keep.size(); ++k) {
-            if (keep[k] == p.PoseVar(last, c)) block.push_back(static_cast<int>(k));
+            if (keep[k] == var) block.push_back(static_cast<int>(k));
         }
     }
     DenseMarginal out{Eigen::MatrixXd(block.size(), block.size()), Eigen::VectorXd(block.size())};
@@ -94,42 +104,61 @@ DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std:
     return out;
 }
 
+// The joint information on its free entries (the height dropped when fixed).
+Eigen::MatrixXd FreeInformation(const PosePriorTerm& t, bool fix_height) {
+    const JointMatrix info = t.JointInformation();
+    std::vector<int> idx;
+    for (int k = 0; k < 5; ++k) {
+        if (!(fix_height && k == 2)) idx.push_back(k);
+    }
+    Eigen::MatrixXd out(idx.size(), idx.size());
+    for (std::size_t r = 0; r < idx.size(); ++r) {
+        for (std::size_t c = 0; c < idx.size(); ++c) out(r, c) = info(idx[r], idx[c]);
+    }
+    return out;
+}
+
+// The marginal of the boundary pose and its segment's scale: the Schur complement of the window's
+// information onto them, from a prior on the pose alone or on the pose and its scale.
 TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
     const ModelConfig model = Model();
     for (bool fix_height : {false, true}) {
-        SCOPED_TRACE(fix_height ? "planar" : "free height");
-        TrajectoryState s = test::StateFrom(Curve(), model, fix_height);
-        const PosePriorTerm prior = SomePrior(s, 4);
-        // Off the estimate (and the prior's mean) the old terms have a gradient: the mean moves.
-        for (std::size_t i = 5; i <= 17; ++i) s.poses[i].p.x() += 0.02 * double(i - 4);
-        const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior);
-        ASSERT_TRUE(marginal.has_value());
-        const PoseState& b = s.poses[17];
-        const PoseVector shift = marginal->mean - PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad);
-        const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior);
-        const Eigen::MatrixXd& dense = reference.sigma;
-        for (int r = 0, k = 0; r < 4; ++r) {
-            if (fix_height && r == 2) {
-                EXPECT_EQ(shift[r], 0.0);
-                continue;
+        for (bool prior_scale : {false, true}) {
+            SCOPED_TRACE(std::string(fix_height ? "planar" : "free height") +
+                         (prior_scale ? ", prior with its scale" : ", prior on the pose"));
+            TrajectoryState s = test::StateFrom(Curve(), model, fix_height);
+            const PosePriorTerm prior = SomePrior(s, 4, prior_scale);
+            // Off the estimate (and the prior's mean) the old terms have a gradient: the mean
+            // moves.
+            for (std::size_t i = 5; i <= 17; ++i) s.poses[i].p.x() += 0.02 * double(i - 4);
+            const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior);
+            ASSERT_TRUE(marginal.has_value());
+            ASSERT_TRUE(marginal->HasScale());
+            EXPECT_EQ(marginal->scale_segment, s.scale_segment[17]);
+            const PoseState& b = s.poses[17];
+            JointVector at;
+            at << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad, s.scales[s.scale_segment[17]];
+            const JointVector shift = marginal->JointMean() - at;
+            const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior);
+            for (int r = 0, k = 0; r < 5; ++r) {
+                if (fix_height && r == 2) {
+                    EXPECT_EQ(shift[r], 0.0);
+                    continue;
+                }
+                EXPECT_NEAR(shift[r], reference.shift[k++], 1e-8) << "component " << r;
             }
-            EXPECT_NEAR(shift[r], reference.shift[k++], 1e-8) << "component " << r;
+            EXPECT_GT(shift.head<2>().norm(), 1e-3);
+            if (fix_height) {
+                const JointMatrix info = marginal->JointInformation();
+                EXPECT_EQ(info.row(2).norm() + info.col(2).norm(), 0.0);
+            }
+            const Eigen::MatrixXd sigma = FreeInformation(*marginal, fix_height).inverse();
+            const Eigen::MatrixXd& dense = reference.sigma;
+            EXPECT_LT((sigma - dense).cwiseAbs().maxCoeff(), 1e-8 * dense.cwiseAbs().maxCoeff())
+                << "marginal\n"
+                << sigma << "\ndense\n"
+                << dense;
         }
-        EXPECT_GT(shift.head<2>().norm(), 1e-3);
-        Eigen::MatrixXd info = marginal->information;
-        if (fix_height) {
-            EXPECT_EQ(info.row(2).norm() + info.col(2).norm(), 0.0);
-            const Eigen::Matrix3d i3 =
-                (Eigen::Matrix3d() << info(0, 0), info(0, 1), info(0, 3), info(1, 0), info(1, 1),
-                 info(1, 3), info(3, 0), info(3, 1), info(3, 3))
-                    .finished();
-            info = i3;
-        }
-        const Eigen::MatrixXd sigma = info.inverse();
-        EXPECT_LT((sigma - dense).cwiseAbs().maxCoeff(), 1e-8 * dense.cwiseAbs().maxCoeff())
-            << "marginal\n"
-            << sigma << "\ndense\n"
-            << dense;
     }
 }
 
@@ -142,13 +171,8 @@ TEST(MarginalPrior, GrowsAlongTheOdometry) {
     for (std::size_t last : {6u, 12u, 24u, 36u}) {
         const auto m = MarginalPrior(s, nullptr, model, 5, last, prior);
         ASSERT_TRUE(m.has_value());
-        const Eigen::Matrix2d xy =
-            (Eigen::Matrix3d() << m->information(0, 0), m->information(0, 1), m->information(0, 3),
-             m->information(1, 0), m->information(1, 1), m->information(1, 3), m->information(3, 0),
-             m->information(3, 1), m->information(3, 3))
-                .finished()
-                .inverse()
-                .topLeftCorner<2, 2>();
+        // x, y of the marginal covariance (the scale integrated out).
+        const Eigen::Matrix2d xy = FreeInformation(*m, true).inverse().topLeftCorner<2, 2>();
         EXPECT_GT(xy.trace(), previous) << "pose " << last;
         previous = xy.trace();
     }

@@ -155,11 +155,13 @@ struct WindowCase {
     unsigned seed;
     bool all_terms = false;  ///< also the robust step length and the speed-continuity terms
     bool boundary_prior = false;  ///< pose first-1 a variable under a PosePriorTerm
+    bool prior_scale = false;     ///< the prior joint with the scale of pose first-1's segment
 };
 
 /// A prior on pose `pose` of `s`: its mean 0.4 m / 0.05 rad off the pose, a full information
-/// matrix (a fixed height's row and column zero, as the fixed-lag window passes it).
-PosePriorTerm PriorOn(const TrajectoryState& s, std::size_t pose) {
+/// matrix (a fixed height's row and column zero, as the fixed-lag window passes it); with_scale:
+/// joint with the scale of the pose's segment, its mean 0.03 off.
+PosePriorTerm PriorOn(const TrajectoryState& s, std::size_t pose, bool with_scale = false) {
     PosePriorTerm t;
     const PoseState& b = s.poses[pose];
     t.mean << b.p.x() + 0.4, b.p.y() - 0.3, b.p.z() + 0.1, b.yaw_rad + 0.05;
@@ -170,6 +172,12 @@ PosePriorTerm PriorOn(const TrajectoryState& s, std::size_t pose) {
         0.1, 0.0, 0.0, 5.0;
     t.information = a * a.transpose();
     if (s.fix_height) t.information.row(2).setZero(), t.information.col(2).setZero();
+    if (with_scale) {
+        t.scale_segment = s.scale_segment[pose];
+        t.scale_mean = s.scales[t.scale_segment] + 0.03;
+        t.cross << 0.4, -0.3, s.fix_height ? 0.0 : 0.2, 1.0;
+        t.scale_information = 50.0;
+    }
     return t;
 }
 
@@ -177,7 +185,8 @@ PosePriorTerm PriorOn(const TrajectoryState& s, std::size_t pose) {
 void PrintTo(const WindowCase& c, std::ostream* os) {
     *os << "poses [" << c.first << ", " << c.last << "]"
         << (c.fix_height ? " planar" : " free height") << ", seed " << c.seed
-        << (c.all_terms ? ", all terms" : "") << (c.boundary_prior ? ", boundary prior" : "");
+        << (c.all_terms ? ", all terms" : "") << (c.boundary_prior ? ", boundary prior" : "")
+        << (c.prior_scale ? " with its scale" : "");
 }
 
 class WindowDerivatives : public ::testing::TestWithParam<WindowCase> {
@@ -198,7 +207,7 @@ protected:
     WindowProblem Problem() {
         const WindowCase c = GetParam();
         std::optional<PosePriorTerm> prior;
-        if (c.boundary_prior) prior = PriorOn(state_, c.first - 1);
+        if (c.boundary_prior) prior = PriorOn(state_, c.first - 1, c.prior_scale);
         return WindowProblem(state_, &field_, model_, c.first, c.last, EveryThird(c.first, c.last),
                              WindowUse::kSolve, prior);
     }
@@ -410,12 +419,14 @@ INSTANTIATE_TEST_SUITE_P(
                       WindowCase{2, 5, true, 108u, true},
                       WindowCase{12, 25, true, 109u, false, true},
                       WindowCase{12, 25, false, 110u, true, true},
-                      WindowCase{1, 29, true, 111u, false, true}),  // the prior on pose 0
+                      WindowCase{1, 29, true, 111u, false, true},  // the prior on pose 0
+                      WindowCase{12, 25, false, 112u, false, true, true},
+                      WindowCase{12, 25, true, 113u, true, true, true}),
     [](const ::testing::TestParamInfo<WindowCase>& param_info) {
         const WindowCase& c = param_info.param;
         return "poses_" + std::to_string(c.first) + "_" + std::to_string(c.last) +
                (c.fix_height ? "_planar" : "_free_height") + (c.all_terms ? "_all_terms" : "") +
-               (c.boundary_prior ? "_boundary_prior" : "");
+               (c.boundary_prior ? "_boundary_prior" : "") + (c.prior_scale ? "_with_scale" : "");
     });
 
 TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {
@@ -459,8 +470,9 @@ TEST(WindowProblem, BoundaryPriorMakesPoseFirstMinusOneAVariable) {
     fixed.InitialPoint(xf.data());
     // At the state the objective is the fixed window's plus the prior's cost at pose 11.
     const PoseState& b = s.poses[11];
-    const double prior_cost = prior.Evaluate(
-        PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad), nullptr, nullptr);
+    JointVector at = JointVector::Zero();
+    at << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad, 0.0;
+    const double prior_cost = prior.Evaluate(at, nullptr, nullptr);
     EXPECT_GT(prior_cost, 0.5);
     EXPECT_NEAR(p.Objective(x.data()), fixed.Objective(xf.data()) + prior_cost, 1e-9);
     // The Gauss-Newton Hessian carries the prior's information on pose 11's block (the step
@@ -479,6 +491,43 @@ TEST(WindowProblem, BoundaryPriorMakesPoseFirstMinusOneAVariable) {
     x[0] += 0.7;
     p.Store(x.data());
     EXPECT_EQ(s.poses[11].p.x(), x[0]);
+}
+
+// A prior joint with the boundary's scale summarises that segment's walk and range terms: its
+// scale becomes a variable of the window, and the segment before it no longer matters.
+TEST(WindowProblem, BoundaryPriorWithItsScaleReplacesThatSegmentsWalk) {
+    const ModelConfig model = Model();
+    for (std::size_t first : {std::size_t(12), std::size_t(13)}) {
+        TrajectoryState s = StateFrom(Curve(), model, true);
+        const PosePriorTerm joint = PriorOn(s, first - 1, true), pose_only = PriorOn(s, first - 1);
+        const int g = joint.scale_segment;
+        ASSERT_GT(g, 0);
+        const std::vector<std::uint8_t> none(26 - first, 0);
+        // Fixed values are read when a problem is built: one problem per state.
+        auto objective = [&](const TrajectoryState& state, const PosePriorTerm& prior) {
+            TrajectoryState copy = state;
+            const WindowProblem p(copy, nullptr, model, first, 25, none, WindowUse::kSolve, prior);
+            std::vector<double> x(p.NumVariables());
+            p.InitialPoint(x.data());
+            return p.Objective(x.data());
+        };
+        {
+            const WindowProblem p(s, nullptr, model, first, 25, none, WindowUse::kSolve, joint);
+            const WindowProblem q(s, nullptr, model, first, 25, none, WindowUse::kSolve, pose_only);
+            EXPECT_GE(p.ScaleVar(g), 0);
+            EXPECT_EQ(p.ScaleVar(g - 1), -1);
+            EXPECT_EQ(p.NumVariables(), q.NumVariables() + (s.scale_segment[first] > g ? 1 : 0));
+        }
+        TrajectoryState before = s;  // the segment before the prior's: no walk term reads it
+        before.scales[g - 1] = 1.3;
+        EXPECT_EQ(objective(before, joint), objective(s, joint));
+        if (s.scale_segment[first] == g) {  // with a prior on the pose alone the walk reads it
+            EXPECT_GT(objective(before, pose_only), objective(s, pose_only) + 1.0);
+        }
+        TrajectoryState moved = s;  // the prior (and the steps) read the segment's own scale
+        moved.scales[g] += 0.2;
+        EXPECT_GT(objective(moved, joint), objective(s, joint) + 0.5);
+    }
 }
 
 TEST(WindowProblem, ObjectiveAtTheTruthIsOnlyThePreservationPrior) {

@@ -311,21 +311,43 @@ Linearisation<3> MapDistanceTerm::Linearise(double d, const Eigen::Vector3d& gra
     return {d, grad_d, std::max(rho_dd, 0.0), k * e * d * d};
 }
 
-double PosePriorTerm::Evaluate(const PoseVector& x, PoseVector* grad, PoseMatrix* hess) const {
-    const PoseVector e = x - mean;
-    const PoseVector ie = information * e;
+JointVector PosePriorTerm::JointMean() const {
+    JointVector m;
+    m << mean, HasScale() ? scale_mean : 0.0;
+    return m;
+}
+
+JointMatrix PosePriorTerm::JointInformation() const {
+    JointMatrix i = JointMatrix::Zero();
+    i.topLeftCorner<4, 4>() = information;
+    if (HasScale()) {
+        i.topRightCorner<4, 1>() = cross;
+        i.bottomLeftCorner<1, 4>() = cross.transpose();
+        i(4, 4) = scale_information;
+    }
+    return i;
+}
+
+double PosePriorTerm::Evaluate(const JointVector& x, JointVector* grad, JointMatrix* hess) const {
+    JointVector e = x - JointMean();
+    if (!HasScale()) e[4] = 0.0;
+    const JointMatrix info = JointInformation();
+    const JointVector ie = info * e;
     if (grad) *grad = ie;
-    if (hess) *hess = information;
+    if (hess) *hess = info;
     return 0.5 * e.dot(ie);
 }
 
-std::array<Linearisation<4>, 4> PosePriorTerm::Linearise(const PoseVector& x) const {
-    const Eigen::SelfAdjointEigenSolver<PoseMatrix> eigen(information);
-    std::array<Linearisation<4>, 4> out;
-    for (int k = 0; k < 4; ++k) {
-        Linearisation<4>& l = out[k];
+std::array<Linearisation<5>, 5> PosePriorTerm::Linearise(const JointVector& x) const {
+    JointVector e = x - JointMean();
+    if (!HasScale()) e[4] = 0.0;
+    const Eigen::SelfAdjointEigenSolver<JointMatrix> eigen(JointInformation());
+    std::array<Linearisation<5>, 5> out;
+    for (int k = 0; k < 5; ++k) {
+        Linearisation<5>& l = out[k];
         l.jacobian = eigen.eigenvectors().col(k);
-        l.residual = l.jacobian.dot(x - mean);
+        if (!HasScale()) l.jacobian[4] = 0.0;
+        l.residual = l.jacobian.dot(e);
         l.information = std::max(eigen.eigenvalues()[k], 0.0);
         l.chi2 = l.information * l.residual * l.residual;
     }

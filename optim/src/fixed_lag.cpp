@@ -11,17 +11,17 @@
 namespace driftcorr {
 namespace {
 
-// The number of pose variables of `problem` (they come first; the scales follow).
-int PoseVariables(const WindowProblem& problem) { return problem.PoseVar(problem.last(), 3) + 1; }
+// The number of pose and scale variables of `problem` (they come first; the heading-rate biases
+// follow). `last_segment`: the scale segment of the problem's last step.
+int JointVariables(const WindowProblem& problem, int last_segment) {
+    return problem.ScaleVar(last_segment) + 1;
+}
 
-// The Gauss-Newton information of `problem` at its initial point over its pose variables, the
-// scales held at their values (conditioned on: the next window holds the earlier segments' scales
-// fixed, so a prior that had integrated them out would count their uncertainty twice, once in the
-// boundary's along-track spread and once in the window's free scale). A fixed height (planar
-// mode: no term sees it) gets a unit diagonal so that the matrix can be factored without coupling
-// it to anything.
-Eigen::SparseMatrix<double> Information(const WindowProblem& problem, bool fix_height) {
-    const int n = PoseVariables(problem);
+// The Gauss-Newton information of `problem` at its initial point over its pose and scale
+// variables, the heading-rate biases held at their values. A fixed height (planar mode: no term
+// sees it) gets a unit diagonal so that the matrix can be factored without coupling it to
+// anything.
+Eigen::SparseMatrix<double> Information(const WindowProblem& problem, int n, bool fix_height) {
     std::vector<double> x(problem.NumVariables());
     problem.InitialPoint(x.data());
     std::vector<LinearisedTerm> terms;
@@ -51,34 +51,38 @@ Eigen::SparseMatrix<double> Information(const WindowProblem& problem, bool fix_h
     return h;
 }
 
-// The marginal of pose `pose` under `problem`'s NLL given the scales, linearised at its initial
-// point x0 (the state): f(x0 + d) ~ f(x0) + g^T d + d^T H d / 2 (H Gauss-Newton, over the pose
-// variables). Its minimiser d* = -H^-1 g and covariance H^-1, read at the pose's variables: the
-// mean shift d*_pose and the 4x4 block.
-struct PoseMarginal {
-    PoseMatrix sigma;
-    PoseVector shift;
+// The joint marginal of pose `pose` and the scale of `segment` under `problem`'s NLL (the
+// heading-rate biases given), linearised at its initial point x0 (the state):
+// f(x0 + d) ~ f(x0) + g^T d + d^T H d / 2 (H Gauss-Newton, over the pose and scale variables).
+// Its minimiser d* = -H^-1 g and covariance H^-1, read at the five variables: the mean shift and
+// the 5x5 block.
+struct JointMarginal {
+    JointMatrix sigma;
+    JointVector shift;
 };
 
-std::optional<PoseMarginal> Marginal(const WindowProblem& problem, std::size_t pose,
-                                     bool fix_height) {
-    const Eigen::SparseMatrix<double> h = Information(problem, fix_height);
+std::optional<JointMarginal> Marginal(const WindowProblem& problem, std::size_t pose, int segment,
+                                      bool fix_height) {
+    const int n = JointVariables(problem, segment);
+    const Eigen::SparseMatrix<double> h = Information(problem, n, fix_height);
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
-    const int n = PoseVariables(problem);
-    PoseMarginal m;
+    const int vars[5] = {problem.PoseVar(pose, 0), problem.PoseVar(pose, 1),
+                         problem.PoseVar(pose, 2), problem.PoseVar(pose, 3),
+                         problem.ScaleVar(segment)};
+    JointMarginal m;
     Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < 5; ++c) {
         e.setZero();
-        e[problem.PoseVar(pose, c)] = 1.0;
+        e[vars[c]] = 1.0;
         const Eigen::VectorXd col = ldlt.solve(e);
-        for (int r = 0; r < 4; ++r) m.sigma(r, c) = col[problem.PoseVar(pose, r)];
+        for (int r = 0; r < 5; ++r) m.sigma(r, c) = col[vars[r]];
     }
     std::vector<double> x0(problem.NumVariables()), g(problem.NumVariables());
     problem.InitialPoint(x0.data());
     problem.Gradient(x0.data(), g.data());
     const Eigen::VectorXd step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(g.data(), n));
-    for (int c = 0; c < 4; ++c) m.shift[c] = step[problem.PoseVar(pose, c)];
+    for (int c = 0; c < 5; ++c) m.shift[c] = step[vars[c]];
     if (!m.sigma.allFinite() || !m.shift.allFinite()) return std::nullopt;
     m.sigma = 0.5 * (m.sigma + m.sigma.transpose());
     if (fix_height) m.sigma.row(2).setZero(), m.sigma.col(2).setZero(), m.shift[2] = 0.0;
@@ -86,31 +90,38 @@ std::optional<PoseMarginal> Marginal(const WindowProblem& problem, std::size_t p
 }
 
 // The inverse on the variables that are not fixed (height excluded when fixed): a covariance from
-// an information matrix, or the other way round.
-std::optional<PoseMatrix> InverseOnFree(const PoseMatrix& sigma, bool fix_height) {
-    PoseMatrix info = PoseMatrix::Zero();
-    if (!fix_height) {
-        const Eigen::FullPivLU<PoseMatrix> lu(sigma);
-        if (!lu.isInvertible()) return std::nullopt;
-        info = lu.inverse();
-    } else {
-        const int idx[3] = {0, 1, 3};
-        Eigen::Matrix3d s3;
-        for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 3; ++c) s3(r, c) = sigma(idx[r], idx[c]);
-        }
-        const Eigen::FullPivLU<Eigen::Matrix3d> lu(s3);
-        if (!lu.isInvertible()) return std::nullopt;
-        const Eigen::Matrix3d i3 = lu.inverse();
-        for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 3; ++c) info(idx[r], idx[c]) = i3(r, c);
-        }
+// an information matrix, or the other way round. N = 4 (a pose) or 5 (a pose and its scale).
+template <int N>
+std::optional<Eigen::Matrix<double, N, N>> InverseOnFree(const Eigen::Matrix<double, N, N>& m,
+                                                         bool fix_height) {
+    using Matrix = Eigen::Matrix<double, N, N>;
+    std::vector<int> idx;
+    for (int k = 0; k < N; ++k) {
+        if (!(fix_height && k == 2)) idx.push_back(k);
     }
-    if (!info.allFinite()) return std::nullopt;
-    return PoseMatrix(0.5 * (info + info.transpose()));
+    const int f = static_cast<int>(idx.size());
+    Eigen::MatrixXd sub(f, f);
+    for (int r = 0; r < f; ++r) {
+        for (int c = 0; c < f; ++c) sub(r, c) = m(idx[r], idx[c]);
+    }
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(sub);
+    if (!lu.isInvertible()) return std::nullopt;
+    const Eigen::MatrixXd inv = lu.inverse();
+    Matrix out = Matrix::Zero();
+    for (int r = 0; r < f; ++r) {
+        for (int c = 0; c < f; ++c) out(idx[r], idx[c]) = inv(r, c);
+    }
+    if (!out.allFinite()) return std::nullopt;
+    return Matrix(0.5 * (out + out.transpose()));
 }
 
-PoseVector ToVector(const PoseState& p) { return PoseVector(p.p.x(), p.p.y(), p.p.z(), p.yaw_rad); }
+// The boundary pose's covariance under `prior` (its scale integrated out).
+std::optional<PoseMatrix> BoundaryCovariance(const PosePriorTerm& prior, bool fix_height) {
+    if (!prior.HasScale()) return InverseOnFree<4>(prior.information, fix_height);
+    const std::optional<JointMatrix> sigma = InverseOnFree<5>(prior.JointInformation(), fix_height);
+    if (!sigma) return std::nullopt;
+    return PoseMatrix(sigma->topLeftCorner<4, 4>());
+}
 
 }  // namespace
 
@@ -122,11 +133,20 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
     const WindowProblem problem(s, field, model, first, last,
                                 std::vector<std::uint8_t>(last - first + 1, 0),
                                 WindowUse::kLinearise, prior);
-    const std::optional<PoseMarginal> m = Marginal(problem, last, s.fix_height);
+    const int segment = s.scale_segment[last];
+    const std::optional<JointMarginal> m = Marginal(problem, last, segment, s.fix_height);
     if (!m) return std::nullopt;
-    const std::optional<PoseMatrix> info = InverseOnFree(m->sigma, s.fix_height);
+    const std::optional<JointMatrix> info = InverseOnFree<5>(m->sigma, s.fix_height);
     if (!info) return std::nullopt;
-    return PosePriorTerm{ToVector(s.poses[last]) + m->shift, *info};
+    const PoseState& b = s.poses[last];
+    PosePriorTerm out;
+    out.mean = PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad) + m->shift.head<4>();
+    out.information = info->topLeftCorner<4, 4>();
+    out.scale_segment = segment;
+    out.scale_mean = s.scales[segment] + m->shift[4];
+    out.cross = info->topRightCorner<4, 1>();
+    out.scale_information = (*info)(4, 4);
+    return out;
 }
 
 FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
@@ -206,7 +226,7 @@ std::optional<PoseMatrix> FixedLagSmoother::EndCovariance(
     j(0, 3) = -(e.p.y() - b.p.y());
     j(1, 3) = e.p.x() - b.p.x();
     if (state_.fix_height) j(2, 2) = 0.0;
-    const std::optional<PoseMatrix> sigma_b = InverseOnFree(prior->information, state_.fix_height);
+    const std::optional<PoseMatrix> sigma_b = BoundaryCovariance(*prior, state_.fix_height);
     if (!sigma_b) return std::nullopt;
     return PoseMatrix(sigma + j * *sigma_b * j.transpose());
 }

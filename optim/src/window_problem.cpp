@@ -98,6 +98,9 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
     DRIFTCORR_CHECK(first >= 1 && first <= last && last < state.poses.size(), "bad window");
     DRIFTCORR_CHECK(constrained.size() == last - first + 1, "one constraint flag per window pose");
     seg_first_ = state.scale_segment[first];
+    // A prior joint with its segment's scale makes that scale a variable (it summarises the walk
+    // and range terms of that segment and before).
+    if (prior_ && prior_->HasScale()) seg_first_ = std::min(seg_first_, prior_->scale_segment);
     seg_last_ = state.scale_segment[last];
     n_vars_ = 4 * static_cast<int>(last - var_first_ + 1) + (seg_last_ - seg_first_ + 1);
     if (HasBias()) {
@@ -215,6 +218,7 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
 // (robust) random walk from the one before; each the plausible range (ModelConfig).
 void WindowProblem::AddScaleBlocks() {
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
+        if (prior_ && prior_->scale_segment == sgm) continue;  // in the boundary prior
         const RandomWalkTerm walk =
             sgm == 0 ? RandomWalkTerm{cfg_.scale_prior_sigma, 1.0, 0.0}
                      : RandomWalkTerm{cfg_.scale_rw_sigma, 1.0, cfg_.scale_rw_robust_k};
@@ -259,6 +263,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
         blocks_.push_back(
             std::make_unique<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
         for (int c = 0; c < 4; ++c) blocks_.back()->Bind(c, PoseVar(first_ - 1, c), 0.0);
+        if (prior_->HasScale()) blocks_.back()->Bind(4, ScaleVar(prior_->scale_segment), 0.0);
     }
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
         for (int c = 0; c < 3; ++c)

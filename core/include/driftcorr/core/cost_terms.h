@@ -154,14 +154,32 @@ struct MapDistanceTerm {
 /// the prior says nothing about (a fixed height) are zero. Quadratic: the Hessian is I everywhere.
 using PoseVector = Eigen::Matrix<double, 4, 1>;
 using PoseMatrix = Eigen::Matrix<double, 4, 4>;
+/// With scale_segment >= 0 the prior is joint with the step-length scale of that segment (the one
+/// the boundary pose's step belongs to): variables [x, y, z, yaw, scale], mean (mean, scale_mean),
+/// information [[information, cross], [cross^T, scale_information]] (JointInformation). The
+/// scale's marginal then travels with the pose: a window that learns the scale was wrong can
+/// move it, and the boundary with it along the track.
+using JointVector = Eigen::Matrix<double, 5, 1>;
+using JointMatrix = Eigen::Matrix<double, 5, 5>;
 struct PosePriorTerm {
     PoseVector mean = PoseVector::Zero();
     PoseMatrix information = PoseMatrix::Zero();
-    double Evaluate(const PoseVector& x, PoseVector* grad, PoseMatrix* hess) const;
+    int scale_segment = -1;  ///< -1: a prior on the pose alone
+    double scale_mean = 1.0;
+    PoseVector cross = PoseVector::Zero();
+    double scale_information = 0.0;
+
+    bool HasScale() const { return scale_segment >= 0; }
+    int Size() const { return HasScale() ? 5 : 4; }
+    JointVector JointMean() const;
+    JointMatrix JointInformation() const;
+    /// Over the first Size() entries of x (the pose, then the scale when HasScale()).
+    double Evaluate(const JointVector& x, JointVector* grad, JointMatrix* hess) const;
     /// I = V diag(lambda) V^T: one residual per eigenvector, r_k = v_k . (x - mean), with
     /// information max(lambda_k, 0); the sum of information_k J_k J_k^T is I (up to a negative
-    /// eigenvalue from round-off, dropped).
-    std::array<Linearisation<4>, 4> Linearise(const PoseVector& x) const;
+    /// eigenvalue from round-off, dropped). Size() entries; with a pose prior alone the fifth
+    /// entry is empty (zero information) and its jacobians' fifth component zero.
+    std::array<Linearisation<5>, 5> Linearise(const JointVector& x) const;
 };
 
 }  // namespace driftcorr

@@ -12,8 +12,9 @@
 //    (chunk_m of path, or max_chunk_poses poses) the request also allows restarts from other
 //    step-length scale hypotheses. A solve is a fixed-lag window (optim/fixed_lag.h): the trailing
 //    window_m of path ending at the newest pose, so its cost does not grow with the trajectory;
-//    its boundary pose is a variable under the marginalised prior of the poses before it
-//    (boundary_prior; false: held at its last solution, as the batch windows do). Its solution
+//    its boundary pose and that pose's step-length scale are variables under the marginalised
+//    prior of the poses before it (boundary_prior; false: held at their last solution, as the
+//    batch windows do). Its solution
 //    replaces the causal estimates of the window's poses and the poses pushed since are
 //    re-composed onto it. Outputs already returned are not changed (causal).
 //  - The worker always works on the newest data: when it is free it solves the window that ends

@@ -170,27 +170,37 @@ private:
     MapDistanceTerm term_;
 };
 
-/// The prior on a fixed-lag window's boundary pose (core PosePriorTerm) over its [x, y, z, yaw];
-/// linearised as one residual per eigenvector of its information.
+/// The prior on a fixed-lag window's boundary pose (core PosePriorTerm) over its [x, y, z, yaw],
+/// and the scale of its segment when the prior carries one; linearised as one residual per
+/// eigenvector of its information.
 class BoundaryPriorBlock final : public TermBlock {
 public:
     BoundaryPriorBlock(const PosePriorTerm& term, int pose)
-        : TermBlock(TermFamily::kBoundaryPrior, 4), term_(term) {
+        : TermBlock(TermFamily::kBoundaryPrior, term.Size()), term_(term) {
         set_pose(pose);
     }
     double Evaluate(const BlockContext&, const BlockVector& x, BlockVector* grad,
                     BlockMatrix* hess) const override {
-        PoseVector g;
-        PoseMatrix h;
-        const double cost = term_.Evaluate(PoseVector(x), grad ? &g : nullptr, hess ? &h : nullptr);
-        if (grad) *grad = g;
-        if (hess) *hess = h;
+        const int n = size();
+        JointVector xj = JointVector::Zero();
+        xj.head(n) = x.head(n);
+        JointVector g;
+        JointMatrix h;
+        const double cost = term_.Evaluate(xj, grad ? &g : nullptr, hess ? &h : nullptr);
+        if (grad) *grad = g.head(n);
+        if (hess) *hess = h.topLeftCorner(n, n);
         return cost;
     }
     void Linearise(const BlockContext&, const BlockVector& x,
                    std::vector<LinearisedTerm>& out) const override {
-        for (const Linearisation<4>& l : term_.Linearise(PoseVector(x))) {
-            out.push_back(FromLinearisation(l));
+        const int n = size();
+        JointVector xj = JointVector::Zero();
+        xj.head(n) = x.head(n);
+        for (const Linearisation<5>& l : term_.Linearise(xj)) {
+            if (l.jacobian.head(n).squaredNorm() < 0.5) continue;  // the absent scale's axis
+            LinearisedTerm t = FromLinearisation(l);
+            t.size = n;
+            out.push_back(t);
         }
     }
 

@@ -5,7 +5,8 @@
 // Pose first-1 and everything before it is held fixed, at the values the state has when the
 // problem is built; with a boundary prior (a fixed-lag window whose earlier poses are
 // marginalised) pose first-1 is a variable too, tied to the window by the terms of step `first`
-// and to the past by the prior (core PosePriorTerm).
+// and to the past by the prior (core PosePriorTerm); a prior joint with the scale of pose
+// first-1's segment makes that scale a variable as well, and replaces its walk and range terms.
 //
 // Variables: per pose (x, y, z, yaw) in the ENU map frame, then one scale per scale segment
 // touched by the window's steps, then one heading-rate bias per bias segment they touch.
@@ -68,7 +69,9 @@ public:
     /// Preconditions: 1 <= first <= last < poses.size(); field may be null (no map terms);
     /// HessianValues only with use == kSolve (with kLinearise HessianStructure() is empty).
     /// `boundary_prior`: pose first-1 becomes a variable with this prior (its map term is not
-    /// added: the prior summarises it); none: pose first-1 is held fixed.
+    /// added: the prior summarises it), and so does the scale of segment
+    /// boundary_prior->scale_segment when the prior carries it (its walk and range terms are not
+    /// added either); none: pose first-1 is held fixed.
     WindowProblem(TrajectoryState& state, const TraversableField* field, const ModelConfig& cfg,
                   std::size_t first, std::size_t last, std::vector<std::uint8_t> constrained,
                   WindowUse use = WindowUse::kSolve,
