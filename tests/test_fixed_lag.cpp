@@ -66,7 +66,7 @@ struct DenseMarginal {
     Eigen::VectorXd shift;
 };
 DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std::size_t first,
-                              std::size_t last, const PosePriorTerm& prior) {
+                              std::size_t last, const PosePriorTerm& prior, bool with_scale) {
     const WindowProblem p(s, nullptr, model, first, last,
                           std::vector<std::uint8_t>(last - first + 1, 0), WindowUse::kLinearise,
                           prior);
@@ -76,8 +76,10 @@ DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std:
     std::vector<double> g(p.NumVariables());
     p.Gradient(x.data(), g.data());
     const int scale = p.ScaleVar(s.scale_segment[last]);
+    const int end =
+        with_scale ? scale + 1 : p.PoseVar(last, 3) + 1;  // the scales given: poses only
     std::vector<int> keep;
-    for (int k = 0; k <= scale; ++k) {
+    for (int k = 0; k < end; ++k) {
         if (!(s.fix_height && k < p.PoseVar(last, 3) + 1 && k % 4 == 2)) keep.push_back(k);
     }
     Eigen::MatrixXd hk(keep.size(), keep.size());
@@ -89,7 +91,7 @@ DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std:
     for (std::size_t r = 0; r < keep.size(); ++r) gk[r] = g[keep[r]];
     const Eigen::VectorXd step = -sigma * gk;
     std::vector<int> block;
-    for (int c = 0; c < 5; ++c) {
+    for (int c = 0; c < (with_scale ? 5 : 4); ++c) {
         if (s.fix_height && c == 2) continue;
         const int var = c < 4 ? p.PoseVar(last, c) : scale;
         for (std::size_t k = 0; k < keep.size(); ++k) {
@@ -104,11 +106,12 @@ DenseMarginal DenseMarginalOf(TrajectoryState& s, const ModelConfig& model, std:
     return out;
 }
 
-// The joint information on its free entries (the height dropped when fixed).
+// The prior's information on its free entries (the height dropped when fixed; the scale when the
+// prior has none).
 Eigen::MatrixXd FreeInformation(const PosePriorTerm& t, bool fix_height) {
     const JointMatrix info = t.JointInformation();
     std::vector<int> idx;
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < t.Size(); ++k) {
         if (!(fix_height && k == 2)) idx.push_back(k);
     }
     Eigen::MatrixXd out(idx.size(), idx.size());
@@ -119,28 +122,32 @@ Eigen::MatrixXd FreeInformation(const PosePriorTerm& t, bool fix_height) {
 }
 
 // The marginal of the boundary pose and its segment's scale: the Schur complement of the window's
-// information onto them, from a prior on the pose alone or on the pose and its scale.
+// information onto them, from a prior on the pose alone or on the pose and its scale; without
+// the scale (with_scale false), of the pose alone given the scales.
 TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
     const ModelConfig model = Model();
     for (bool fix_height : {false, true}) {
-        for (bool prior_scale : {false, true}) {
+        for (int variant = 0; variant < 3; ++variant) {
+            const bool prior_scale = variant == 1, with_scale = variant < 2;
             SCOPED_TRACE(std::string(fix_height ? "planar" : "free height") +
-                         (prior_scale ? ", prior with its scale" : ", prior on the pose"));
+                         (prior_scale ? ", prior with its scale" : ", prior on the pose") +
+                         (with_scale ? "" : ", marginal of the pose alone"));
             TrajectoryState s = test::StateFrom(Curve(), model, fix_height);
             const PosePriorTerm prior = SomePrior(s, 4, prior_scale);
             // Off the estimate (and the prior's mean) the old terms have a gradient: the mean
             // moves.
             for (std::size_t i = 5; i <= 17; ++i) s.poses[i].p.x() += 0.02 * double(i - 4);
-            const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior);
+            const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior, with_scale);
             ASSERT_TRUE(marginal.has_value());
-            ASSERT_TRUE(marginal->HasScale());
-            EXPECT_EQ(marginal->scale_segment, s.scale_segment[17]);
+            ASSERT_EQ(marginal->HasScale(), with_scale);
+            if (with_scale) EXPECT_EQ(marginal->scale_segment, s.scale_segment[17]);
             const PoseState& b = s.poses[17];
             JointVector at;
-            at << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad, s.scales[s.scale_segment[17]];
+            at << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad,
+                with_scale ? s.scales[s.scale_segment[17]] : 0.0;
             const JointVector shift = marginal->JointMean() - at;
-            const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior);
-            for (int r = 0, k = 0; r < 5; ++r) {
+            const DenseMarginal reference = DenseMarginalOf(s, model, 5, 17, prior, with_scale);
+            for (int r = 0, k = 0; r < (with_scale ? 5 : 4); ++r) {
                 if (fix_height && r == 2) {
                     EXPECT_EQ(shift[r], 0.0);
                     continue;

@@ -62,27 +62,31 @@ struct JointMarginal {
 };
 
 std::optional<JointMarginal> Marginal(const WindowProblem& problem, std::size_t pose, int segment,
-                                      bool fix_height) {
-    const int n = JointVariables(problem, segment);
+                                      bool with_scale, bool fix_height) {
+    const int n =
+        with_scale ? JointVariables(problem, segment) : problem.PoseVar(problem.last(), 3) + 1;
     const Eigen::SparseMatrix<double> h = Information(problem, n, fix_height);
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
     const int vars[5] = {problem.PoseVar(pose, 0), problem.PoseVar(pose, 1),
                          problem.PoseVar(pose, 2), problem.PoseVar(pose, 3),
                          problem.ScaleVar(segment)};
+    const int k = with_scale ? 5 : 4;
     JointMarginal m;
+    m.sigma.setZero();
+    m.shift.setZero();
     Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
-    for (int c = 0; c < 5; ++c) {
+    for (int c = 0; c < k; ++c) {
         e.setZero();
         e[vars[c]] = 1.0;
         const Eigen::VectorXd col = ldlt.solve(e);
-        for (int r = 0; r < 5; ++r) m.sigma(r, c) = col[vars[r]];
+        for (int r = 0; r < k; ++r) m.sigma(r, c) = col[vars[r]];
     }
     std::vector<double> x0(problem.NumVariables()), g(problem.NumVariables());
     problem.InitialPoint(x0.data());
     problem.Gradient(x0.data(), g.data());
     const Eigen::VectorXd step = ldlt.solve(-Eigen::Map<const Eigen::VectorXd>(g.data(), n));
-    for (int c = 0; c < 5; ++c) m.shift[c] = step[vars[c]];
+    for (int c = 0; c < k; ++c) m.shift[c] = step[vars[c]];
     if (!m.sigma.allFinite() || !m.shift.allFinite()) return std::nullopt;
     m.sigma = 0.5 * (m.sigma + m.sigma.transpose());
     if (fix_height) m.sigma.row(2).setZero(), m.sigma.col(2).setZero(), m.shift[2] = 0.0;
@@ -128,19 +132,28 @@ std::optional<PoseMatrix> BoundaryCovariance(const PosePriorTerm& prior, bool fi
 std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const TraversableField* field,
                                            const ModelConfig& model, std::size_t first,
                                            std::size_t last,
-                                           const std::optional<PosePriorTerm>& prior) {
+                                           const std::optional<PosePriorTerm>& prior,
+                                           bool with_scale) {
     DRIFTCORR_CHECK(first >= 1 && first <= last && last < s.poses.size(), "bad marginal window");
     const WindowProblem problem(s, field, model, first, last,
                                 std::vector<std::uint8_t>(last - first + 1, 0),
                                 WindowUse::kLinearise, prior);
     const int segment = s.scale_segment[last];
-    const std::optional<JointMarginal> m = Marginal(problem, last, segment, s.fix_height);
+    const std::optional<JointMarginal> m =
+        Marginal(problem, last, segment, with_scale, s.fix_height);
     if (!m) return std::nullopt;
-    const std::optional<JointMatrix> info = InverseOnFree<5>(m->sigma, s.fix_height);
-    if (!info) return std::nullopt;
     const PoseState& b = s.poses[last];
     PosePriorTerm out;
     out.mean = PoseVector(b.p.x(), b.p.y(), b.p.z(), b.yaw_rad) + m->shift.head<4>();
+    if (!with_scale) {
+        const std::optional<PoseMatrix> info =
+            InverseOnFree<4>(PoseMatrix(m->sigma.topLeftCorner<4, 4>()), s.fix_height);
+        if (!info) return std::nullopt;
+        out.information = *info;
+        return out;
+    }
+    const std::optional<JointMatrix> info = InverseOnFree<5>(m->sigma, s.fix_height);
+    if (!info) return std::nullopt;
     out.information = info->topLeftCorner<4, 4>();
     out.scale_segment = segment;
     out.scale_mean = s.scales[segment] + m->shift[4];
@@ -151,11 +164,12 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
 
 FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
                                    const TraversableField* field, const CorrectorConfig& config,
-                                   bool marginalise)
+                                   bool marginalise, bool boundary_scale)
     : state_(StartState(pose0, fix_height, config.model)),
       field_(field),
       cfg_(config),
-      marginalise_(marginalise) {
+      marginalise_(marginalise),
+      boundary_scale_(boundary_scale) {
     dist_.assign(1, 0.0);
 }
 
@@ -186,12 +200,12 @@ std::optional<PosePriorTerm> FixedLagSmoother::BoundaryPrior(std::size_t boundar
     std::size_t from = window_first_;
     if (solved_end_ >= window_first_) {  // the solved part: with the map
         const std::size_t to = std::min(boundary, solved_end_);
-        prior = MarginalPrior(state_, field_, cfg_.model, from, to, prior);
+        prior = MarginalPrior(state_, field_, cfg_.model, from, to, prior, boundary_scale_);
         if (!prior) return std::nullopt;
         from = to + 1;
     }
     if (boundary >= from) {  // never solved: odometry only
-        prior = MarginalPrior(state_, nullptr, cfg_.model, from, boundary, prior);
+        prior = MarginalPrior(state_, nullptr, cfg_.model, from, boundary, prior, boundary_scale_);
     }
     return prior;
 }

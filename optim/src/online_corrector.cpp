@@ -357,7 +357,8 @@ void OnlineCorrector::RunSolve(std::size_t end, bool restarts) {
     std::size_t k = 0;
     if (!solver_) {
         solver_ = std::make_unique<FixedLagSmoother>(entries.front().initial, fix_height_, field_,
-                                                     cfg_.corrector, cfg_.boundary_prior);
+                                                     cfg_.corrector, cfg_.boundary_prior,
+                                                     cfg_.boundary_scale);
         k = 1;
     }
     for (; k < entries.size(); ++k) solver_->Append(entries[k].initial, entries[k].step);

@@ -73,19 +73,24 @@ struct FixedLagSolution {
 /// their 5x5 covariance (zero height row and column when heights are fixed). nullopt when the
 /// curvature is singular (an unobserved variable). Precondition: 1 <= first <= last <
 /// s.poses.size().
+/// `with_scale` false: the marginal of the pose alone, the scales held at their values (a prior
+/// without scale_segment).
 std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const TraversableField* field,
                                            const ModelConfig& model, std::size_t first,
                                            std::size_t last,
-                                           const std::optional<PosePriorTerm>& prior);
+                                           const std::optional<PosePriorTerm>& prior,
+                                           bool with_scale = true);
 
 class FixedLagSmoother {
 public:
     /// Starts from the known pose 0. `field` may be null (odometry only) and must outlive this.
     /// Uses config.window_m, max_window_poses, model, window_ipopt and the restart settings.
     /// `marginalise`: the boundary pose carries the marginalised prior; false: it is held fixed
-    /// at its last solution (the batch windows' rule).
+    /// at its last solution (the batch windows' rule). `boundary_scale`: the prior is joint with
+    /// the boundary segment's scale (MarginalPrior with_scale).
     FixedLagSmoother(const PoseState& pose0, bool fix_height, const TraversableField* field,
-                     const CorrectorConfig& config, bool marginalise = true);
+                     const CorrectorConfig& config, bool marginalise = true,
+                     bool boundary_scale = true);
 
     /// Appends pose i = size() with its observation (the step from pose i-1); `initial` gives
     /// its height in planar mode (positions and heading are dead-reckoned when solved).
@@ -112,6 +117,7 @@ private:
     const TraversableField* field_;
     CorrectorConfig cfg_;
     bool marginalise_;
+    bool boundary_scale_;
     std::vector<double> dist_;                   ///< path length from pose 0 [m]
     double elapsed_s_ = 0.0;                     ///< time of the appended steps [s]
     std::size_t solved_end_ = 0;                 ///< last pose of the last solve
