@@ -328,9 +328,9 @@ JointMatrix PosePriorTerm::JointInformation() const {
     return i;
 }
 
+// Without a scale the joint information's fifth row and column are zero: x[4] plays no part.
 double PosePriorTerm::Evaluate(const JointVector& x, JointVector* grad, JointMatrix* hess) const {
-    JointVector e = x - JointMean();
-    if (!HasScale()) e[4] = 0.0;
+    const JointVector e = x - JointMean();
     const JointMatrix info = JointInformation();
     const JointVector ie = info * e;
     if (grad) *grad = ie;
@@ -339,8 +339,7 @@ double PosePriorTerm::Evaluate(const JointVector& x, JointVector* grad, JointMat
 }
 
 std::array<Linearisation<5>, 5> PosePriorTerm::Linearise(const JointVector& x) const {
-    JointVector e = x - JointMean();
-    if (!HasScale()) e[4] = 0.0;
+    const JointVector e = x - JointMean();
     const Eigen::SelfAdjointEigenSolver<JointMatrix> eigen(JointInformation());
     std::array<Linearisation<5>, 5> out;
     for (int k = 0; k < 5; ++k) {

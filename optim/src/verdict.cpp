@@ -18,6 +18,14 @@ public:
     explicit Findings(Verdict& v) : v_(v) {}
     void Degraded(const std::string& why) { Add(VerdictLevel::kDegraded, "degraded: " + why); }
     void Failed(const std::string& why) { Add(VerdictLevel::kFailed, "failed: " + why); }
+    /// A finding over `share` of the poses: failed beyond failed_share, else degraded.
+    void ByShare(double share, double failed_share, const std::string& why) {
+        if (share > failed_share) {
+            Failed(why);
+        } else {
+            Degraded(why);
+        }
+    }
 
 private:
     void Add(VerdictLevel level, const std::string& reason) {
@@ -178,11 +186,7 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
                              FormatFixed(worst_est, 1) + " m, the correction by " +
                              FormatFixed(worst_cor, 1) +
                              " m): a floor change the walk does not support, likely a wrong floor";
-    if (share > c.off_map_failed_share) {
-        f.Failed(what);
-    } else {
-        f.Degraded(what);
-    }
+    f.ByShare(share, c.off_map_failed_share, what);
 }
 
 // Level walking between floors (VerdictConfig::floor_heights_m): runs of poses off every floor
@@ -233,11 +237,7 @@ void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor
         FormatFixed(worst_m, 1) + " m from every floor (" + FormatFixed(longest_s, 0) +
         " s in a row, while the estimate's height stays level): between floors, where only "
         "stairs or a lift could hold them; their floor is not supported";
-    if (share > c.off_map_failed_share) {
-        f.Failed(what);
-    } else {
-        f.Degraded(what);
-    }
+    f.ByShare(share, c.off_map_failed_share, what);
 }
 
 std::string Placement(const AnchorPlacement& p) {
