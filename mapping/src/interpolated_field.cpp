@@ -101,6 +101,22 @@ void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& s
         hyz * inv * invz, hxz * inv * invz, hyz * inv * invz, hzz * invz * invz;
 }
 
+// The value alone, summed as Accumulate sums it (the same bits).
+double AccumulateValue(const GridSpec& s, const std::vector<float>& v, const Stencil& st) {
+    double val = 0;
+    const int nk = st.planar ? 1 : 4;
+    for (int c = 0; c < nk; ++c) {
+        const double wz = st.planar ? 1.0 : st.bz.w[c];
+        for (int b = 0; b < 4; ++b) {
+            const float* row = &v[s.Index(st.i0, st.j0 + b, st.k0 + (st.planar ? 0 : c))];
+            double r = 0;
+            for (int a = 0; a < 4; ++a) r += st.bx.w[a] * row[a];
+            val += r * st.by.w[b] * wz;
+        }
+    }
+    return val;
+}
+
 }  // namespace
 
 InterpolatedField::InterpolatedField(const GridSpec& spec, std::vector<float> values)
@@ -114,6 +130,12 @@ std::optional<FieldSample> InterpolatedField::Query(const Eigen::Vector3d& p) co
     FieldSample out;
     Accumulate(spec_, values_, st, out);
     return out;
+}
+
+std::optional<double> InterpolatedField::Value(const Eigen::Vector3d& p) const {
+    Stencil st;
+    if (!MakeStencil(spec_, p, st)) return std::nullopt;
+    return AccumulateValue(spec_, values_, st);
 }
 
 bool InterpolatedField::QueryMany(const std::vector<const InterpolatedField*>& fields,

@@ -86,6 +86,13 @@ std::optional<FieldSample> TraversableField::QueryCentre(const Eigen::Vector3d& 
     });
 }
 
+std::optional<double> TraversableField::CentreValue(const Eigen::Vector3d& p_enu) const {
+    if (!tiled()) return centre_.Value(p_enu);
+    const int k = TileAt(p_enu);
+    if (k < 0) return std::nullopt;
+    return tiles_[k].centre.Value(p_enu);
+}
+
 std::optional<FieldSample> TraversableField::QueryCentreBilinear(const Eigen::Vector3d& p_enu) const {
     return QueryOne(p_enu, true, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
         return f.QueryBilinear(p);

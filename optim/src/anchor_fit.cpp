@@ -45,9 +45,9 @@ void Score(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableFiel
     std::size_t off = 0;
     for (std::size_t k = 0; k < lead.p_rel.size(); ++k) {
         const Eigen::Vector2d p = r * lead.p_rel[k] + shift;
-        const auto q = field.Query(Eigen::Vector3d(p.x(), p.y(), lead.up_m[k]));
-        const double d = q ? std::min(std::max(q->centre.value, 0.0), reach_m) : reach_m;
-        if (!q || q->centre.value > reach_m) ++off;
+        const auto q = field.CentreValue(Eigen::Vector3d(p.x(), p.y(), lead.up_m[k]));
+        const double d = q ? std::min(std::max(*q, 0.0), reach_m) : reach_m;
+        if (!q || *q > reach_m) ++off;
         sum += d * d;
     }
     const double n = double(std::max<std::size_t>(1, lead.p_rel.size()));

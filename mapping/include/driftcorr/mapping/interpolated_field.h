@@ -29,6 +29,8 @@ public:
     /// (p closer than one cell to the border) or the grid is empty. For planar grids p.z() is
     /// ignored.
     std::optional<FieldSample> Query(const Eigen::Vector3d& p) const;
+    /// Query's value alone (the same number), without the derivatives.
+    std::optional<double> Value(const Eigen::Vector3d& p) const;
     /// Like Query but several fields sharing one spec are evaluated with one set of weights.
     static bool QueryMany(const std::vector<const InterpolatedField*>& fields,
                           const Eigen::Vector3d& p, std::vector<FieldSample>& out);

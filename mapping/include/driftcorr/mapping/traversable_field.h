@@ -41,6 +41,8 @@ public:
     std::optional<TraversableSample> Query(const Eigen::Vector3d& p_enu) const;
     /// The centre distance alone (B-spline), std::nullopt where Query has none.
     std::optional<FieldSample> QueryCentre(const Eigen::Vector3d& p_enu) const;
+    /// QueryCentre's value alone (the same number), without the derivatives.
+    std::optional<double> CentreValue(const Eigen::Vector3d& p_enu) const;
     /// InterpolatedField::QueryBilinear of the centre / corridor distance (the paper's method).
     std::optional<FieldSample> QueryCentreBilinear(const Eigen::Vector3d& p_enu) const;
     std::optional<FieldSample> QueryCorridorBilinear(const Eigen::Vector3d& p_enu) const;
