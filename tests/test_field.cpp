@@ -107,12 +107,71 @@ TEST_P(EdtTest, SignedDistanceMatchesItsDefinition) {
     }
 }
 
+TEST_P(EdtTest, CapKeepsTheDistancesWithinIt) {
+    const EdtCase c = GetParam();
+    const GridSpec s = Spec(c);
+    const std::vector<std::uint8_t> mask = RandomMask(s, c.density, c.seed);
+    const std::vector<float> full = EuclideanDistanceTransform(s, mask);
+    std::size_t dropped = 0;
+    for (double cap_cells : {0.0, 1.0, 2.5, 6.0}) {
+        const double cap = cap_cells * s.resolution_m;
+        const std::vector<float> capped = EuclideanDistanceTransform(s, mask, cap);
+        for (std::size_t n = 0; n < s.size(); ++n) {
+            if (full[n] <= cap) {
+                ASSERT_EQ(capped[n], full[n]) << "cap " << cap << ", sample " << n;
+            } else {
+                // Beyond the cap: the same number or more (up to +infinity), never less.
+                ASSERT_GE(capped[n], full[n])
+                    << "cap " << cap << ", sample " << n << ": " << capped[n] << " against "
+                    << full[n];
+                dropped += capped[n] > full[n];
+            }
+        }
+    }
+    // The cap does leave features out (else this test could not tell it from no cap).
+    if (c.density < 0.1) EXPECT_GT(dropped, 0u);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     RandomMasks, EdtTest,
     ::testing::Values(EdtCase{37, 23, 1, 0.25, 0.03, 11u}, EdtCase{37, 23, 1, 1.0, 0.005, 12u},
                       EdtCase{37, 23, 1, 0.5, 0.3, 13u}, EdtCase{1, 29, 1, 0.5, 0.1, 14u},
                       EdtCase{11, 9, 7, 0.5, 0.02, 21u}, EdtCase{11, 9, 7, 0.2, 0.1, 22u}),
     CaseName);
+
+TEST(SegmentRowSpan, HoldsEverySampleWithinReachAndIsTight) {
+    std::mt19937 rng(5u);
+    std::uniform_real_distribution<double> u(-10.0, 10.0), r(0.0, 4.0);
+    for (int trial = 0; trial < 200; ++trial) {
+        const Eigen::Vector2d a(u(rng), u(rng));
+        // A quarter of the segments degenerate, axis-parallel or tiny.
+        Eigen::Vector2d b(u(rng), u(rng));
+        if (trial % 8 == 0) b = a;
+        if (trial % 8 == 1) b.y() = a.y();
+        if (trial % 8 == 2) b.x() = a.x();
+        if (trial % 8 == 3) b = a + Eigen::Vector2d(1e-9, -1e-9);
+        const double reach = r(rng);
+        for (double y = -15.0; y <= 15.0; y += 0.37) {
+            double lo = 0.0, hi = 0.0;
+            const bool hit = SegmentRowSpan(a, b, reach, y, lo, hi);
+            bool any = false;
+            for (double x = -16.0; x <= 16.0; x += 0.05) {
+                const double d = PointSegmentDistance(Eigen::Vector2d(x, y), a, b);
+                if (d > reach) continue;
+                any = true;
+                ASSERT_TRUE(hit && x >= lo - 1e-9 && x <= hi + 1e-9)
+                    << "trial " << trial << ", y " << y << ", x " << x << " within reach, span ["
+                    << lo << ", " << hi << "]";
+            }
+            if (!hit) continue;
+            // Tight: the span's ends lie on the capsule's boundary.
+            EXPECT_NEAR(PointSegmentDistance(Eigen::Vector2d(lo, y), a, b), reach, 1e-6)
+                << "trial " << trial << ", y " << y << (any ? "" : " (no sample inside)");
+            EXPECT_NEAR(PointSegmentDistance(Eigen::Vector2d(hi, y), a, b), reach, 1e-6)
+                << "trial " << trial << ", y " << y;
+        }
+    }
+}
 
 TEST(Edt, EmptyMaskGivesInfinity) {
     for (int nz : {1, 5}) {

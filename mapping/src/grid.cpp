@@ -46,7 +46,7 @@ void Edt1d(const float* f, int n, float* d, int* v, float* z, float w = 1.0f) {
 // to the nearest feature is that to the last one before or the next one after, two sweeps (the
 // lower envelope is only needed once distances differ from 0 and infinity).
 void FeatureRows(const std::vector<std::uint8_t>& feature, const GridSpec& s,
-                 std::vector<float>& g) {
+                 std::vector<float>& g, float cap2) {
     const int n = s.nx;
     for (std::size_t base = 0; base < g.size(); base += std::size_t(n)) {
         const std::uint8_t* f = feature.data() + base;
@@ -61,6 +61,7 @@ void FeatureRows(const std::vector<std::uint8_t>& feature, const GridSpec& s,
             if (f[q]) next = q;
             if (next >= 0) d[q] = std::min(d[q], float(next - q));
             d[q] *= d[q];
+            if (d[q] > cap2) d[q] = kInf;
         }
     }
 }
@@ -101,10 +102,14 @@ void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
 }  // namespace
 
 std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
-                                              const std::vector<std::uint8_t>& feature) {
+                                              const std::vector<std::uint8_t>& feature,
+                                              double cap_m) {
     DRIFTCORR_CHECK(feature.size() == spec.size(), "feature mask does not match the grid");
     std::vector<float> g(spec.size());
-    FeatureRows(feature, spec, g);
+    // A site farther than the cap along x cannot make a distance within it (squared cells; a
+    // cell's margin against rounding).
+    const double cap_cells = cap_m / spec.resolution_m + 1.0;
+    FeatureRows(feature, spec, g, std::isfinite(cap_m) ? float(cap_cells * cap_cells) : kInf);
     EdtAxis(g, spec, 1);
     if (spec.nz > 1) EdtAxis(g, spec, 2);
     const float res = static_cast<float>(spec.resolution_m);
@@ -131,6 +136,56 @@ double PointSegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
     const double len2 = ab.squaredNorm();
     const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
     return (a + t * ab - p).norm();
+}
+
+namespace {
+
+// Widens [lo, hi] by the chord of the disc of radius r around c on the line at height y.
+void AddDiscChord(const Eigen::Vector2d& c, double r, double y, double& lo, double& hi) {
+    const double dy = y - c.y(), h2 = r * r - dy * dy;
+    if (h2 < 0.0) return;
+    const double h = std::sqrt(h2);
+    lo = std::min(lo, c.x() - h);
+    hi = std::max(hi, c.x() + h);
+}
+
+// Intersects [lo, hi] with {x : lo_v <= k * x + m <= hi_v}.
+void ClipLinear(double k, double m, double lo_v, double hi_v, double& lo, double& hi) {
+    if (k == 0.0) {
+        if (m < lo_v || m > hi_v) { lo = 1.0; hi = 0.0; }
+        return;
+    }
+    double x0 = (lo_v - m) / k, x1 = (hi_v - m) / k;
+    if (x0 > x1) std::swap(x0, x1);
+    lo = std::max(lo, x0);
+    hi = std::min(hi, x1);
+}
+
+}  // namespace
+
+bool SegmentRowSpan(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double reach, double y,
+                    double& lo, double& hi) {
+    // The capsule is the union of the discs at both ends and the band between them; its chord
+    // is the hull of theirs (the capsule is convex and each piece's chord lies in it).
+    lo = std::numeric_limits<double>::infinity();
+    hi = -lo;
+    AddDiscChord(a, reach, y, lo, hi);
+    AddDiscChord(b, reach, y, lo, hi);
+    const Eigen::Vector2d ab = b - a;
+    const double len = ab.norm();
+    if (len > 0.0) {
+        const Eigen::Vector2d u = ab / len;
+        // Band: 0 <= u . (p - a) <= len and |n . (p - a)| <= reach, n = (-u.y, u.x), p = (x, y).
+        double blo = -std::numeric_limits<double>::infinity(), bhi = -blo;
+        const double dy = y - a.y();
+        ClipLinear(u.x(), u.y() * dy - u.x() * a.x(), 0.0, len, blo, bhi);
+        ClipLinear(-u.y(), u.x() * dy + u.y() * a.x(), -reach, reach, blo, bhi);
+        if (blo <= bhi) {
+            lo = std::min(lo, blo);
+            hi = std::max(hi, bhi);
+        }
+    }
+    return lo <= hi;
 }
 
 CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,

@@ -51,8 +51,14 @@ void RasteriseSegment(Raster& r, const Eigen::Vector2d& a, const Eigen::Vector2d
     const GridSpec& s = r.spec;
     const double reach = hw + band, res = s.resolution_m;
     const auto [i0, j0, i1, j1] = SegmentCells(s, a, b, reach);
+    const double ox = r.whole.origin_m.x();
     for (int j = j0; j <= j1; ++j) {
-        for (int i = i0; i <= i1; ++i) {
+        // Only the samples of this row near the capsule's chord (a cell wider on each side).
+        double lo = 0.0, hi = 0.0;
+        if (!SegmentRowSpan(a, b, reach, r.whole.Position(0, j + r.dj).y(), lo, hi)) continue;
+        const int ri0 = std::max(i0, int(std::floor((lo - ox) / res)) - r.di - 1);
+        const int ri1 = std::min(i1, int(std::ceil((hi - ox) / res)) - r.di + 1);
+        for (int i = ri0; i <= ri1; ++i) {
             const Eigen::Vector2d p = r.whole.Position(i + r.di, j + r.dj).head<2>();
             const double d = PointSegmentDistance(p, a, b);
             if (d > reach) continue;
@@ -135,12 +141,15 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
                              config.exact_band_m);
         }
     }
+    // Both fields are capped at the truncation; the corridor's takes half a cell off the
+    // distance to an inside sample, so beyond truncation + a cell nothing is needed.
+    const double cap = config.truncation_m + config.resolution_m;
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     const bool side_by_side = (config.threads == 0 ? cores : unsigned(config.threads)) >= 2;
     std::future<std::vector<float>> to_corridor = std::async(
         side_by_side ? std::launch::async : std::launch::deferred,
-        [&r] { return EuclideanDistanceTransform(r.spec, r.inside); });
-    std::vector<float> centre = EuclideanDistanceTransform(r.spec, r.centre_seed);
+        [&r, cap] { return EuclideanDistanceTransform(r.spec, r.inside, cap); });
+    std::vector<float> centre = EuclideanDistanceTransform(r.spec, r.centre_seed, cap);
     std::vector<float> corridor = to_corridor.get();
     const float trunc = float(config.truncation_m), half = float(0.5 * config.resolution_m);
     for (std::size_t i = 0; i < n; ++i) {

@@ -2,6 +2,7 @@
 // Regular sample grids and the exact Euclidean distance transform.
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace driftcorr {
@@ -44,12 +45,22 @@ struct CellBox {
 CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                      double reach);
 
+/// The x interval [lo, hi] of the points of the line at height y that lie within `reach` of the
+/// segment ab (the capsule's chord), or false when the line misses the capsule. Exact up to
+/// rounding: widen it by a cell before testing samples against the distance.
+bool SegmentRowSpan(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double reach, double y,
+                    double& lo, double& hi);
+
 /// Exact Euclidean distance transform (Felzenszwalb & Huttenlocher 2012, separable lower
 /// envelope of parabolas, linear in the number of samples). Returns, for every sample, the
 /// distance in metres to the nearest sample whose `feature` is non-zero, or +infinity when the
-/// grid has no feature. Precondition: feature.size() == spec.size().
+/// grid has no feature. With `cap_m`, a distance beyond cap_m may come out larger, up to
+/// +infinity (the features farther than cap_m along x are left out of the second pass: a field
+/// truncated at cap_m needs no more); the distances up to cap_m are the same numbers.
+/// Precondition: feature.size() == spec.size().
 std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
-                                              const std::vector<std::uint8_t>& feature);
+                                              const std::vector<std::uint8_t>& feature,
+                                              double cap_m = std::numeric_limits<double>::infinity());
 
 /// Signed distance to a set: negative inside (distance to the nearest outside sample, minus
 /// half a cell), positive outside (distance to the nearest inside sample, minus half a cell), so
