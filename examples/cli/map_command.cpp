@@ -14,8 +14,8 @@
 #include "driftcorr/core/errors.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/mapping/atomic_file.h"
-#include "driftcorr/mapping/surface_io.h"
 #include "driftcorr/mapping/walkable_surface.h"
+#include "driftcorr/pipeline/surface_io_loader.h"
 
 namespace driftcorr::cli {
 namespace {
@@ -154,7 +154,7 @@ int Extract(const std::string& input, const std::string& output, WalkableSurface
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     double voxel_m = 0.0;
-    const std::vector<Eigen::Vector3d> cloud = ReadRawPoints(input, &voxel_m);
+    const std::vector<Eigen::Vector3d> cloud = pipeline::SurfaceIo().read_raw_points(input, &voxel_m);
     // An OctoMap is binned at its own voxel size unless --resolution says otherwise.
     if (voxel_m > 0.0 && !resolution_given) cfg.resolution_m = voxel_m;
     const auto t1 = Clock::now();
@@ -177,9 +177,9 @@ int Extract(const std::string& input, const std::string& output, WalkableSurface
         throw InputError(input, 0, "", "no walkable surface: " + found);
     }
     if (ext == ".pcd") {
-        WriteSurfacePointsPcd(output, s.points);
+        pipeline::SurfaceIo().write_surface_points_pcd(output, s.points);
     } else {
-        WriteSurfacePointsPly(output, s.points);
+        pipeline::SurfaceIo().write_surface_points_ply(output, s.points);
     }
     const std::vector<double> levels = FloorLevels(s);
     std::vector<int> level_of(s.points.size(), -1);

@@ -14,7 +14,7 @@
 #include "driftcorr/mapping/geodesy.h"
 #include "driftcorr/mapping/floor_plan.h"
 #include "driftcorr/mapping/osm_reader.h"
-#include "driftcorr/mapping/surface_io.h"
+#include "driftcorr/pipeline/surface_io_loader.h"
 #include "driftcorr/optim/anchor_fit.h"
 
 namespace driftcorr::pipeline {
@@ -84,7 +84,7 @@ TraversableField LoadSurfaceField(const io::Scenario& sc, const SurfaceFieldConf
                              "indoor3d maps are either point-cloud/OctoMap layers or GeoJSON "
                              "layers, not both");
         }
-        const std::vector<Eigen::Vector3d> layer = ReadSurfacePoints(sc.map[i].path);
+        const std::vector<Eigen::Vector3d> layer = SurfaceIo().read_surface_points(sc.map[i].path);
         points.insert(points.end(), layer.begin(), layer.end());
     }
     try {

@@ -64,3 +64,22 @@ void WriteOctomapFromPoints(const std::string& path, const std::vector<Eigen::Ve
                             double resolution_m);
 
 }  // namespace driftcorr
+
+namespace driftcorr {
+
+/// The readers and writers above as one table, for a program that loads this library only when
+/// a map needs it (PCL and OctoMap bring about a hundred shared libraries whose loading would
+/// otherwise cost every run of the program: driftcorr/pipeline/surface_io_loader.h).
+struct SurfaceIoApi {
+    std::vector<Eigen::Vector3d> (*read_surface_points)(const std::string& path);
+    std::vector<Eigen::Vector3d> (*read_raw_points)(const std::string& path, double* voxel_m);
+    void (*write_surface_points_pcd)(const std::string& path,
+                                     const std::vector<Eigen::Vector3d>& points);
+    void (*write_surface_points_ply)(const std::string& path,
+                                     const std::vector<Eigen::Vector3d>& points);
+};
+
+}  // namespace driftcorr
+
+/// The table, under an unmangled name that dlsym finds.
+extern "C" const driftcorr::SurfaceIoApi* driftcorr_surface_io_api();
