@@ -87,10 +87,10 @@ void ParseNumbers(const DataLines& lines, std::size_t n, const std::string& path
     }
     for (std::size_t i = 0; i < n; ++i) {
         const std::optional<double> value = internal::ParseDouble(fields[i]);
-        const std::string which = "field " + std::to_string(i + 1) + " '" + std::string(fields[i]);
-        if (!value) throw InputError(path, lines.number(), "", which + "' is not a number");
-        if (!std::isfinite(*value)) {
-            throw InputError(path, lines.number(), "", which + "' is not finite");
+        if (!value || !std::isfinite(*value)) {
+            const std::string which = "field " + std::to_string(i + 1) + " '" + std::string(fields[i]);
+            throw InputError(path, lines.number(), "",
+                             which + (value ? "' is not finite" : "' is not a number"));
         }
         out[i] = *value;
     }

@@ -34,9 +34,10 @@ TumLine ParseTumLine(std::string_view line) {
         pos = end;
         if (++n > 8) continue;  // counted for the message below
         const std::optional<double> value = internal::ParseDouble(field);
-        const std::string which = "field " + std::to_string(n) + " '" + std::string(field) + "'";
-        if (!value) return Error(which + " is not a number");
-        if (!std::isfinite(*value)) return Error(which + " is not finite");
+        if (!value || !std::isfinite(*value)) {
+            const std::string which = "field " + std::to_string(n) + " '" + std::string(field) + "'";
+            return Error(which + (value ? " is not finite" : " is not a number"));
+        }
         v[n - 1] = *value;
     }
     if (n != 8) return Error("expected 8 numbers, found " + std::to_string(n) + " fields");
