@@ -3,6 +3,7 @@
 // rasterisation (mapping/src/traversable_field.cpp, road_network.cpp), and the road class table.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <ostream>
@@ -129,7 +130,9 @@ TEST_P(EdtTest, CapKeepsTheDistancesWithinIt) {
         }
     }
     // The cap does leave features out (else this test could not tell it from no cap).
-    if (c.density < 0.1) EXPECT_GT(dropped, 0u);
+    if (c.density < 0.1) {
+        EXPECT_GT(dropped, 0u);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -171,6 +174,21 @@ TEST(SegmentRowSpan, HoldsEverySampleWithinReachAndIsTight) {
                 << "trial " << trial << ", y " << y;
         }
     }
+}
+
+TEST(AssignLarge, FillsLikeAssignAtEverySize) {
+    // Below and above the size from which huge pages are asked for, growing and shrinking.
+    std::vector<float> v = {1.0f, 2.0f};
+    for (std::size_t n : {std::size_t(3), std::size_t(5) << 20, std::size_t(100), std::size_t(3) << 20,
+                          std::size_t(7) << 20}) {
+        AssignLarge(v, n, 0.25f);
+        ASSERT_EQ(v.size(), n);
+        for (std::size_t i = 0; i < n; i += 4099) ASSERT_EQ(v[i], 0.25f) << "n " << n << ", i " << i;
+        ASSERT_EQ(v.back(), 0.25f);
+    }
+    std::vector<std::uint8_t> m;
+    AssignLarge(m, std::size_t(9) << 20, std::uint8_t(1));
+    EXPECT_EQ(std::count(m.begin(), m.end(), std::uint8_t(1)), std::ptrdiff_t(9) << 20);
 }
 
 TEST(Edt, EmptyMaskGivesInfinity) {

@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 #include "driftcorr/core/check.h"
 
@@ -101,11 +106,31 @@ void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
 
 }  // namespace
 
+template <typename T>
+void AssignLarge(std::vector<T>& v, std::size_t n, T value) {
+#ifdef __linux__
+    constexpr std::size_t kHuge = std::size_t(2) << 20;
+    if (n * sizeof(T) >= 4 * kHuge && v.capacity() < n) {
+        std::vector<T>().swap(v);
+        v.reserve(n);  // fresh pages, not yet touched
+        const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
+        const std::uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
+        const std::uintptr_t last = (begin + n * sizeof(T)) & ~(kHuge - 1);
+        if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+    }
+#endif
+    v.assign(n, value);
+}
+
+template void AssignLarge<float>(std::vector<float>&, std::size_t, float);
+template void AssignLarge<std::uint8_t>(std::vector<std::uint8_t>&, std::size_t, std::uint8_t);
+
 std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
                                               const std::vector<std::uint8_t>& feature,
                                               double cap_m) {
     DRIFTCORR_CHECK(feature.size() == spec.size(), "feature mask does not match the grid");
-    std::vector<float> g(spec.size());
+    std::vector<float> g;
+    AssignLarge(g, spec.size(), 0.0f);
     // A site farther than the cap along x cannot make a distance within it (squared cells; a
     // cell's margin against rounding).
     const double cap_cells = cap_m / spec.resolution_m + 1.0;

@@ -131,10 +131,10 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
     r.di = di;
     r.dj = dj;
     const std::size_t n = r.spec.size();
-    r.centre_exact.assign(n, inf);
-    r.corridor_exact.assign(n, inf);
-    r.centre_seed.assign(n, 0);
-    r.inside.assign(n, 0);
+    AssignLarge(r.centre_exact, n, inf);
+    AssignLarge(r.corridor_exact, n, inf);
+    AssignLarge(r.centre_seed, n, std::uint8_t(0));
+    AssignLarge(r.inside, n, std::uint8_t(0));
     for (const auto& road : network.roads) {
         for (std::size_t k = 1; k < road.points_en.size(); ++k) {
             RasteriseSegment(r, road.points_en[k - 1], road.points_en[k], road.half_width_m,

@@ -51,6 +51,12 @@ CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::V
 bool SegmentRowSpan(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double reach, double y,
                     double& lo, double& hi);
 
+/// Fills `v` with n copies of `value` in memory the kernel may back with huge pages (Linux
+/// transparent huge pages in "madvise" mode; elsewhere an ordinary assign): a grid of millions of
+/// samples then costs hundreds of page faults instead of tens of thousands.
+template <typename T>
+void AssignLarge(std::vector<T>& v, std::size_t n, T value);
+
 /// Exact Euclidean distance transform (Felzenszwalb & Huttenlocher 2012, separable lower
 /// envelope of parabolas, linear in the number of samples). Returns, for every sample, the
 /// distance in metres to the nearest sample whose `feature` is non-zero, or +infinity when the
