@@ -122,9 +122,8 @@ TEST_P(EdtTest, CapKeepsTheDistancesWithinIt) {
                 ASSERT_EQ(capped[n], full[n]) << "cap " << cap << ", sample " << n;
             } else {
                 // Beyond the cap: the same number or more (up to +infinity), never less.
-                ASSERT_GE(capped[n], full[n])
-                    << "cap " << cap << ", sample " << n << ": " << capped[n] << " against "
-                    << full[n];
+                ASSERT_GE(capped[n], full[n]) << "cap " << cap << ", sample " << n << ": "
+                                              << capped[n] << " against " << full[n];
                 dropped += capped[n] > full[n];
             }
         }
@@ -179,11 +178,12 @@ TEST(SegmentRowSpan, HoldsEverySampleWithinReachAndIsTight) {
 TEST(AssignLarge, FillsLikeAssignAtEverySize) {
     // Below and above the size from which huge pages are asked for, growing and shrinking.
     std::vector<float> v = {1.0f, 2.0f};
-    for (std::size_t n : {std::size_t(3), std::size_t(5) << 20, std::size_t(100), std::size_t(3) << 20,
-                          std::size_t(7) << 20}) {
+    for (std::size_t n : {std::size_t(3), std::size_t(5) << 20, std::size_t(100),
+                          std::size_t(3) << 20, std::size_t(7) << 20}) {
         AssignLarge(v, n, 0.25f);
         ASSERT_EQ(v.size(), n);
-        for (std::size_t i = 0; i < n; i += 4099) ASSERT_EQ(v[i], 0.25f) << "n " << n << ", i " << i;
+        for (std::size_t i = 0; i < n; i += 4099)
+            ASSERT_EQ(v[i], 0.25f) << "n " << n << ", i " << i;
         ASSERT_EQ(v.back(), 0.25f);
     }
     std::vector<std::uint8_t> m;

@@ -50,8 +50,8 @@ void Edt1d(const float* f, int n, float* d, int* v, float* z, float w = 1.0f) {
 // The first pass, along x, on the feature mask itself: in a row the squared distance (in cells)
 // to the nearest feature is that to the last one before or the next one after, two sweeps (the
 // lower envelope is only needed once distances differ from 0 and infinity).
-void FeatureRows(const std::vector<std::uint8_t>& feature, const GridSpec& s,
-                 std::vector<float>& g, float cap2) {
+void FeatureRows(const std::vector<std::uint8_t>& feature, const GridSpec& s, std::vector<float>& g,
+                 float cap2) {
     const int n = s.nx;
     for (std::size_t base = 0; base < g.size(); base += std::size_t(n)) {
         const std::uint8_t* f = feature.data() + base;
@@ -177,7 +177,10 @@ void AddDiscChord(const Eigen::Vector2d& c, double r, double y, double& lo, doub
 // Intersects [lo, hi] with {x : lo_v <= k * x + m <= hi_v}.
 void ClipLinear(double k, double m, double lo_v, double hi_v, double& lo, double& hi) {
     if (k == 0.0) {
-        if (m < lo_v || m > hi_v) { lo = 1.0; hi = 0.0; }
+        if (m < lo_v || m > hi_v) {
+            lo = 1.0;
+            hi = 0.0;
+        }
         return;
     }
     double x0 = (lo_v - m) / k, x1 = (hi_v - m) / k;

@@ -1,9 +1,8 @@
 #include "driftcorr/mapping/surface_io.h"
 
 extern "C" const driftcorr::SurfaceIoApi* driftcorr_surface_io_api() {
-    static const driftcorr::SurfaceIoApi api{&driftcorr::ReadSurfacePoints,
-                                             &driftcorr::ReadRawPoints,
-                                             &driftcorr::WriteSurfacePointsPcd,
-                                             &driftcorr::WriteSurfacePointsPly};
+    static const driftcorr::SurfaceIoApi api{
+        &driftcorr::ReadSurfacePoints, &driftcorr::ReadRawPoints, &driftcorr::WriteSurfacePointsPcd,
+        &driftcorr::WriteSurfacePointsPly};
     return &api;
 }
