@@ -359,6 +359,18 @@ TEST_P(FieldTest, QueryManyMatchesQuery) {
         EXPECT_EQ(out[1].hessian, f2.Query(p)->hessian);
     }
     EXPECT_FALSE(InterpolatedField::QueryMany({&f1, &f2}, s.origin_m, out));
+    // QueryPair: the same numbers, and the same misses.
+    FieldSample a, b;
+    for (int trial = 0; trial < 20; ++trial) {
+        const Eigen::Vector3d p = RandomInterior(s, rng, 1.0);
+        ASSERT_TRUE(InterpolatedField::QueryPair(f1, f2, p, a, b));
+        ASSERT_TRUE(InterpolatedField::QueryMany({&f1, &f2}, p, out));
+        EXPECT_EQ(a.value, out[0].value);
+        EXPECT_EQ(a.hessian, out[0].hessian);
+        EXPECT_EQ(b.value, out[1].value);
+        EXPECT_EQ(b.gradient, out[1].gradient);
+    }
+    EXPECT_FALSE(InterpolatedField::QueryPair(f1, f2, s.origin_m, a, b));
 }
 
 INSTANTIATE_TEST_SUITE_P(PlanarAnd3d, FieldTest, ::testing::Values(true, false),

@@ -138,6 +138,16 @@ std::optional<double> InterpolatedField::Value(const Eigen::Vector3d& p) const {
     return AccumulateValue(spec_, values_, st);
 }
 
+bool InterpolatedField::QueryPair(const InterpolatedField& a, const InterpolatedField& b,
+                                  const Eigen::Vector3d& p, FieldSample& out_a,
+                                  FieldSample& out_b) {
+    Stencil st;
+    if (!MakeStencil(a.spec_, p, st)) return false;
+    Accumulate(a.spec_, a.values_, st, out_a);
+    Accumulate(b.spec_, b.values_, st, out_b);
+    return true;
+}
+
 bool InterpolatedField::QueryMany(const std::vector<const InterpolatedField*>& fields,
                                   const Eigen::Vector3d& p, std::vector<FieldSample>& out) {
     if (fields.empty()) return false;

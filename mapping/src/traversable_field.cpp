@@ -59,7 +59,6 @@ int TraversableField::TileAt(const Eigen::Vector3d& p) const {
 }
 
 std::optional<TraversableSample> TraversableField::Query(const Eigen::Vector3d& p_enu) const {
-    thread_local std::vector<FieldSample> samples;
     const InterpolatedField *centre = &centre_, *corridor = &corridor_;
     if (tiled()) {
         const int k = TileAt(p_enu);
@@ -67,8 +66,11 @@ std::optional<TraversableSample> TraversableField::Query(const Eigen::Vector3d& 
         centre = &tiles_[k].centre;
         corridor = &tiles_[k].corridor;
     }
-    if (!InterpolatedField::QueryMany({centre, corridor}, p_enu, samples)) return std::nullopt;
-    return TraversableSample{samples[0], samples[1]};
+    TraversableSample out;
+    if (!InterpolatedField::QueryPair(*centre, *corridor, p_enu, out.centre, out.corridor)) {
+        return std::nullopt;
+    }
+    return out;
 }
 
 template <typename Fn>

@@ -34,6 +34,9 @@ public:
     /// Like Query but several fields sharing one spec are evaluated with one set of weights.
     static bool QueryMany(const std::vector<const InterpolatedField*>& fields,
                           const Eigen::Vector3d& p, std::vector<FieldSample>& out);
+    /// QueryMany of two fields (the same numbers) without building a vector per query.
+    static bool QueryPair(const InterpolatedField& a, const InterpolatedField& b,
+                          const Eigen::Vector3d& p, FieldSample& out_a, FieldSample& out_b);
     /// The samples interpolated (bi)linearly instead of by the B-spline: bilinear in (x, y) for a
     /// planar grid (p.z() ignored), trilinear otherwise. The value is continuous, the gradient is
     /// piecewise constant (it jumps at cell borders) and the Hessian is returned as zero. This is
