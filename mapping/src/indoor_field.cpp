@@ -198,7 +198,9 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
 
     // The traversable set and the centre seeds.
     const std::size_t np = plane.size();
-    Mask inside(s.size(), 0), seeds(s.size(), 0);
+    Mask inside, seeds;
+    AssignLarge(inside, s.size(), std::uint8_t(0));
+    AssignLarge(seeds, s.size(), std::uint8_t(0));
     const float half = 0.5f * float(s.resolution_m);
     std::size_t connector_voxels = 0;
     for (const FloorRaster& r : rasters) {
@@ -233,7 +235,8 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
     inside.clear();
     inside.shrink_to_fit();
 
-    std::vector<float> centre = EuclideanDistanceTransform(s, seeds);
+    // Clamped to trunc below: beyond it the distances need not be exact.
+    std::vector<float> centre = EuclideanDistanceTransform(s, seeds, trunc);
     seeds.clear();
     seeds.shrink_to_fit();
     // Exact distances to the walkway lines near each floor's surface.

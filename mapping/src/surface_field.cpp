@@ -53,7 +53,9 @@ TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_p
     const double res = s.resolution_m, dz = s.dz(), tol = config.vertical_tolerance_m;
 
     // The traversable set (columns within tol of each point) and the centre seeds.
-    Mask inside(s.size(), 0), seeds(s.size(), 0);
+    Mask inside, seeds;
+    AssignLarge(inside, s.size(), std::uint8_t(0));
+    AssignLarge(seeds, s.size(), std::uint8_t(0));
     for (const Eigen::Vector3d& p : surface_points_enu) {
         const double z = p.z() + config.device_height_m;
         const int i = std::clamp(int(std::lround((p.x() - s.origin_m.x()) / res)), 0, s.nx - 1);
@@ -76,7 +78,8 @@ TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_p
     const float trunc = float(config.truncation_m);
     std::vector<float> corridor = internal::CorridorField(s, inside, trunc);
     Mask().swap(inside);
-    std::vector<float> centre = EuclideanDistanceTransform(s, seeds);
+    // Clamped to trunc below: beyond it the distances need not be exact.
+    std::vector<float> centre = EuclideanDistanceTransform(s, seeds, trunc);
     Mask().swap(seeds);
     const float clearance = float(config.wall_clearance_m);
     for (std::size_t i = 0; i < centre.size(); ++i) {

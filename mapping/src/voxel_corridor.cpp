@@ -26,7 +26,8 @@ using Mask = std::vector<std::uint8_t>;
 // voxel (plus half a cell), written into `corridor`. The EDT runs on the bounding box of the
 // inside voxels grown by one cell: the nearest outside voxel of an inside one is never beyond it
 // (clamping a far outside voxel onto the box gives a nearer one, still outside).
-void InsideSlice(const GridSpec& s, const Mask& inside, int k, std::vector<float>& corridor) {
+void InsideSlice(const GridSpec& s, const Mask& inside, int k, float cap,
+                 std::vector<float>& corridor) {
     const std::size_t base = s.Index(0, 0, k);
     int i0 = s.nx, i1 = -1, j0 = s.ny, j1 = -1;
     for (int j = 0; j < s.ny; ++j) {
@@ -48,7 +49,7 @@ void InsideSlice(const GridSpec& s, const Mask& inside, int k, std::vector<float
         for (int i = 0; i < sub.nx; ++i)
             outside[sub.Index(i, j)] = !inside[s.Index(i0 + i, j0 + j, k)];
     }
-    const std::vector<float> d = EuclideanDistanceTransform(sub, outside);
+    const std::vector<float> d = EuclideanDistanceTransform(sub, outside, cap);
     const float half = 0.5f * float(s.resolution_m);
     for (int j = 0; j < sub.ny; ++j) {
         for (int i = 0; i < sub.nx; ++i) {
@@ -61,7 +62,10 @@ void InsideSlice(const GridSpec& s, const Mask& inside, int k, std::vector<float
 }  // namespace
 
 std::vector<float> CorridorField(const GridSpec& s, const Mask& inside, float trunc) {
-    std::vector<float> corridor = EuclideanDistanceTransform(s, inside);
+    // Clamped to +-trunc below, after half a cell comes off: distances beyond trunc and a cell
+    // need not be exact (EuclideanDistanceTransform's cap).
+    const float cap = trunc + float(s.resolution_m);
+    std::vector<float> corridor = EuclideanDistanceTransform(s, inside, cap);
     const float half = 0.5f * float(s.resolution_m);
     for (float& v : corridor) v = v - half;  // outside; inside voxels are overwritten below
     const std::size_t plane = std::size_t(s.nx) * s.ny;
@@ -73,7 +77,7 @@ std::vector<float> CorridorField(const GridSpec& s, const Mask& inside, float tr
                 if (inside[base + i]) corridor[base + i] = corridor[base - plane + i];
             }
         } else {
-            InsideSlice(s, inside, k, corridor);
+            InsideSlice(s, inside, k, cap, corridor);
         }
     }
     for (float& v : corridor) v = std::clamp(v, -trunc, trunc);
