@@ -175,6 +175,41 @@ TEST(SegmentRowSpan, HoldsEverySampleWithinReachAndIsTight) {
     }
 }
 
+TEST(SegmentRowCells, HoldEverySampleWithinReach) {
+    // A sub-grid placed at sample (di, dj) of a whole grid, as the road field's tiles are.
+    GridSpec whole;
+    whole.origin_m = Eigen::Vector3d(-12.3, -7.9, 0.0);
+    whole.resolution_m = 0.5;
+    whole.nx = 60, whole.ny = 50;
+    const int di = 7, dj = 4;
+    GridSpec sub = whole;
+    sub.origin_m = whole.Position(di, dj);
+    sub.nx = 40, sub.ny = 35;
+    std::mt19937 rng(9u);
+    std::uniform_real_distribution<double> u(-10.0, 12.0), r(0.0, 5.0);
+    std::size_t within = 0;
+    for (int trial = 0; trial < 100; ++trial) {
+        const Eigen::Vector2d a(u(rng), u(rng));
+        const Eigen::Vector2d b = trial % 5 == 0 ? a : Eigen::Vector2d(u(rng), u(rng));
+        const double reach = r(rng);
+        const CellBox box = SegmentCells(sub, a, b, reach);
+        for (int j = 0; j < sub.ny; ++j) {
+            int i0 = 0, i1 = -1;
+            const bool any = j >= box.j0 && j <= box.j1 &&
+                             SegmentRowCells(whole, di, dj, j, a, b, reach, box, i0, i1);
+            for (int i = 0; i < sub.nx; ++i) {
+                const Eigen::Vector2d p = whole.Position(i + di, j + dj).head<2>();
+                if (PointSegmentDistance(p, a, b) > reach) continue;
+                ++within;
+                ASSERT_TRUE(any && i >= i0 && i <= i1)
+                    << "trial " << trial << ", sample (" << i << ", " << j << ") within reach, "
+                    << "row cells [" << i0 << ", " << i1 << "]";
+            }
+        }
+    }
+    EXPECT_GT(within, 1000u);
+}
+
 TEST(AssignLarge, FillsLikeAssignAtEverySize) {
     // Below and above the size from which huge pages are asked for, growing and shrinking.
     std::vector<float> v = {1.0f, 2.0f};
@@ -342,35 +377,29 @@ TEST_P(FieldTest, QueryMissesOutsideAndNearTheBorder) {
     EXPECT_FALSE(field.Query(mid + Eigen::Vector3d(std::nan(""), 0, 0)).has_value());
 }
 
-TEST_P(FieldTest, QueryManyMatchesQuery) {
+TEST_P(FieldTest, QueryPairAndValueMatchQuery) {
     const GridSpec s = FieldSpec(GetParam());
     const InterpolatedField f1 =
         Sampled(s, [](const Eigen::Vector3d& p) { return p.squaredNorm(); });
     const InterpolatedField f2 =
         Sampled(s, [](const Eigen::Vector3d& p) { return std::sin(p.x()); });
     std::mt19937 rng(3u);
-    std::vector<FieldSample> out;
-    for (int trial = 0; trial < 20; ++trial) {
-        const Eigen::Vector3d p = RandomInterior(s, rng, 1.0);
-        ASSERT_TRUE(InterpolatedField::QueryMany({&f1, &f2}, p, out));
-        ASSERT_EQ(out.size(), 2u);
-        EXPECT_EQ(out[0].value, f1.Query(p)->value);
-        EXPECT_EQ(out[1].gradient, f2.Query(p)->gradient);
-        EXPECT_EQ(out[1].hessian, f2.Query(p)->hessian);
-    }
-    EXPECT_FALSE(InterpolatedField::QueryMany({&f1, &f2}, s.origin_m, out));
-    // QueryPair: the same numbers, and the same misses.
     FieldSample a, b;
     for (int trial = 0; trial < 20; ++trial) {
         const Eigen::Vector3d p = RandomInterior(s, rng, 1.0);
         ASSERT_TRUE(InterpolatedField::QueryPair(f1, f2, p, a, b));
-        ASSERT_TRUE(InterpolatedField::QueryMany({&f1, &f2}, p, out));
-        EXPECT_EQ(a.value, out[0].value);
-        EXPECT_EQ(a.hessian, out[0].hessian);
-        EXPECT_EQ(b.value, out[1].value);
-        EXPECT_EQ(b.gradient, out[1].gradient);
+        const FieldSample q1 = *f1.Query(p), q2 = *f2.Query(p);
+        EXPECT_EQ(a.value, q1.value);
+        EXPECT_EQ(a.gradient, q1.gradient);
+        EXPECT_EQ(a.hessian, q1.hessian);
+        EXPECT_EQ(b.value, q2.value);
+        EXPECT_EQ(b.gradient, q2.gradient);
+        EXPECT_EQ(b.hessian, q2.hessian);
+        EXPECT_EQ(*f1.Value(p), q1.value);
+        EXPECT_EQ(*f2.Value(p), q2.value);
     }
     EXPECT_FALSE(InterpolatedField::QueryPair(f1, f2, s.origin_m, a, b));
+    EXPECT_FALSE(f1.Value(s.origin_m).has_value());
 }
 
 INSTANTIATE_TEST_SUITE_P(PlanarAnd3d, FieldTest, ::testing::Values(true, false),

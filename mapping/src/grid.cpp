@@ -216,6 +216,16 @@ bool SegmentRowSpan(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double r
     return lo <= hi;
 }
 
+bool SegmentRowCells(const GridSpec& whole, int di, int dj, int j, const Eigen::Vector2d& a,
+                     const Eigen::Vector2d& b, double reach, const CellBox& box, int& i0, int& i1) {
+    double lo = 0.0, hi = 0.0;
+    if (!SegmentRowSpan(a, b, reach, whole.Position(0, j + dj).y(), lo, hi)) return false;
+    const double ox = whole.origin_m.x(), res = whole.resolution_m;
+    i0 = std::max(box.i0, int(std::floor((lo - ox) / res)) - di - 1);
+    i1 = std::min(box.i1, int(std::ceil((hi - ox) / res)) - di + 1);
+    return i0 <= i1;
+}
+
 CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                      double reach) {
     const double res = s.resolution_m;

@@ -71,8 +71,10 @@ void FillPolygon(const GridSpec& s, const FloorPolygon& poly, std::uint8_t value
 // distances within `reach` (>= half_width) in `exact`.
 void RasteriseWalkway(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                       double half_width, double reach, Mask& mask, std::vector<float>& exact) {
-    const auto [i0, j0, i1, j1] = SegmentCells(s, a, b, reach);
-    for (int j = j0; j <= j1; ++j) {
+    const CellBox box = SegmentCells(s, a, b, reach);
+    for (int j = box.j0; j <= box.j1; ++j) {
+        int i0 = 0, i1 = -1;
+        if (!SegmentRowCells(s, 0, 0, j, a, b, reach, box, i0, i1)) continue;
         for (int i = i0; i <= i1; ++i) {
             const double d = PointSegmentDistance(s.Position(i, j).head<2>(), a, b);
             if (d > reach) continue;

@@ -148,18 +148,6 @@ bool InterpolatedField::QueryPair(const InterpolatedField& a, const Interpolated
     return true;
 }
 
-bool InterpolatedField::QueryMany(const std::vector<const InterpolatedField*>& fields,
-                                  const Eigen::Vector3d& p, std::vector<FieldSample>& out) {
-    if (fields.empty()) return false;
-    Stencil st;
-    if (!MakeStencil(fields[0]->spec_, p, st)) return false;
-    out.resize(fields.size());
-    for (std::size_t f = 0; f < fields.size(); ++f) {
-        Accumulate(fields[f]->spec_, fields[f]->values_, st, out[f]);
-    }
-    return true;
-}
-
 namespace {
 
 // Cell and fraction of a coordinate for linear interpolation; false outside [0, n - 1].

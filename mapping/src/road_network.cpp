@@ -50,15 +50,11 @@ void RasteriseSegment(Raster& r, const Eigen::Vector2d& a, const Eigen::Vector2d
                       double band) {
     const GridSpec& s = r.spec;
     const double reach = hw + band, res = s.resolution_m;
-    const auto [i0, j0, i1, j1] = SegmentCells(s, a, b, reach);
-    const double ox = r.whole.origin_m.x();
-    for (int j = j0; j <= j1; ++j) {
-        // Only the samples of this row near the capsule's chord (a cell wider on each side).
-        double lo = 0.0, hi = 0.0;
-        if (!SegmentRowSpan(a, b, reach, r.whole.Position(0, j + r.dj).y(), lo, hi)) continue;
-        const int ri0 = std::max(i0, int(std::floor((lo - ox) / res)) - r.di - 1);
-        const int ri1 = std::min(i1, int(std::ceil((hi - ox) / res)) - r.di + 1);
-        for (int i = ri0; i <= ri1; ++i) {
+    const CellBox box = SegmentCells(s, a, b, reach);
+    for (int j = box.j0; j <= box.j1; ++j) {
+        int i0 = 0, i1 = -1;
+        if (!SegmentRowCells(r.whole, r.di, r.dj, j, a, b, reach, box, i0, i1)) continue;
+        for (int i = i0; i <= i1; ++i) {
             const Eigen::Vector2d p = r.whole.Position(i + r.di, j + r.dj).head<2>();
             const double d = PointSegmentDistance(p, a, b);
             if (d > reach) continue;

@@ -138,7 +138,8 @@ SolveReport SolveWithIpopt(WindowProblem& problem, const IpoptOptions& options) 
     // rounding; on kitti05 cvo the final solve then ended in one of two solutions (7.45 m and
     // `ok`, or 7.65 m after Maximum_Iterations_Exceeded and `failed`) on identical input. AMF
     // (2) was the fastest of the run-to-run identical orderings (AMD 0, AMF 2, PORD 4, QAMD 6)
-    // on the three KITTI drives whose final solve needs Ipopt; it costs 0.3-0.9 s there.
+    // summed over the three KITTI drives whose final solve needs Ipopt; it costs them 0.2-0.8 s
+    // against METIS (docs/results.md).
     app->Options()->SetIntegerValue("mumps_pivot_order", 2);
     app->Options()->SetStringValue("hessian_approximation", "exact");
     app->Options()->SetStringValue("mu_strategy", "adaptive");

@@ -51,6 +51,13 @@ CellBox SegmentCells(const GridSpec& s, const Eigen::Vector2d& a, const Eigen::V
 bool SegmentRowSpan(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double reach, double y,
                     double& lo, double& hi);
 
+/// The cells [i0, i1] of row j, within `box`, whose samples can lie within `reach` of ab: the
+/// row's SegmentRowSpan widened by a cell. The samples sit at whole.Position(i + di, j + dj) (a
+/// sub-grid of `whole` from sample (di, dj) on; di = dj = 0 for the grid itself). False when the
+/// row has none.
+bool SegmentRowCells(const GridSpec& whole, int di, int dj, int j, const Eigen::Vector2d& a,
+                     const Eigen::Vector2d& b, double reach, const CellBox& box, int& i0, int& i1);
+
 /// Fills `v` with n copies of `value` in memory the kernel may back with huge pages (Linux
 /// transparent huge pages in "madvise" mode; elsewhere an ordinary assign): a grid of millions of
 /// samples then costs hundreds of page faults instead of tens of thousands.

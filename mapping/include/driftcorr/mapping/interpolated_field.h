@@ -31,10 +31,8 @@ public:
     std::optional<FieldSample> Query(const Eigen::Vector3d& p) const;
     /// Query's value alone (the same number), without the derivatives.
     std::optional<double> Value(const Eigen::Vector3d& p) const;
-    /// Like Query but several fields sharing one spec are evaluated with one set of weights.
-    static bool QueryMany(const std::vector<const InterpolatedField*>& fields,
-                          const Eigen::Vector3d& p, std::vector<FieldSample>& out);
-    /// QueryMany of two fields (the same numbers) without building a vector per query.
+    /// Query of two fields sharing one spec (the same numbers), with one set of weights; false
+    /// where Query of `a` has none.
     static bool QueryPair(const InterpolatedField& a, const InterpolatedField& b,
                           const Eigen::Vector3d& p, FieldSample& out_a, FieldSample& out_b);
     /// The samples interpolated (bi)linearly instead of by the B-spline: bilinear in (x, y) for a
