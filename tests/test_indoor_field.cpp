@@ -257,6 +257,64 @@ TEST(IndoorField, LiftAndStairsJoinFloorsNothingElseDoes) {
     EXPECT_GT(Corridor(g, 5.0, 5.0, 2.0), 1.5);
 }
 
+// With the heights a walk can reach, the field holds fewer layers and gives the same values
+// (value, gradient, Hessian) at those heights as the whole building's field; far from them it
+// reads outside the map.
+TEST(IndoorField, HeightsKeepTheLayersThatServeThem) {
+    std::vector<IndoorFloor> floors(4);
+    for (int n = 0; n < 4; ++n) floors[n].floor_z_m = 4.0 * n;
+    floors[0].walkable.push_back(Rect(0, 0, 30, 12));
+    floors[1].walkable.push_back(Rect(0, 0, 30, 12));  // under the 2nd floor's gap too
+    floors[2].walkable.push_back(Rect(0, 0, 12, 12));
+    floors[2].walkable.push_back(Rect(20, 0, 30, 12));
+    floors[2].walkways_en.push_back({{1.0, 6.0}, {11.0, 6.0}});
+    floors[3].walkable.push_back(Rect(0, 0, 30, 12));
+    floors[0].lifts.push_back(Rect(2, 2, 4, 4));     // a shaft through every floor
+    floors[1].stairs.push_back(Rect(24, 2, 28, 5));  // joins the ground and the 2nd floor
+    const IndoorFieldConfig c = TestConfig();
+    // The number of points at `heights` where both fields give the same values (all of them).
+    auto same_at = [&c](const std::vector<IndoorFloor>& fs, const HeightRange& heights) {
+        IndoorFieldStats whole_stats, kept_stats;
+        const TraversableField whole = BuildIndoorField(fs, c, &whole_stats);
+        const TraversableField kept = BuildIndoorField(fs, c, &kept_stats, heights);
+        EXPECT_LT(kept_stats.voxels, whole_stats.voxels * 3 / 4);
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<double> ux(-1.0, 31.0), uy(-1.0, 13.0),
+            uz(heights.lo_m, heights.hi_m);
+        int compared = 0;
+        for (int n = 0; n < 4000; ++n) {
+            const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng));
+            const auto a = whole.Query(p), b = kept.Query(p);
+            EXPECT_EQ(a.has_value(), b.has_value()) << p.transpose();
+            if (!a || !b) continue;
+            bool same = true;
+            for (const auto& [x, y] :
+                 {std::pair(a->centre, b->centre), std::pair(a->corridor, b->corridor)}) {
+                same = same && std::abs(x.value - y.value) < 1e-9 &&
+                       (x.gradient - y.gradient).norm() < 1e-9 &&
+                       (x.hessian - y.hessian).norm() < 1e-8;
+            }
+            EXPECT_TRUE(same) << p.transpose();
+            compared += same;
+        }
+        return compared;
+    };
+    EXPECT_GT(same_at(floors, {7.6, 8.3}), 3000);
+    // One floor: the kept layers are those the interpolation reads about the heights.
+    EXPECT_GT(same_at({floors[0]}, {-0.2, 0.2}), 3000);
+    const TraversableField whole = BuildIndoorField(floors, c);
+    const TraversableField kept = BuildIndoorField(floors, c, nullptr, HeightRange{7.6, 8.3});
+    // Over the 2nd floor's gap the 1st floor lies within the truncation (3.35-4.05 m below
+    // the heights): the kept layers reach down to it.
+    EXPECT_GT(Corridor(whole, 16.0, 6.0, 7.6), 2.5);
+    EXPECT_LT(Corridor(whole, 16.0, 6.0, 7.6), 4.0);
+    // The ground floor is beyond the truncation: not held.
+    EXPECT_TRUE(whole.Query({16.0, 6.0, 0.0}).has_value());
+    EXPECT_FALSE(kept.Query({16.0, 6.0, 0.0}).has_value());
+    EXPECT_THROW(BuildIndoorField(floors, c, nullptr, HeightRange{8.0, 7.0}),
+                 std::invalid_argument);
+}
+
 TEST(IndoorField, WallsAreCutOutAndDoorsCutBack) {
     IndoorFloor floor;
     floor.walkable.push_back(Rect(0, 0, 10, 10));

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "driftcorr/mapping/grid.h"
@@ -140,12 +141,39 @@ Eigen::AlignedBox2d FloorsBounds(const std::vector<IndoorFloor>& floors) {
 }
 
 GridSpec MakeSpec(const Eigen::AlignedBox2d& box, double z_lo, double z_hi,
-                  const IndoorFieldConfig& c) {
+                  const IndoorFieldConfig& c, const std::optional<std::pair<int, int>>& layers) {
     const Eigen::AlignedBox3d box3(Eigen::Vector3d(box.min().x(), box.min().y(), z_lo),
                                    Eigen::Vector3d(box.max().x(), box.max().y(), z_hi));
     return internal::VoxelGridSpec(
         box3, {c.resolution_m, c.resolution_z_m, c.margin_m, c.vertical_margin_m, c.max_memory_mb},
-        "indoor");
+        "indoor", layers);
+}
+
+// The layers of `all` that give every value the whole building's field gives at `heights`:
+// the interpolation reads two layers beyond them, and a voxel's distance within the truncation
+// comes from a traversable voxel within it. Those are floor layers, whole here when they come
+// within the truncation; or stair and lift columns, each continuous up to a floor's surface, so
+// a column voxel beyond the kept layers has one at least as near in them: level with the voxel
+// read, or at the floor surface where the column ends.
+std::pair<int, int> KeptLayers(const GridSpec& all, const std::vector<FloorRaster>& rasters,
+                               const HeightRange& heights, double truncation_m) {
+    if (!(heights.lo_m <= heights.hi_m) || !std::isfinite(heights.lo_m) ||
+        !std::isfinite(heights.hi_m)) {
+        throw std::invalid_argument("the heights the indoor field serves are not a finite range");
+    }
+    const double dz = all.dz();
+    const double g_lo = std::clamp((heights.lo_m - all.origin_m.z()) / dz, -1.0, double(all.nz));
+    const double g_hi = std::clamp((heights.hi_m - all.origin_m.z()) / dz, -1.0, double(all.nz));
+    const int read_lo = int(std::floor(g_lo)) - 2, read_hi = int(std::ceil(g_hi)) + 2;
+    // The distance transforms' cap: the truncation and a cell.
+    const int reach = int(std::ceil((truncation_m + all.resolution_m) / dz));
+    int first = read_lo, last = read_hi;
+    for (const FloorRaster& r : rasters) {
+        if (r.k_hi < read_lo - reach || r.k_lo > read_hi + reach) continue;
+        first = std::min(first, r.k_lo);
+        last = std::max(last, r.k_hi);
+    }
+    return {std::clamp(first, 0, all.nz - 1), std::clamp(last, 0, all.nz - 1)};
 }
 
 }  // namespace
@@ -160,7 +188,8 @@ std::string IndoorFieldConfig::Validate() const {
 }
 
 TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
-                                  const IndoorFieldConfig& config, IndoorFieldStats* stats) {
+                                  const IndoorFieldConfig& config, IndoorFieldStats* stats,
+                                  const std::optional<HeightRange>& heights) {
     if (const std::string err = config.Validate(); !err.empty()) throw std::invalid_argument(err);
     if (floors.empty()) throw std::invalid_argument("the indoor map has no floor");
     const Eigen::AlignedBox2d box = FloorsBounds(floors);
@@ -173,11 +202,15 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
     });
     const double z_lo = floors[order.front()].floor_z_m + config.device_height_m;
     const double z_hi = floors[order.back()].floor_z_m + config.device_height_m;
-    const GridSpec s = MakeSpec(box, z_lo, z_hi, config);
-    const GridSpec plane = PlaneOf(s);
-    const double dz = s.dz();
+    // The layers of the whole building are numbered in `all`; the grid `s` holds those from k0
+    // to k0 + s.nz - 1 (KeptLayers).
+    IndoorFieldConfig whole = config;  // the memory cap applies to the layers built
+    whole.max_memory_mb = std::numeric_limits<double>::infinity();
+    const GridSpec all = MakeSpec(box, z_lo, z_hi, whole, std::nullopt);
+    const GridSpec plane = PlaneOf(all);
+    const double dz = all.dz();
     auto layer_of = [&](double z) {
-        return std::clamp(int(std::lround((z - s.origin_m.z()) / dz)), 0, s.nz - 1);
+        return std::clamp(int(std::lround((z - all.origin_m.z()) / dz)), 0, all.nz - 1);
     };
 
     std::vector<FloorRaster> rasters(floors.size());
@@ -187,16 +220,24 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
         r.surface_z_m = floors[order[n]].floor_z_m + config.device_height_m;
         r.k_surface = layer_of(r.surface_z_m);
         // The layer: voxels within vertical_tolerance_m of the surface, at least the nearest.
-        const double g_lo = (r.surface_z_m - config.vertical_tolerance_m - s.origin_m.z()) / dz;
-        const double g_hi = (r.surface_z_m + config.vertical_tolerance_m - s.origin_m.z()) / dz;
-        r.k_lo = std::clamp(std::min(r.k_surface, int(std::ceil(g_lo - 1e-9))), 0, s.nz - 1);
-        r.k_hi = std::clamp(std::max(r.k_surface, int(std::floor(g_hi + 1e-9))), 0, s.nz - 1);
+        const double g_lo = (r.surface_z_m - config.vertical_tolerance_m - all.origin_m.z()) / dz;
+        const double g_hi = (r.surface_z_m + config.vertical_tolerance_m - all.origin_m.z()) / dz;
+        r.k_lo = std::clamp(std::min(r.k_surface, int(std::ceil(g_lo - 1e-9))), 0, all.nz - 1);
+        r.k_hi = std::clamp(std::max(r.k_surface, int(std::floor(g_hi + 1e-9))), 0, all.nz - 1);
     }
     for (std::size_t n = 0; n < rasters.size(); ++n) {
         rasters[n].k_conn_lo = n > 0 ? rasters[n - 1].k_surface : rasters[n].k_surface;
         rasters[n].k_conn_hi =
             n + 1 < rasters.size() ? rasters[n + 1].k_surface : rasters[n].k_surface;
     }
+    std::optional<std::pair<int, int>> kept;
+    if (heights) kept = KeptLayers(all, rasters, *heights, config.truncation_m);
+    const GridSpec s = MakeSpec(box, z_lo, z_hi, config, kept);
+    const int k0 = kept ? std::clamp(kept->first, 0, all.nz - 1) : 0;
+    // The layers [a, b] of the whole building that the grid holds, as the grid's layers.
+    auto held = [&](int a, int b) {
+        return std::pair<int, int>(std::max(a, k0) - k0, std::min(b, k0 + s.nz - 1) - k0);
+    };
 
     // The traversable set and the centre seeds.
     const std::size_t np = plane.size();
@@ -206,7 +247,8 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
     const float half = 0.5f * float(s.resolution_m);
     std::size_t connector_voxels = 0;
     for (const FloorRaster& r : rasters) {
-        for (int k = r.k_lo; k <= r.k_hi; ++k) {
+        const auto [layer_lo, layer_hi] = held(r.k_lo, r.k_hi);
+        for (int k = layer_lo; k <= layer_hi; ++k) {
             std::uint8_t* slice = &inside[s.Index(0, 0, k)];
             for (std::size_t i = 0; i < np; ++i) slice[i] |= r.walkable[i];
         }
@@ -216,18 +258,21 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
             {&r.connector, {r.k_conn_lo, r.k_conn_hi}},
             {&r.lift, {rasters.front().k_surface, rasters.back().k_surface}}};
         for (const auto& [mask, range] : columns) {
-            for (int k = range.first; k <= range.second; ++k) {
+            const auto [column_lo, column_hi] = held(range.first, range.second);
+            for (int k = column_lo; k <= column_hi; ++k) {
                 std::uint8_t* slice = &inside[s.Index(0, 0, k)];
                 std::uint8_t* seed = &seeds[s.Index(0, 0, k)];
+                const bool off_floor = k + k0 < r.k_lo || k + k0 > r.k_hi;
                 for (std::size_t i = 0; i < np; ++i) {
                     if (!(*mask)[i]) continue;
-                    connector_voxels += (k < r.k_lo || k > r.k_hi) && !slice[i];
+                    connector_voxels += off_floor && !slice[i];
                     slice[i] = 1;
                     seed[i] = 1;
                 }
             }
         }
-        std::uint8_t* seed = &seeds[s.Index(0, 0, r.k_surface)];
+        if (r.k_surface < k0 || r.k_surface >= k0 + s.nz) continue;
+        std::uint8_t* seed = &seeds[s.Index(0, 0, r.k_surface - k0)];
         for (std::size_t i = 0; i < np; ++i) {
             seed[i] |= r.has_walkways ? std::uint8_t(r.walkway_exact[i] <= half) : r.walkable[i];
         }
@@ -246,7 +291,7 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
     for (const FloorRaster& r : rasters) {
         if (!r.has_walkways) continue;
         for (int k = 0; k < s.nz; ++k) {
-            const double dzk = s.origin_m.z() + k * dz - r.surface_z_m;
+            const double dzk = all.origin_m.z() + (k + k0) * dz - r.surface_z_m;
             if (std::abs(dzk) > band) continue;
             float* slice = &centre[s.Index(0, 0, k)];
             for (std::size_t i = 0; i < np; ++i) {

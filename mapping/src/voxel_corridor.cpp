@@ -84,7 +84,8 @@ std::vector<float> CorridorField(const GridSpec& s, const Mask& inside, float tr
     return corridor;
 }
 
-GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what) {
+GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what,
+                       const std::optional<std::pair<int, int>>& layers) {
     GridSpec s;
     s.resolution_m = c.resolution_m;
     s.resolution_z_m = c.resolution_z_m;
@@ -94,6 +95,12 @@ GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, c
     s.nx = std::max(4, int(std::ceil((box.sizes().x() + 2.0 * c.margin_m) / c.resolution_m)) + 1);
     s.ny = std::max(4, int(std::ceil((box.sizes().y() + 2.0 * c.margin_m) / c.resolution_m)) + 1);
     s.nz = int(std::ceil(box.sizes().z() / c.resolution_z_m - 1e-9)) + 2 * kz + 1;
+    if (layers) {
+        const int k0 = std::clamp(layers->first, 0, s.nz - 1);
+        const int k1 = std::clamp(layers->second, k0, s.nz - 1);
+        s.origin_m.z() += k0 * c.resolution_z_m;
+        s.nz = k1 - k0 + 1;
+    }
     // Peak bytes per voxel: centre and corridor (4 + 4), the EDT's buffer (4), two masks.
     const double mb = double(s.size()) * 14.0 / (1024.0 * 1024.0);
     if (mb > c.max_memory_mb) {

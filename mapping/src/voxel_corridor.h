@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "driftcorr/core/params.h"
@@ -21,10 +22,13 @@ struct VoxelGridSize {
 };
 
 /// The grid over `box` grown by margin_m horizontally and by at least two layers (and
-/// vertical_margin_m) vertically, at least 4 x 4 cells. Throws std::invalid_argument when it
-/// would need more than max_memory_mb, saying which horizontal resolution would fit; `what`
-/// names the field in that message ("indoor", "surface").
-GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what);
+/// vertical_margin_m) vertically, at least 4 x 4 cells; with `layers` (first, last), only
+/// those of its layers (clamped to the grid; at least one). Throws
+/// std::invalid_argument when the grid would need more than max_memory_mb, saying which
+/// horizontal resolution would fit; `what` names the field in that message ("indoor",
+/// "surface").
+GridSpec VoxelGridSpec(const Eigen::AlignedBox3d& box, const VoxelGridSize& c, const char* what,
+                       const std::optional<std::pair<int, int>>& layers = std::nullopt);
 
 /// The rule both voxel fields share: vertical_tolerance_m >= resolution_z_m, with why.
 std::optional<ParamProblem> ThinLayerProblem(double vertical_tolerance_m, double resolution_z_m);

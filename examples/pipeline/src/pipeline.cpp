@@ -98,7 +98,8 @@ TraversableField LoadSurfaceField(const io::Scenario& sc, const SurfaceFieldConf
 // lines of the floor nearest to `up_m`). Layer files are named in the loader's errors; a field
 // too large for the memory cap names the scenario and the setting.
 TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig& config,
-                                 double up_m, RoadNetwork& walkways) {
+                                 double up_m, RoadNetwork& walkways,
+                                 const std::optional<HeightRange>& heights) {
     std::vector<IndoorLayerSpec> specs;
     for (std::size_t i = 0; i < sc.map.size(); ++i) {
         const io::MapLayerSpec& layer = sc.map[i];
@@ -129,7 +130,7 @@ TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig
     const IndoorMap map = LoadIndoorMap(specs, frame);
     walkways = WalkwaysNear(map, up_m, config.walkway_half_width_m);
     try {
-        return BuildIndoorField(map.floors, config);
+        return BuildIndoorField(map.floors, config, nullptr, heights);
     } catch (const std::invalid_argument& e) {
         throw InputError(sc.yaml_path, 0, "map", std::string(e.what()) + " (indoor_field settings)");
     }
@@ -164,6 +165,16 @@ std::vector<FieldDisc> FieldCorridor(const PlanarTrajectory& estimate,
     return discs;
 }
 
+// The heights where the corrected walk can be: the estimate's, grown by half their range (a
+// height change read up to 1.4x) and by indoor_field.height_margin_m.
+std::optional<HeightRange> WalkHeights(const PlanarTrajectory& estimate,
+                                       const IndoorFieldConfig& config) {
+    if (estimate.up_m.empty()) return std::nullopt;
+    const auto [lo, hi] = std::minmax_element(estimate.up_m.begin(), estimate.up_m.end());
+    const double grow = 0.5 * (*hi - *lo) + config.height_margin_m;
+    return HeightRange{*lo - grow, *hi + grow};
+}
+
 // `yaw_deg: auto` / `position_search_m`: the leading path is matched against a field that covers
 // every heading and position searched, then the estimate is placed where it fits best and the
 // anchor takes that heading and position.
@@ -180,7 +191,8 @@ void PlaceStart(const WorldFrame& world, const PipelineConfig& config, PreparedS
     const Eigen::AlignedBox2d region(c - Eigen::Vector2d(half, half), c + Eigen::Vector2d(half, half));
     RoadNetwork unused;
     const TraversableField lead_field =
-        LoadMapField(sc, world, config, region, ps.anchor.origin_up_m, unused);
+        LoadMapField(sc, world, config, region, ps.anchor.origin_up_m, unused, nullptr,
+                     WalkHeights(ps.estimate, config.indoor_field));
     ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, lead_field,
                               !sc.anchor.yaw_deg, sc.anchor.position_search_m, fit_cfg);
     const AnchorPlacement& best = ps.anchor_fit->best;
@@ -356,7 +368,7 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
     const std::vector<FieldDisc> corridor = FieldCorridor(ps.estimate, ps.anchor.origin_en,
                                                           AnchorFitFor(sc, config), config.field);
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
-                            &corridor);
+                            &corridor, WalkHeights(ps.estimate, config.indoor_field));
     if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
     if (!ps.anchor_fit) {
         // The anchor check: the given start, scored against every other heading and against
@@ -376,10 +388,11 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
 TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
                               double up_m, RoadNetwork& network,
-                              const std::vector<FieldDisc>* corridor) {
+                              const std::vector<FieldDisc>* corridor,
+                              const std::optional<HeightRange>& heights) {
     if (sc.mode == io::ScenarioMode::kIndoor3d) {
         if (IsSurfaceLayer(sc.map.front())) return LoadSurfaceField(sc, config.surface_field);
-        return LoadIndoorField(sc, config.indoor_field, up_m, network);
+        return LoadIndoorField(sc, config.indoor_field, up_m, network, heights);
     }
     network = LoadRoads(sc, world, config.roads);
     try {

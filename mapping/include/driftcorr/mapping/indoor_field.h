@@ -51,6 +51,11 @@ struct IndoorFieldConfig {
     double margin_m = 2.0;              ///< grid extends this far around the map (horizontal) [m]
     double vertical_margin_m = 1.5;     ///< and this far below the lowest, above the highest floor
     double truncation_m = 5.0;          ///< distances are capped at this value [m]
+    /// A corrected walk's field serves the heights of its estimate grown by half their range
+    /// and by this (BuildIndoorField's `heights`); far beyond them it reads outside the map.
+    /// Half the range: the floor hypotheses read a height change at most 1.4x; this margin: a
+    /// level walk's corrected height stays within decimetres of its estimate [m]
+    double height_margin_m = 3.0;
     double exact_band_m = 1.0;      ///< exact walkway distances within this band; EDT beyond [m]
     double max_memory_mb = 1024.0;  ///< refuse fields larger than this [MB]
 
@@ -79,6 +84,8 @@ inline constexpr Param<IndoorFieldConfig> kIndoorFieldParamRows[] = {
      "and this far below the lowest, above the highest floor"},
     {"truncation_m", Field<&IndoorFieldConfig::truncation_m>(), kPositive,
      "distances are capped at this value"},
+    {"height_margin_m", Field<&IndoorFieldConfig::height_margin_m>(), kNonNegative,
+     "a walk's field spans its estimated heights grown by half their range and this"},
     {"exact_band_m", Field<&IndoorFieldConfig::exact_band_m>(), kNonNegative,
      "exact walkway distances within this band; EDT beyond"},
     {"max_memory_mb", Field<&IndoorFieldConfig::max_memory_mb>(), kPositive,
@@ -95,7 +102,15 @@ struct IndoorFieldStats {
     std::size_t connector_voxels = 0;      ///< stair and lift voxels between floors
 };
 
-/// Builds the field over the floors' extent grown by margin_m.
+/// Heights [m]: where a walk's field is read.
+struct HeightRange {
+    double lo_m = 0.0, hi_m = 0.0;
+};
+
+/// Builds the field over the floors' extent grown by margin_m; with `heights`, only the layers
+/// within truncation_m plus two layers of them: at every height of `heights` the field gives the
+/// whole building's values, beyond them up to that reach values at least as large, and beyond
+/// the reach it reads outside the map. The memory cap applies to the layers built.
 /// Traversable set: on each floor's layer (the voxels within vertical_tolerance_m of
 /// floor_z_m + device_height_m, at least the nearest one), (walkable polygons minus walls) plus
 /// doors, stairs, lifts, and every point within walkway_half_width_m of a walkway line. Stairs
@@ -115,6 +130,7 @@ struct IndoorFieldStats {
 /// horizontal resolution that would fit).
 TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
                                   const IndoorFieldConfig& config,
-                                  IndoorFieldStats* stats = nullptr);
+                                  IndoorFieldStats* stats = nullptr,
+                                  const std::optional<HeightRange>& heights = std::nullopt);
 
 }  // namespace driftcorr

@@ -172,11 +172,13 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
 /// The scenario's map as a field: OSM roads rasterised over `region_en` (road2d; with a
 /// `corridor` and field.tile_m > 0, only the tiles within its discs, see RasteriseRoadCorridor),
 /// or the indoor GeoJSON / point-cloud / OctoMap layers (indoor3d; `up_m` picks the floor whose
-/// walkways go into `network` for pictures). Throws InputError naming the file or setting.
+/// walkways go into `network` for pictures; with `heights`, GeoJSON floors only at the layers
+/// that serve them, see BuildIndoorField). Throws InputError naming the file or setting.
 TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
                               double up_m, RoadNetwork& network,
-                              const std::vector<FieldDisc>* corridor = nullptr);
+                              const std::vector<FieldDisc>* corridor = nullptr,
+                              const std::optional<HeightRange>& heights = std::nullopt);
 
 /// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector).
 const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config);
