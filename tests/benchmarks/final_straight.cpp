@@ -23,8 +23,8 @@
 // platform) and moving along each straight by the estimate's steps, scaled to the straight's true
 // length (constant scale on it; on the last straight, which no turn ends, the scale before it),
 // leaves an along-track error whose RMS over the whole drive is printed as the bound of every
-// straight. Path lengths are horizontal: through a stairwell
-// (whose start the map also shows) it overstates the bound.
+// straight. Path lengths are horizontal: through a stairwell (whose start the map also shows) it
+// overstates the bound.
 //
 // Run: build/tests/final_straight [scenario dir ...]  (default: the 7 KITTI scenarios)
 #include <cmath>
