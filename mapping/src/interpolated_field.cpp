@@ -60,7 +60,7 @@ bool MakeStencil(const GridSpec& s, const Eigen::Vector3d& p, Stencil& st) {
     }
     st.bx = CubicBSpline(tx);
     st.by = CubicBSpline(ty);
-    st.bz = CubicBSpline(tz);
+    if (!st.planar) st.bz = CubicBSpline(tz);  // a planar field reads one layer, unweighted
     return true;
 }
 

@@ -333,8 +333,19 @@ const std::vector<std::optional<TraversableSample>>& WindowProblem::Samples(cons
         return cache_samples_;
     cache_x_.assign(x, x + n);
     cache_samples_.resize(last_ - first_ + 1);
+    // The terms read the centre distance; the corridor distance only the constraints do.
+    const bool corridor = !constraint_pose_.empty();
     for (std::size_t i = first_; i <= last_; ++i) {
-        cache_samples_[i - first_] = field_ ? field_->Query(PosePosition(x, i)) : std::nullopt;
+        auto& sample = cache_samples_[i - first_];
+        if (!field_) {
+            sample.reset();
+        } else if (corridor) {
+            sample = field_->Query(PosePosition(x, i));
+        } else if (const auto centre = field_->QueryCentre(PosePosition(x, i))) {
+            sample = TraversableSample{*centre, FieldSample{}};
+        } else {
+            sample.reset();
+        }
     }
     return cache_samples_;
 }

@@ -135,7 +135,8 @@ private:
     void BindPose(TermBlock& block, int k0, std::size_t pose) const;
     Eigen::Vector3d PosePosition(const double* x, std::size_t pose) const;
     /// Map field samples of every window pose at x, queried once per distinct x (Ipopt evaluates
-    /// objective, gradient, constraints and Hessians at the same point).
+    /// objective, gradient, constraints and Hessians at the same point); the corridor distance
+    /// only in a window with constraints (left zero otherwise: no term reads it).
     const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
     void BuildStructure(WindowUse use);
 
