@@ -28,12 +28,12 @@
 //
 // And what a causal output (each pose corrected with the epochs up to it, the online mode's) cannot
 // know: on the first straight, up to the first cut, nothing has yet told the step-length scale,
-// so a causal corrector moves by the estimate's steps at the model's prior scale of 1. Its along-track error there, with zero error
-// everywhere else, is printed as the causal bound of the first straight (RMS over the whole drive
-// or walk). After it, a causal corrector can at best carry the scale of the path before each
-// straight (as on the final straight above) until the straight's end turn tells its length: the
-// causal figure of every straight, an estimate of what the filter leaves rather than a bound (a
-// scale that varies can be predicted better or worse).
+// so a causal corrector moves by the estimate's steps at the model's prior scale of 1. Its
+// along-track error there, with zero error everywhere else, is printed as the causal bound of the
+// first straight (RMS over the whole drive or walk). After it, a causal corrector can at best carry
+// the scale of the path before each straight (as on the final straight above) until the straight's
+// end turn tells its length: the causal figure of every straight, an estimate of what the filter
+// leaves rather than a bound (a scale that varies can be predicted better or worse).
 //
 // Run: build/tests/final_straight [scenario dir ...]  (default: the 7 KITTI scenarios)
 #include <cmath>
@@ -164,15 +164,15 @@ void Evaluate(const std::string& dir) {
             causal_sq += std::pow((sg[i] - sg[from]) - scale * (se[i] - se[from]), 2);
         }
     }
-    std::printf("%-30s straight from pose %5zu of %5zu, %6.0f m | scale before %.3f, on it %.3f | "
-                "bound: final >= %6.1f m, ATE >= %5.2f m | every straight (%zu): ATE >= %5.2f m | "
-                "causal: first straight to pose %zu (%.0f m, scale %.3f) ATE >= %5.2f m, every "
-                "straight %5.2f m\n",
-                ps.scenario.name.c_str(), k, n, sg[n - 1] - sg[k], scale_before, scale_on,
-                final_err, std::sqrt(sum_sq / double(n)), cuts.size() - 1,
-                std::sqrt(every_sq / double(n)), first_end, sg[first_end],
-                sg[first_end] / std::max(se[first_end], 1e-9), std::sqrt(first_sq / double(n)),
-                std::sqrt(causal_sq / double(n)));
+    std::printf(
+        "%-30s straight from pose %5zu of %5zu, %6.0f m | scale before %.3f, on it %.3f | "
+        "bound: final >= %6.1f m, ATE >= %5.2f m | every straight (%zu): ATE >= %5.2f m | "
+        "causal: first straight to pose %zu (%.0f m, scale %.3f) ATE >= %5.2f m, every "
+        "straight %5.2f m\n",
+        ps.scenario.name.c_str(), k, n, sg[n - 1] - sg[k], scale_before, scale_on, final_err,
+        std::sqrt(sum_sq / double(n)), cuts.size() - 1, std::sqrt(every_sq / double(n)), first_end,
+        sg[first_end], sg[first_end] / std::max(se[first_end], 1e-9),
+        std::sqrt(first_sq / double(n)), std::sqrt(causal_sq / double(n)));
     std::fflush(stdout);
 }
 
