@@ -47,46 +47,62 @@ void Edt1d(const float* f, int n, float* d, int* v, float* z, float w = 1.0f) {
     }
 }
 
-// The first pass, along x, on the feature mask itself: in a row the squared distance (in cells)
-// to the nearest feature is that to the last one before or the next one after, two sweeps (the
-// lower envelope is only needed once distances differ from 0 and infinity).
-void FeatureRows(const std::vector<std::uint8_t>& feature, const GridSpec& s, std::vector<float>& g,
-                 float cap2) {
-    const int n = s.nx;
-    for (std::size_t base = 0; base < g.size(); base += std::size_t(n)) {
+// The first pass, along y, on the feature mask itself: in a column the squared distance (in cells)
+// to the nearest feature is that to the last one before or the next one after, a sweep down the
+// rows and one back up, each a whole row at a time (the lower envelope is only needed once
+// distances differ from 0 and infinity). Squared distances beyond cap2 become infinity.
+void FeatureColumns(const std::vector<std::uint8_t>& feature, const GridSpec& s,
+                    std::vector<float>& g, float cap2) {
+    const std::size_t nx = std::size_t(s.nx), slab = nx * std::size_t(s.ny);
+    for (std::size_t base = 0; base < g.size(); base += slab) {
         const std::uint8_t* f = feature.data() + base;
         float* d = g.data() + base;
-        int last = -1;
-        for (int q = 0; q < n; ++q) {
-            if (f[q]) last = q;
-            d[q] = last < 0 ? kInf : float(q - last);
+        for (std::size_t i = 0; i < nx; ++i) d[i] = f[i] ? 0.0f : kInf;
+        for (int j = 1; j < s.ny; ++j) {
+            const std::uint8_t* fr = f + j * nx;
+            const float* above = d + (j - 1) * nx;
+            float* row = d + j * nx;
+            for (std::size_t i = 0; i < nx; ++i) row[i] = fr[i] ? 0.0f : above[i] + 1.0f;
         }
-        int next = -1;
-        for (int q = n - 1; q >= 0; --q) {
-            if (f[q]) next = q;
-            if (next >= 0) d[q] = std::min(d[q], float(next - q));
-            d[q] *= d[q];
-            if (d[q] > cap2) d[q] = kInf;
+        for (int j = s.ny - 2; j >= 0; --j) {
+            const float* below = d + (j + 1) * nx;
+            float* row = d + j * nx;
+            for (std::size_t i = 0; i < nx; ++i) row[i] = std::min(row[i], below[i] + 1.0f);
+        }
+        for (std::size_t i = 0; i < slab; ++i) {
+            const float sq = d[i] * d[i];
+            d[i] = sq > cap2 ? kInf : sq;
         }
     }
 }
 
-// Applies Edt1d along axis 1 (y) or 2 (z) of the grid, in place. The lines along these axes are
-// strided in memory; kBlock neighbouring lines (neighbours along x) are gathered and scattered
-// together, a row of kBlock contiguous samples at a time.
-void EdtAxis(std::vector<float>& g, const GridSpec& s, int axis) {
+// Applies Edt1d along x, in place: the rows are contiguous.
+void EdtRows(std::vector<float>& g, const GridSpec& s) {
+    const int n = s.nx;
+    std::vector<float> d(n), z(n + 1);
+    std::vector<int> v(n);
+    for (std::size_t base = 0; base < g.size(); base += std::size_t(n)) {
+        float* row = g.data() + base;
+        Edt1d(row, n, d.data(), v.data(), z.data());
+        std::copy(d.begin(), d.end(), row);
+    }
+}
+
+// Applies Edt1d along z, in place. The lines along z are strided in memory; kBlock neighbouring
+// lines (neighbours along x) are gathered and scattered together, a row of kBlock contiguous
+// samples at a time.
+void EdtLayers(std::vector<float>& g, const GridSpec& s) {
     constexpr int kBlock = 16;
-    const int n = axis == 1 ? s.ny : s.nz;
-    const std::size_t stride = axis == 1 ? std::size_t(s.nx) : std::size_t(s.nx) * s.ny;
-    const int lines_b = axis == 2 ? s.ny : s.nz;
+    const int n = s.nz;
+    const std::size_t stride = std::size_t(s.nx) * s.ny;
     std::vector<float> f(std::size_t(n) * kBlock), d(n), z(n + 1);
     std::vector<int> v(n);
-    const float ratio = axis == 2 ? float(s.dz() / s.resolution_m) : 1.0f;
+    const float ratio = float(s.dz() / s.resolution_m);
     const float w = ratio * ratio;
-    for (int b = 0; b < lines_b; ++b) {
+    for (int b = 0; b < s.ny; ++b) {
         for (int a0 = 0; a0 < s.nx; a0 += kBlock) {
             const int width = std::min(kBlock, s.nx - a0);
-            const std::size_t base = axis == 1 ? s.Index(a0, 0, b) : s.Index(a0, b, 0);
+            const std::size_t base = s.Index(a0, b, 0);
             for (int q = 0; q < n; ++q) {
                 const float* row = &g[base + q * stride];
                 for (int a = 0; a < width; ++a) f[std::size_t(a) * n + q] = row[a];
@@ -131,12 +147,12 @@ std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
     DRIFTCORR_CHECK(feature.size() == spec.size(), "feature mask does not match the grid");
     std::vector<float> g;
     AssignLarge(g, spec.size(), 0.0f);
-    // A site farther than the cap along x cannot make a distance within it (squared cells; a
+    // A site farther than the cap along y cannot make a distance within it (squared cells; a
     // cell's margin against rounding).
     const double cap_cells = cap_m / spec.resolution_m + 1.0;
-    FeatureRows(feature, spec, g, std::isfinite(cap_m) ? float(cap_cells * cap_cells) : kInf);
-    EdtAxis(g, spec, 1);
-    if (spec.nz > 1) EdtAxis(g, spec, 2);
+    FeatureColumns(feature, spec, g, std::isfinite(cap_m) ? float(cap_cells * cap_cells) : kInf);
+    EdtRows(g, spec);
+    if (spec.nz > 1) EdtLayers(g, spec);
     const float res = static_cast<float>(spec.resolution_m);
     for (float& x : g) x = (x == kInf) ? kInf : std::sqrt(x) * res;
     return g;

@@ -68,7 +68,7 @@ void AssignLarge(std::vector<T>& v, std::size_t n, T value);
 /// envelope of parabolas, linear in the number of samples). Returns, for every sample, the
 /// distance in metres to the nearest sample whose `feature` is non-zero, or +infinity when the
 /// grid has no feature. With `cap_m`, a distance beyond cap_m may come out larger, up to
-/// +infinity (the features farther than cap_m along x are left out of the second pass: a field
+/// +infinity (the features farther than cap_m along y are left out of the second pass: a field
 /// truncated at cap_m needs no more); the distances up to cap_m are the same numbers.
 /// Precondition: feature.size() == spec.size().
 std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
