@@ -21,8 +21,8 @@
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/ipopt_solver.h"
 #include "driftcorr/optim/newton_solver.h"
+#include "driftcorr/optim/skyline_ldlt.h"
 #include "driftcorr/optim/window_problem.h"
-
 #include "test_state.h"
 
 namespace driftcorr {
@@ -642,6 +642,70 @@ TEST(IpoptSolver, ConstrainedWindowEndsInsideTheCorridor) {
 // Odometry 4.5x too long, the poses starting on the true curve: the map asks for scales of
 // 1/4.5, below kScaleMin. Newton keeps them at the bound (the projected method), where Ipopt
 // ends too, with the same objective.
+// A random symmetric positive definite matrix whose upper triangle lies in a random envelope
+// (a band with a few columns that reach far back, like a window's scale variables).
+struct EnvelopeCase {
+    std::vector<int> first;
+    Eigen::MatrixXd a;
+};
+
+EnvelopeCase RandomEnvelope(int n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    EnvelopeCase c;
+    c.first.resize(n);
+    for (int j = 0; j < n; ++j) {
+        const int reach = (rng() % 7 == 0) ? int(rng() % (j + 1)) : int(rng() % 6);
+        c.first[j] = std::max(0, j - reach);
+    }
+    c.a = Eigen::MatrixXd::Zero(n, n);
+    for (int j = 0; j < n; ++j) {
+        for (int i = c.first[j]; i < j; ++i) {
+            // Some entries of the envelope stay zero, as in a Hessian's pattern.
+            if (rng() % 3 == 0) continue;
+            c.a(i, j) = c.a(j, i) = u(rng);
+        }
+    }
+    // Diagonally dominant: positive definite.
+    for (int j = 0; j < n; ++j) c.a(j, j) = c.a.row(j).cwiseAbs().sum() + 0.5 + 0.5 * u(rng);
+    return c;
+}
+
+TEST(SkylineLdlt, SolvesAsADenseFactorisation) {
+    for (unsigned seed = 1; seed <= 20; ++seed) {
+        const int n = 5 + int(seed) * 7;
+        const EnvelopeCase c = RandomEnvelope(n, seed);
+        SkylineLdlt ldlt(c.first);
+        for (int j = 0; j < n; ++j)
+            for (int i = c.first[j]; i <= j; ++i) ldlt.values()[ldlt.Index(i, j)] = c.a(i, j);
+        ASSERT_TRUE(ldlt.Factorize()) << "seed " << seed;
+        const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+        std::vector<double> x(b.data(), b.data() + n);
+        ldlt.Solve(x);
+        const Eigen::VectorXd ref = c.a.ldlt().solve(b);
+        for (int k = 0; k < n; ++k)
+            ASSERT_NEAR(x[k], ref[k], 1e-10) << "seed " << seed << ", " << k;
+        // Factorize leaves the matrix as it was: again, the same answer.
+        ASSERT_TRUE(ldlt.Factorize());
+        std::vector<double> again(b.data(), b.data() + n);
+        ldlt.Solve(again);
+        EXPECT_EQ(again, x);
+    }
+}
+
+TEST(SkylineLdlt, SaysWhenTheMatrixIsNotPositiveDefinite) {
+    const EnvelopeCase c = RandomEnvelope(40, 7);
+    for (int bad : {0, 17, 39}) {
+        SkylineLdlt ldlt(c.first);
+        for (int j = 0; j < 40; ++j)
+            for (int i = c.first[j]; i <= j; ++i) ldlt.values()[ldlt.Index(i, j)] = c.a(i, j);
+        ldlt.values()[ldlt.Index(bad, bad)] = -1.0;  // an indefinite matrix
+        EXPECT_FALSE(ldlt.Factorize()) << "negative diagonal at " << bad;
+        ldlt.values()[ldlt.Index(bad, bad)] = std::nan("");
+        EXPECT_FALSE(ldlt.Factorize()) << "NaN at " << bad;
+    }
+}
+
 TEST(NewtonSolver, KeepsScalesAtTheirBoundLikeIpopt) {
     ModelConfig model = Model();
     model.scale_range_sigma = 0.0;  // no prior pulling the scales back into the plausible range

@@ -1,17 +1,14 @@
 #include "driftcorr/optim/newton_solver.h"
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "driftcorr/core/check.h"
+#include "driftcorr/optim/skyline_ldlt.h"
 
 namespace driftcorr {
 namespace {
-
-using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
 // Armijo's sufficient decrease, the damping's first value and growth, the backtracking's
 // halvings before the damping grows instead, and the damping beyond which the solve gives up.
@@ -40,54 +37,48 @@ std::vector<int> BandOrder(const WindowProblem& p) {
     return position;
 }
 
-// The Hessian's upper triangle (Eigen's LDL^T factorises it in place, without the copy it makes
-// of a lower one) in BandOrder, with the problem's pattern and a full diagonal, and where each
-// entry of HessianValues lands in it.
+// The Hessian's upper triangle in BandOrder, held by its envelope (the problem's pattern and a
+// full diagonal), and where each entry of HessianValues lands in it.
 struct Pattern {
-    SparseMatrix matrix;
+    SkylineLdlt matrix;
     std::vector<int> position;  ///< per variable: its row and column in the matrix
-    std::vector<int> slot;      ///< per HessianStructure entry: index into matrix.valuePtr()
-    std::vector<int> diagonal;  ///< per variable: index of its diagonal entry
-    std::vector<int> row_var, column_var;  ///< per entry: the variables of its row and column
+    std::vector<std::size_t> slot;      ///< per HessianStructure entry: index into matrix.values()
+    std::vector<std::size_t> diagonal;  ///< per variable: index of its diagonal entry
+    std::vector<int> row_var,
+        column_var;  ///< per envelope entry: the variables of its row and column
 };
 
 Pattern BuildPattern(const WindowProblem& p) {
     const auto& structure = p.HessianStructure();
     const int n = p.NumVariables();
-    Pattern out;
-    out.position = BandOrder(p);
+    std::vector<int> position = BandOrder(p);
     auto upper = [&](int r, int c) {  // (row, column) with row <= column
-        const int a = out.position[r], b = out.position[c];
+        const int a = position[r], b = position[c];
         return a <= b ? std::make_pair(a, b) : std::make_pair(b, a);
     };
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(structure.size() + n);
+    std::vector<int> first(n);
+    for (int k = 0; k < n; ++k) first[k] = k;
     for (const auto& [r, c] : structure) {
         const auto [a, b] = upper(r, c);
-        t.emplace_back(a, b, 0.0);
+        first[b] = std::min(first[b], a);
     }
-    for (int k = 0; k < n; ++k) t.emplace_back(k, k, 0.0);
-    out.matrix.resize(n, n);
-    out.matrix.setFromTriplets(t.begin(), t.end());
-    out.matrix.makeCompressed();
-    const int* outer = out.matrix.outerIndexPtr();
-    const int* inner = out.matrix.innerIndexPtr();
-    auto index = [&](int r, int c) {
-        const auto [a, b] = upper(r, c);
-        return static_cast<int>(std::lower_bound(inner + outer[b], inner + outer[b + 1], a) -
-                                inner);
-    };
+    Pattern out{SkylineLdlt(std::move(first)), {}, {}, {}, {}, {}};
     out.slot.reserve(structure.size());
-    for (const auto& [r, c] : structure) out.slot.push_back(index(r, c));
-    for (int k = 0; k < n; ++k) out.diagonal.push_back(index(k, k));
+    for (const auto& [r, c] : structure) {
+        const auto [a, b] = upper(r, c);
+        out.slot.push_back(out.matrix.Index(a, b));
+    }
+    out.position = std::move(position);
+    for (int k = 0; k < n; ++k)
+        out.diagonal.push_back(out.matrix.Index(out.position[k], out.position[k]));
     std::vector<int> var(n);
     for (int k = 0; k < n; ++k) var[out.position[k]] = k;
-    out.row_var.resize(out.matrix.nonZeros());
-    out.column_var.resize(out.matrix.nonZeros());
+    out.row_var.resize(out.matrix.entries());
+    out.column_var.resize(out.matrix.entries());
     for (int c = 0; c < n; ++c) {
-        for (int e = outer[c]; e < outer[c + 1]; ++e) {
-            out.row_var[e] = var[inner[e]];
-            out.column_var[e] = var[c];
+        for (int r = out.matrix.first_row(c); r <= c; ++r) {
+            out.row_var[out.matrix.Index(r, c)] = var[r];
+            out.column_var[out.matrix.Index(r, c)] = var[c];
         }
     }
     return out;
@@ -114,8 +105,6 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         x[k] = std::clamp(x[k], lower[k], upper[k]);
     }
     Pattern pattern = BuildPattern(problem);
-    Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
-    ldlt.analyzePattern(pattern.matrix);
 
     std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
     // The active set: held variables and those pressed against a bound by the gradient; they
@@ -139,7 +128,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     // Ipopt's scaling of the objective: its gradient at the start at most 100.
     const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
     double damping = 0.0;
-    Eigen::VectorXd step(n), rhs(n), solved(n);
+    std::vector<double> step(n), rhs(n);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
     for (int it = 0;; ++it) {
@@ -158,10 +147,10 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         }
         report.iterations = it + 1;
         problem.HessianValues(x.data(), 1.0, nullptr, hessian.data());
-        double* values = pattern.matrix.valuePtr();
-        std::fill(values, values + pattern.matrix.nonZeros(), 0.0);
+        std::vector<double>& values = pattern.matrix.values();
+        std::fill(values.begin(), values.end(), 0.0);
         for (std::size_t e = 0; e < hessian.size(); ++e) values[pattern.slot[e]] += hessian[e];
-        for (int e = 0; e < pattern.matrix.nonZeros(); ++e) {
+        for (std::size_t e = 0; e < values.size(); ++e) {
             if (active[pattern.row_var[e]] || active[pattern.column_var[e]]) values[e] = 0.0;
         }
         std::vector<double> diagonal(n);
@@ -178,12 +167,10 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
                     diagonal[k] +
                     (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
             }
-            ldlt.factorize(pattern.matrix);
-            const bool definite = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
-            if (definite) {
+            if (pattern.matrix.Factorize()) {
                 for (int k = 0; k < n; ++k) rhs[pattern.position[k]] = -grad[k];
-                solved = ldlt.solve(rhs);
-                for (int k = 0; k < n; ++k) step[k] = solved[pattern.position[k]];
+                pattern.matrix.Solve(rhs);
+                for (int k = 0; k < n; ++k) step[k] = rhs[pattern.position[k]];
                 for (int alpha_k = 0; alpha_k < kHalvings && !moved; ++alpha_k) {
                     const double alpha = std::ldexp(1.0, -alpha_k);
                     double decrease = 0.0;  // the model's, along the projected step

@@ -2,11 +2,12 @@
 // Solves a WindowProblem without constraints (the incremental and fixed-lag windows' soft terms)
 // by a damped Newton method on its exact Hessian: the Hessian of a window is a band (each term
 // couples consecutive poses) bordered by its few scale and heading-rate bias variables, so one
-// sparse LDL^T factorisation (Eigen, fill-reducing ordering analysed once per window) costs
-// O(poses). Where the Hessian is not positive definite (the map term is not convex) a multiple of
-// its diagonal is added, as Ipopt corrects the inertia of its own system; steps are accepted by a
-// backtracking (Armijo) line search on the objective. Variables whose bounds coincide (heights in
-// planar mode) are held; the scale variables are kept inside their bounds by projection.
+// LDL^T factorisation of its envelope (skyline_ldlt.h; each scale or bias variable ordered right
+// after the last pose it touches) costs O(poses). Where the Hessian is not positive definite (the
+// map term is not convex) a multiple of its diagonal is added, as Ipopt corrects the inertia of its
+// own system; steps are accepted by a backtracking (Armijo) line search on the objective. Variables
+// whose bounds coincide (heights in planar mode) are held; the scale variables are kept inside
+// their bounds by projection.
 //
 // Convergence is Ipopt's test for an unconstrained problem: the gradient's largest component,
 // with the objective scaled as Ipopt scales it (to a gradient of at most 100 at the start),
