@@ -44,8 +44,8 @@ struct Pattern {
     std::vector<int> position;  ///< per variable: its row and column in the matrix
     std::vector<std::size_t> slot;      ///< per HessianStructure entry: index into matrix.values()
     std::vector<std::size_t> diagonal;  ///< per variable: index of its diagonal entry
-    std::vector<int> row_var,
-        column_var;  ///< per envelope entry: the variables of its row and column
+    /// Per envelope entry: the variables of its row and column.
+    std::vector<int> row_var, column_var;
 };
 
 Pattern BuildPattern(const WindowProblem& p) {
