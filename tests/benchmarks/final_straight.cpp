@@ -57,7 +57,7 @@ double kStraightDeg = 10.0;
 constexpr double kScaleWindowM = 500.0; // path before the straight for its scale
 // A new straight starts where the direction turned this much [deg] (environment TURN_DEG).
 double kTurnDeg = 30.0;
-// The first straight of the causal bound ends where the true height changed this much [m]
+// Indoors a straight also ends where the true height changed this much since the last cut [m]
 // (environment CLIMB_M).
 double kClimbM = 0.5;
 
