@@ -54,7 +54,7 @@ Linearisation<N> LinearCauchy(double r, const Eigen::Matrix<double, N, 1>& j, do
     return {r, j, info, info * r * r};
 }
 
-// A residual of the step block with its Jacobian J and Hessian Hr.
+// A residual of the step block with its Jacobian J and Hessian Hr (Hr set only when asked for).
 struct StepResidual {
     double r;
     StepVector j;
@@ -79,16 +79,21 @@ double LinearYawDifference(const StepVector& x, double offset, double sigma, dou
     return Gaussian<9>(x[kYawB] - x[kYawA] - offset, j, nullptr, sigma, weight, grad, hess);
 }
 
-StepResidual StepLengthResidual(const StepVector& x, double length_m, double direction_rad) {
+StepResidual StepLengthResidual(const StepVector& x, double length_m, double direction_rad,
+                                bool with_hr) {
     const StepGeometry g = Geometry(x, direction_rad);
     const double along = g.c * g.dx + g.s * g.dy;  // projection of the displacement
     const double side = -g.s * g.dx + g.c * g.dy;
-    StepResidual res{along - x[kScale] * length_m, StepVector::Zero(), StepMatrix::Zero()};
+    StepResidual res;
+    res.r = along - x[kScale] * length_m;
     StepVector& j = res.j;
+    j.setZero();
     j[kXa] = -g.c, j[kYa] = -g.s, j[kXb] = g.c, j[kYb] = g.s;
     j[kYawA] = side;
     j[kScale] = -length_m;
+    if (!with_hr) return res;
     StepMatrix& hr = res.hr;
+    hr.setZero();
     // d2 along / d yaw_a^2 = -along; d2 along / d yaw_a d(x_b, y_b) = (-s, c) = -(d2/d(x_a, y_a)).
     hr(kYawA, kYawA) = -along;
     hr(kYawA, kXb) = hr(kXb, kYawA) = -g.s;
@@ -98,14 +103,18 @@ StepResidual StepLengthResidual(const StepVector& x, double length_m, double dir
     return res;
 }
 
-StepResidual StepDirectionResidual(const StepVector& x, double direction_rad) {
+StepResidual StepDirectionResidual(const StepVector& x, double direction_rad, bool with_hr) {
     const StepGeometry g = Geometry(x, direction_rad);
     const double along = g.c * g.dx + g.s * g.dy;
-    StepResidual res{-g.s * g.dx + g.c * g.dy, StepVector::Zero(), StepMatrix::Zero()};
+    StepResidual res;
+    res.r = -g.s * g.dx + g.c * g.dy;
     StepVector& j = res.j;
+    j.setZero();
     j[kXa] = g.s, j[kYa] = -g.c, j[kXb] = -g.s, j[kYb] = g.c;
     j[kYawA] = -along;
+    if (!with_hr) return res;
     StepMatrix& hr = res.hr;
+    hr.setZero();
     hr(kYawA, kYawA) = -res.r;
     hr(kYawA, kXb) = hr(kXb, kYawA) = -g.c;
     hr(kYawA, kYb) = hr(kYb, kYawA) = -g.s;
@@ -126,13 +135,14 @@ Linearisation<9> LinearDifference(const StepVector& x, int a, int b, double offs
 }  // namespace
 
 double StepLengthTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    const StepResidual res = StepLengthResidual(x, length_m, direction_rad);
-    if (robust_k <= 0.0) return Gaussian<9>(res.r, res.j, &res.hr, sigma_m, weight, grad, hess);
-    return Cauchy<9>(res.r, res.j, &res.hr, sigma_m, robust_k, weight, grad, hess);
+    const StepResidual res = StepLengthResidual(x, length_m, direction_rad, hess != nullptr);
+    const StepMatrix* hr = hess ? &res.hr : nullptr;
+    if (robust_k <= 0.0) return Gaussian<9>(res.r, res.j, hr, sigma_m, weight, grad, hess);
+    return Cauchy<9>(res.r, res.j, hr, sigma_m, robust_k, weight, grad, hess);
 }
 
 Linearisation<9> StepLengthTerm::Linearise(const StepVector& x) const {
-    const StepResidual res = StepLengthResidual(x, length_m, direction_rad);
+    const StepResidual res = StepLengthResidual(x, length_m, direction_rad, false);
     if (robust_k <= 0.0) return LinearGaussian<9>(res.r, res.j, sigma_m, weight);
     return LinearCauchy<9>(res.r, res.j, sigma_m, robust_k, weight);
 }
@@ -197,12 +207,12 @@ Linearisation<12> SpeedChangeTerm::Linearise(const SpeedVector& x) const {
 }
 
 double StepDirectionTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    const StepResidual res = StepDirectionResidual(x, direction_rad);
-    return Gaussian<9>(res.r, res.j, &res.hr, sigma_m, weight, grad, hess);
+    const StepResidual res = StepDirectionResidual(x, direction_rad, hess != nullptr);
+    return Gaussian<9>(res.r, res.j, hess ? &res.hr : nullptr, sigma_m, weight, grad, hess);
 }
 
 Linearisation<9> StepDirectionTerm::Linearise(const StepVector& x) const {
-    const StepResidual res = StepDirectionResidual(x, direction_rad);
+    const StepResidual res = StepDirectionResidual(x, direction_rad, false);
     return LinearGaussian<9>(res.r, res.j, sigma_m, weight);
 }
 
