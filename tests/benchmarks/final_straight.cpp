@@ -67,6 +67,15 @@ std::vector<double> PathLength(const PlanarTrajectory& t) {
     return s;
 }
 
+// The best scale a corrector could have learned before pose `from`: ground-truth path over the
+// estimate's path over the kScaleWindowM of path before it; the prior scale of 1 at the start.
+double ScaleBefore(const std::vector<double>& sg, const std::vector<double>& se, std::size_t from) {
+    if (from == 0) return 1.0;
+    std::size_t back = from;
+    while (back > 0 && sg[from] - sg[back] < kScaleWindowM) --back;
+    return (sg[from] - sg[back]) / std::max(se[from] - se[back], 1e-9);
+}
+
 // Direction of travel at pose i: the chord to the first pose kChordM further on (or from the
 // first pose kChordM back, near the end). NaN while the platform stands.
 double Direction(const PlanarTrajectory& t, const std::vector<double>& s, std::size_t i) {
@@ -100,9 +109,7 @@ void Evaluate(const std::string& dir) {
         if (!std::isnan(d) && std::abs(AngleDiff(d, final_dir)) > DegToRad(kStraightDeg)) break;
         --k;
     }
-    std::size_t b = k;
-    while (b > 0 && sg[k] - sg[b] < kScaleWindowM) --b;
-    const double scale_before = (sg[k] - sg[b]) / std::max(se[k] - se[b], 1e-9);
+    const double scale_before = ScaleBefore(sg, se, k);
     const double scale_on = (sg[n - 1] - sg[k]) / std::max(se[n - 1] - se[k], 1e-9);
     double sum_sq = 0.0, final_err = 0.0;
     for (std::size_t i = k; i < n; ++i) {
@@ -133,37 +140,24 @@ void Evaluate(const std::string& dir) {
         }
     }
     cuts.push_back(n - 1);
-    double every_sq = 0.0;
+    // Along each straight: the estimate's steps scaled to the straight's true length (every
+    // straight; the last one, which no turn ends, by the scale of the path before it, as above),
+    // or by the scale of the path before it (causal). The causal first straight at the prior
+    // scale of 1, up to its turn or the first climb.
+    double every_sq = 0.0, causal_sq = 0.0;
     for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
         const std::size_t from = cuts[c], to = cuts[c + 1];
-        // Scaled to the straight's true length; the last one (no turn at its end) by the scale
-        // of the path before it, as above.
-        double scale = (sg[to] - sg[from]) / std::max(se[to] - se[from], 1e-9);
-        if (c + 2 == cuts.size()) {
-            std::size_t back = from;
-            while (back > 0 && sg[from] - sg[back] < kScaleWindowM) --back;
-            scale = from > 0 ? (sg[from] - sg[back]) / std::max(se[from] - se[back], 1e-9) : 1.0;
-        }
-        for (std::size_t i = from; i <= to; ++i) {
-            const double e = (sg[i] - sg[from]) - scale * (se[i] - se[from]);
-            every_sq += e * e;
-        }
-    }
-    // Causal: the first straight at the prior scale 1, up to its turn or the first climb; each
-    // later straight at the scale of the path before it.
-    const std::size_t first_end = cuts.size() > 1 ? cuts[1] : n - 1;
-    double first_sq = 0.0, causal_sq = 0.0;
-    for (std::size_t i = 0; i <= first_end; ++i) first_sq += std::pow(sg[i] - se[i], 2);
-    for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
-        const std::size_t from = cuts[c], to = cuts[c + 1];
-        std::size_t back = from;
-        while (back > 0 && sg[from] - sg[back] < kScaleWindowM) --back;
+        const double before = ScaleBefore(sg, se, from);
         const double scale =
-            from > 0 ? (sg[from] - sg[back]) / std::max(se[from] - se[back], 1e-9) : 1.0;
+            c + 2 == cuts.size() ? before : (sg[to] - sg[from]) / std::max(se[to] - se[from], 1e-9);
         for (std::size_t i = from; i <= to; ++i) {
-            causal_sq += std::pow((sg[i] - sg[from]) - scale * (se[i] - se[from]), 2);
+            every_sq += std::pow((sg[i] - sg[from]) - scale * (se[i] - se[from]), 2);
+            causal_sq += std::pow((sg[i] - sg[from]) - before * (se[i] - se[from]), 2);
         }
     }
+    const std::size_t first_end = cuts.size() > 1 ? cuts[1] : n - 1;
+    double first_sq = 0.0;
+    for (std::size_t i = 0; i <= first_end; ++i) first_sq += std::pow(sg[i] - se[i], 2);
     std::printf(
         "%-30s straight from pose %5zu of %5zu, %6.0f m | scale before %.3f, on it %.3f | "
         "bound: final >= %6.1f m, ATE >= %5.2f m | every straight (%zu): ATE >= %5.2f m | "
