@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -402,6 +403,37 @@ TEST(TumLine, ParsesAndRejects) {
         EXPECT_EQ(r.kind, io::TumLine::Kind::kError) << bad;
         EXPECT_FALSE(r.error.empty()) << bad;
     }
+}
+
+// The line is the one printf's "%.6f ... %.9f" gives, to the character: values of every
+// magnitude a trajectory holds, halfway cases of both decimals, negative zero and tiny negatives
+// (printed "-0.000000"); and a value too long for the buffer is refused, not cut.
+TEST(TumLine, FormatsAsPrintfDoes) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-12, 9);
+    std::vector<double> special = {
+        0.0,    -0.0,   0.5e-6, 1.5e-6,    2.5e-6,    -0.5e-6,      0.5e-9,
+        2.5e-9, -4e-10, -4e-7,  0.1234565, 1.0000005, 1e9 + 0.5e-6, 1700000000.123456789,
+        4541.05};
+    char printf_line[512], line[512];
+    for (int trial = 0; trial < 20000; ++trial) {
+        double v[8];
+        for (int k = 0; k < 8; ++k) {
+            v[k] = trial < int(special.size()) ? special[std::size_t(trial)]
+                                               : mantissa(rng) * std::pow(10.0, exponent(rng));
+        }
+        const Eigen::Vector3d p(v[1], v[2], v[3]);
+        const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // w, x, y, z: not normalised here
+        const int expected = std::snprintf(printf_line, sizeof(printf_line),
+                                           "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", v[0], v[1],
+                                           v[2], v[3], v[4], v[5], v[6], v[7]);
+        const std::size_t n = io::FormatTumLine(line, sizeof(line), v[0], p, q);
+        ASSERT_EQ(std::string(line, n), std::string(printf_line, std::size_t(expected))) << trial;
+        EXPECT_EQ(io::FormatTumLine(v[0], p, q), std::string(printf_line)) << trial;
+    }
+    const Eigen::Vector3d far(1e300, 0.0, 0.0);
+    EXPECT_EQ(io::FormatTumLine(line, 256, 0.0, far, Eigen::Quaterniond::Identity()), 0u);
 }
 
 std::string Slurp(const std::string& path) {

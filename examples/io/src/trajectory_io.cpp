@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/io/tum_line.h"
 #include "driftcorr/mapping/atomic_file.h"
 #include "parse_number.h"
 
@@ -470,12 +471,11 @@ void WriteTum(const std::string& path, const Trajectory& traj) {
         const Eigen::Quaterniond q =
             traj.HasOrientation() ? traj.q_frame_body[i] : Eigen::Quaterniond::Identity();
         const Eigen::Vector3d& p = traj.p_frame[i];
-        const int n = std::snprintf(buf, sizeof(buf), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n",
-                                    traj.t_s[i], p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
-        if (n < 0 || n >= static_cast<int>(sizeof(buf))) {
+        const std::size_t n = FormatTumLine(buf, sizeof(buf), traj.t_s[i], p, q);
+        if (n == 0) {
             throw std::runtime_error(path + ": pose " + std::to_string(i) + " does not format");
         }
-        out.write(buf, n);
+        out.write(buf, static_cast<std::streamsize>(n));
     }
     if (!out) throw std::runtime_error(path + ": write failed");
     file.Commit();

@@ -20,8 +20,11 @@ struct TumLine {
 /// number, NaN/inf, a zero-norm quaternion. Same rules as ReadTum, per line.
 TumLine ParseTumLine(std::string_view line);
 
-/// Formats a pose as ReadTum/WriteTum do (timestamps and positions %.6f, quaternion %.9f), with a
-/// trailing newline.
+/// Formats a pose as WriteTum does (timestamps and positions with 6 decimals, the quaternion with
+/// 9: the characters printf's %.6f and %.9f give), with a trailing newline.
 std::string FormatTumLine(double t_s, const Eigen::Vector3d& p, const Eigen::Quaterniond& q);
+/// The same line into [buf, buf + size); returns its length, or 0 when it does not fit.
+std::size_t FormatTumLine(char* buf, std::size_t size, double t_s, const Eigen::Vector3d& p,
+                          const Eigen::Quaterniond& q);
 
 }  // namespace driftcorr::io
