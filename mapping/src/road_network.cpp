@@ -1,5 +1,9 @@
 #include "driftcorr/mapping/road_network.h"
 
+#ifdef __linux__
+#include <sched.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <future>
@@ -45,13 +49,15 @@ struct Raster {
     std::vector<std::uint8_t> centre_seed, inside;
 };
 
-// Exact distances for the samples near one segment (within its half-width plus the band).
+// Exact distances for the samples of rows [j0, j1) near one segment (within its half-width plus
+// the band). Each sample keeps the least distance over the segments and the flags of any, so
+// the rows can be split between threads and the segments taken in any order.
 void RasteriseSegment(Raster& r, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double hw,
-                      double band) {
+                      double band, int j0, int j1) {
     const GridSpec& s = r.spec;
     const double reach = hw + band, res = s.resolution_m;
     const CellBox box = SegmentCells(s, a, b, reach);
-    for (int j = box.j0; j <= box.j1; ++j) {
+    for (int j = std::max(box.j0, j0); j <= std::min(box.j1, j1 - 1); ++j) {
         int i0 = 0, i1 = -1;
         if (!SegmentRowCells(r.whole, r.di, r.dj, j, a, b, reach, box, i0, i1)) continue;
         for (int i = i0; i <= i1; ++i) {
@@ -127,35 +133,51 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
     r.di = di;
     r.dj = dj;
     const std::size_t n = r.spec.size();
-    AssignLarge(r.centre_exact, n, inf);
+    const std::launch second = config.SideBySide() ? std::launch::async : std::launch::deferred;
+    // Two threads: each allocates two of the four grids, then rasterises half the rows.
+    auto centre_grids = std::async(second, [&r, n, inf] {
+        AssignLarge(r.centre_exact, n, inf);
+        AssignLarge(r.centre_seed, n, std::uint8_t(0));
+    });
     AssignLarge(r.corridor_exact, n, inf);
-    AssignLarge(r.centre_seed, n, std::uint8_t(0));
     AssignLarge(r.inside, n, std::uint8_t(0));
-    for (const auto& road : network.roads) {
-        for (std::size_t k = 1; k < road.points_en.size(); ++k) {
-            RasteriseSegment(r, road.points_en[k - 1], road.points_en[k], road.half_width_m,
-                             config.exact_band_m);
+    centre_grids.get();
+    auto rasterise = [&](int j0, int j1) {
+        for (const auto& road : network.roads) {
+            for (std::size_t k = 1; k < road.points_en.size(); ++k) {
+                RasteriseSegment(r, road.points_en[k - 1], road.points_en[k], road.half_width_m,
+                                 config.exact_band_m, j0, j1);
+            }
         }
-    }
+    };
+    const int mid = r.spec.ny / 2;
+    auto upper_rows = std::async(second, [&] { rasterise(mid, r.spec.ny); });
+    rasterise(0, mid);
+    upper_rows.get();
     // Both fields are capped at the truncation; the corridor's takes half a cell off the
-    // distance to an inside sample, so beyond truncation + a cell nothing is needed.
+    // distance to an inside sample, so beyond truncation + a cell nothing is needed. Each
+    // transform, and the exact band laid over it, in its own thread.
     const double cap = config.truncation_m + config.resolution_m;
-    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-    const bool side_by_side = (config.threads == 0 ? cores : unsigned(config.threads)) >= 2;
-    std::future<std::vector<float>> to_corridor = std::async(
-        side_by_side ? std::launch::async : std::launch::deferred,
-        [&r, cap] { return EuclideanDistanceTransform(r.spec, r.inside, cap); });
-    std::vector<float> centre = EuclideanDistanceTransform(r.spec, r.centre_seed, cap);
-    std::vector<float> corridor = to_corridor.get();
     const float trunc = float(config.truncation_m), half = float(0.5 * config.resolution_m);
+    std::future<std::vector<float>> to_corridor =
+        std::async(second, [&r, cap, n, trunc, half, inf] {
+            std::vector<float> corridor = EuclideanDistanceTransform(r.spec, r.inside, cap);
+            // Beyond the band: the distance to the nearest inside sample overestimates the distance
+            // to the corridor edge (which lies between that sample and the next one) by up to one
+            // cell; minus half a cell centres the error (same convention as
+            // SignedDistanceTransform).
+            for (std::size_t i = 0; i < n; ++i) {
+                const float exact = r.corridor_exact[i];
+                corridor[i] = std::min(trunc, exact < inf ? exact : corridor[i] - half);
+            }
+            return corridor;
+        });
+    std::vector<float> centre = EuclideanDistanceTransform(r.spec, r.centre_seed, cap);
     for (std::size_t i = 0; i < n; ++i) {
-        const bool exact = r.centre_exact[i] < inf;
-        centre[i] = std::min(trunc, exact ? r.centre_exact[i] : centre[i]);
-        // Beyond the band: the distance to the nearest inside sample overestimates the distance
-        // to the corridor edge (which lies between that sample and the next one) by up to one
-        // cell; minus half a cell centres the error (same convention as SignedDistanceTransform).
-        corridor[i] = std::min(trunc, exact ? r.corridor_exact[i] : corridor[i] - half);
+        const float exact = r.centre_exact[i];
+        centre[i] = std::min(trunc, exact < inf ? exact : centre[i]);
     }
+    std::vector<float> corridor = to_corridor.get();
     return {std::move(centre), std::move(corridor)};
 }
 
@@ -289,6 +311,16 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
 
 std::optional<ParamProblem> RoadFieldConfig::FindProblem() const {
     return CheckRows(kRoadFieldParams, *this);
+}
+
+bool RoadFieldConfig::SideBySide() const {
+    if (threads != 0) return threads >= 2;
+#ifdef __linux__
+    // The cores this process may run on (taskset, a container's CPU set), not the machine's.
+    cpu_set_t allowed;
+    if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0) return CPU_COUNT(&allowed) >= 2;
+#endif
+    return std::thread::hardware_concurrency() >= 2;
 }
 
 std::string RoadFieldConfig::Validate() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <stdexcept>
 #include <utility>
 
@@ -11,11 +12,11 @@
 #include "driftcorr/core/format.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/io/trajectory_io.h"
-#include "driftcorr/mapping/geodesy.h"
 #include "driftcorr/mapping/floor_plan.h"
+#include "driftcorr/mapping/geodesy.h"
 #include "driftcorr/mapping/osm_reader.h"
-#include "driftcorr/pipeline/surface_io_loader.h"
 #include "driftcorr/optim/anchor_fit.h"
+#include "driftcorr/pipeline/surface_io_loader.h"
 
 namespace driftcorr::pipeline {
 namespace {
@@ -201,6 +202,27 @@ void PlaceStart(const WorldFrame& world, const PipelineConfig& config, PreparedS
     ps.anchor.origin_en += best.offset_en;
 }
 
+// The anchor check: the given start, scored against every other heading and against nearby
+// positions at the given heading; the better of the two searches is kept.
+AnchorFitResult CheckAnchor(const PreparedScenario& ps, const PipelineConfig& config) {
+    const AnchorFitConfig fit_cfg = AnchorFitFor(ps.scenario, config);
+    AnchorFitResult fit = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, true, 0.0, fit_cfg);
+    if (fit_cfg.check_position_radius_m > 0.0) {
+        const AnchorFitResult moved = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, false,
+                                                fit_cfg.check_position_radius_m, fit_cfg);
+        if (moved.best.rms_m < fit.best.rms_m) fit.best = moved.best;
+    }
+    return fit;
+}
+
+// When the anchor check runs: at the end of the map stage, or (RunCorrection, when the map stage
+// may use a second thread) beside the correction, which does not read it.
+enum class AnchorCheck { kInMapStage, kBesideCorrection };
+
+AnchorCheck WhenToCheck(const PipelineConfig& config) {
+    return config.field.SideBySide() ? AnchorCheck::kBesideCorrection : AnchorCheck::kInMapStage;
+}
+
 }  // namespace
 
 // The sigmas of the walkway pull, the heading walk and the step scale were chosen on a real walk
@@ -306,29 +328,63 @@ void CheckWalkStart(const PreparedScenario& ps) {
 
 }  // namespace
 
-PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config) {
-    const auto t0 = std::chrono::steady_clock::now();
-    io::Scenario scenario = io::LoadScenario(scenario_path);
-    const double yaml_s = Since(t0);
-    PreparedScenario ps = PrepareScenario(std::move(scenario), config);
-    ps.timings.load_s += yaml_s;
-    return ps;
-}
+namespace {
 
-PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& config) {
+PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
+                         std::optional<Trajectory> gt, const PipelineConfig& config,
+                         AnchorCheck when);
+
+// Reads the trajectories (the ground truth beside the estimate when a second thread is allowed)
+// and prepares the scenario.
+PreparedScenario LoadAndPrepare(io::Scenario scenario, const PipelineConfig& config,
+                                AnchorCheck when) {
     const auto t0 = std::chrono::steady_clock::now();
+    std::future<std::optional<Trajectory>> gt =
+        std::async(config.field.SideBySide() ? std::launch::async : std::launch::deferred,
+                   [&scenario]() -> std::optional<Trajectory> {
+                       if (!scenario.ground_truth) return std::nullopt;
+                       return io::LoadTrajectory(*scenario.ground_truth);
+                   });
     Trajectory estimate = io::LoadTrajectory(scenario.estimate);
-    std::optional<Trajectory> gt;
-    if (scenario.ground_truth) gt = io::LoadTrajectory(*scenario.ground_truth);
+    std::optional<Trajectory> ground_truth = gt.get();
     const double load_s = Since(t0);
     PreparedScenario ps =
-        PrepareScenario(std::move(scenario), std::move(estimate), std::move(gt), config);
+        Prepare(std::move(scenario), std::move(estimate), std::move(ground_truth), config, when);
     ps.timings.load_s = load_s;
     return ps;
 }
 
+PreparedScenario LoadAndPrepare(const std::string& scenario_path, const PipelineConfig& config,
+                                AnchorCheck when) {
+    const auto t0 = std::chrono::steady_clock::now();
+    io::Scenario scenario = io::LoadScenario(scenario_path);
+    const double yaml_s = Since(t0);
+    PreparedScenario ps = LoadAndPrepare(std::move(scenario), config, when);
+    ps.timings.load_s += yaml_s;
+    return ps;
+}
+
+}  // namespace
+
+PreparedScenario PrepareScenario(const std::string& scenario_path, const PipelineConfig& config) {
+    return LoadAndPrepare(scenario_path, config, AnchorCheck::kInMapStage);
+}
+
+PreparedScenario PrepareScenario(io::Scenario scenario, const PipelineConfig& config) {
+    return LoadAndPrepare(std::move(scenario), config, AnchorCheck::kInMapStage);
+}
+
 PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_frame,
                                  std::optional<Trajectory> gt, const PipelineConfig& config) {
+    return Prepare(std::move(scenario), std::move(estimate_frame), std::move(gt), config,
+                   AnchorCheck::kInMapStage);
+}
+
+namespace {
+
+PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
+                         std::optional<Trajectory> gt, const PipelineConfig& config,
+                         AnchorCheck when) {
     PreparedScenario ps;
     ps.scenario = std::move(scenario);
     const io::Scenario& sc = ps.scenario;
@@ -370,20 +426,12 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor, WalkHeights(ps.estimate, config.indoor_field));
     if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
-    if (!ps.anchor_fit) {
-        // The anchor check: the given start, scored against every other heading and against
-        // nearby positions at the given heading; the better of the two searches is kept.
-        const AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
-        ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, true, 0.0, fit_cfg);
-        if (fit_cfg.check_position_radius_m > 0.0) {
-            const AnchorFitResult moved = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field,
-                                                    false, fit_cfg.check_position_radius_m, fit_cfg);
-            if (moved.best.rms_m < ps.anchor_fit->best.rms_m) ps.anchor_fit->best = moved.best;
-        }
-    }
+    if (!ps.anchor_fit && when == AnchorCheck::kInMapStage) ps.anchor_fit = CheckAnchor(ps, config);
     ps.timings.map_s = Since(t0);
     return ps;
 }
+
+}  // namespace
 
 TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
@@ -442,12 +490,14 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    return RunCorrection(PrepareScenario(scenario_path, config), config, progress);
+    return RunCorrection(LoadAndPrepare(scenario_path, config, WhenToCheck(config)), config,
+                         progress);
 }
 
 CorrectionRun RunCorrection(io::Scenario scenario, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    return RunCorrection(PrepareScenario(std::move(scenario), config), config, progress);
+    return RunCorrection(LoadAndPrepare(std::move(scenario), config, WhenToCheck(config)), config,
+                         progress);
 }
 
 namespace {
@@ -472,9 +522,16 @@ CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
     run.timings = ps.timings;
     run.map_grid_cells = ps.field.Samples();
 
+    // A scenario prepared without its anchor check has it done here, beside the correction.
+    std::future<AnchorFitResult> check;
+    if (!ps.anchor_fit) {
+        check = std::async(config.field.SideBySide() ? std::launch::async : std::launch::deferred,
+                           [&ps, &config] { return CheckAnchor(ps, config); });
+    }
     const auto t0 = std::chrono::steady_clock::now();
     run.result = Correct(ps, config, progress);
     run.timings.solve_s = Since(t0);
+    if (check.valid()) ps.anchor_fit = check.get();
     run.verdict = JudgeResult(ps, config, run.result);
     if (Usable(run.result.status)) {
         run.corrected_frame = CorrectedInFrame(ps, config, run.result.corrected);

@@ -79,9 +79,14 @@ struct RoadFieldConfig {
     /// The field is built and held in square tiles of about this side, one tile at a time
     /// (RasteriseRoadCorridor keeps only the tiles its corridor touches); 0: one grid [m]
     double tile_m = 256.0;
-    /// Threads of the build: the two distance transforms (to the centre lines and to the
-    /// corridors) run side by side with 2 or more; 0: one per core.
+    /// Threads of one run's map stage: with 2 or more, the rasterisation splits its rows and the
+    /// two distance transforms (to the centre lines and to the corridors) run side by side, and
+    /// the pipeline reads the ground truth beside the estimate and checks the anchor beside the
+    /// correction; 0: one per core the process may run on.
     int threads = 0;
+
+    /// Whether `threads` (0: the cores the process may run on) allows a second thread.
+    bool SideBySide() const;
 
     /// The first value kRoadFieldParams does not allow.
     std::optional<ParamProblem> FindProblem() const;
@@ -103,7 +108,7 @@ inline constexpr Param<RoadFieldConfig> kRoadFieldParamRows[] = {
     {"tile_m", Field<&RoadFieldConfig::tile_m>(), kNonNegative,
      "built and held in tiles of this side; 0: one grid over the bounding box"},
     {"threads", Field<&RoadFieldConfig::threads>(), kNonNegative,
-     "threads of the field build (2: both distance transforms at once); 0: one per core"},
+     "threads of the map stage (2: both distance transforms at once); 0: one per core"},
 };
 inline constexpr ParamTable<RoadFieldConfig> kRoadFieldParams{"field", kRoadFieldParamRows};
 
