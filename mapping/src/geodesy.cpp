@@ -1,12 +1,15 @@
 #include "driftcorr/mapping/geodesy.h"
 
-#include <GeographicLib/LocalCartesian.hpp>
+#include <dlfcn.h>
 #include <proj.h>
 
+#include <GeographicLib/LocalCartesian.hpp>
 #include <cctype>
 #include <cmath>
 #include <regex>
 #include <stdexcept>
+#include <string>
+#include <type_traits>
 
 namespace driftcorr {
 
@@ -36,20 +39,81 @@ GeoPoint LocalTangentPlane::ToGeo(const Eigen::Vector3d& enu) const {
 
 namespace {
 
+// PROJ, with the thirty-odd libraries it links (curl, GnuTLS, Kerberos, LDAP, libtiff...), is
+// opened with dlopen the first time a projected CRS is used, not loaded into every process: it
+// adds about 5 ms to each start, and only a CRS anchor or --crs needs it. Its header gives the
+// types and the functions' signatures.
+struct ProjApi {
+    decltype(&proj_context_create) context_create;
+    decltype(&proj_context_destroy) context_destroy;
+    decltype(&proj_log_level) log_level;
+    decltype(&proj_create_crs_to_crs) create_crs_to_crs;
+    decltype(&proj_normalize_for_visualization) normalize_for_visualization;
+    decltype(&proj_create) create;
+    decltype(&proj_get_type) get_type;
+    decltype(&proj_destroy) destroy;
+    decltype(&proj_crs_get_coordinate_system) crs_get_coordinate_system;
+    decltype(&proj_cs_get_axis_count) cs_get_axis_count;
+    decltype(&proj_cs_get_axis_info) cs_get_axis_info;
+    decltype(&proj_trans) trans;
+};
+
+ProjApi LoadProj() {
+    void* lib = dlopen(DRIFTCORR_PROJ_SONAME, RTLD_NOW | RTLD_LOCAL);
+    if (lib == nullptr) {
+        const char* why = dlerror();
+        throw std::runtime_error(std::string("cannot load ") + DRIFTCORR_PROJ_SONAME +
+                                 " (PROJ, for projected CRSs): " + (why ? why : "dlopen failed"));
+    }
+    ProjApi api{};
+    auto bind = [lib](auto& fn, const char* name) {
+        fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(dlsym(lib, name));
+        if (fn == nullptr) {
+            throw std::runtime_error(std::string(DRIFTCORR_PROJ_SONAME) + " has no " + name);
+        }
+    };
+    bind(api.context_create, "proj_context_create");
+    bind(api.context_destroy, "proj_context_destroy");
+    bind(api.log_level, "proj_log_level");
+    bind(api.create_crs_to_crs, "proj_create_crs_to_crs");
+    bind(api.normalize_for_visualization, "proj_normalize_for_visualization");
+    bind(api.create, "proj_create");
+    bind(api.get_type, "proj_get_type");
+    bind(api.destroy, "proj_destroy");
+    bind(api.crs_get_coordinate_system, "proj_crs_get_coordinate_system");
+    bind(api.cs_get_axis_count, "proj_cs_get_axis_count");
+    bind(api.cs_get_axis_info, "proj_cs_get_axis_info");
+    bind(api.trans, "proj_trans");
+    return api;
+}
+
+const ProjApi& Proj() {
+    static const ProjApi api = LoadProj();  // once; a failure is retried on the next call
+    return api;
+}
+
 /// True when every axis of the CRS's coordinate system is in metres (conversion factor 1).
 bool AxesInMetres(PJ_CONTEXT* ctx, const PJ* crs) {
-    PJ* cs = proj_crs_get_coordinate_system(ctx, crs);
+    const ProjApi& proj = Proj();
+    PJ* cs = proj.crs_get_coordinate_system(ctx, crs);
     if (!cs) return false;
-    const int axis_count = proj_cs_get_axis_count(ctx, cs);
+    const int axis_count = proj.cs_get_axis_count(ctx, cs);
     bool metres = axis_count > 0;
     for (int i = 0; i < axis_count && metres; ++i) {
         double unit_conv_factor = 0.0;
-        metres = proj_cs_get_axis_info(ctx, cs, i, nullptr, nullptr, nullptr, &unit_conv_factor,
+        metres = proj.cs_get_axis_info(ctx, cs, i, nullptr, nullptr, nullptr, &unit_conv_factor,
                                        nullptr, nullptr, nullptr) &&
                  unit_conv_factor == 1.0;
     }
-    proj_destroy(cs);
+    proj.destroy(cs);
     return metres;
+}
+
+/// The coordinate (a, b, 0, 0), as proj_coord makes it.
+PJ_COORD Coord(double a, double b) {
+    PJ_COORD c;
+    c.v[0] = a, c.v[1] = b, c.v[2] = 0.0, c.v[3] = 0.0;
+    return c;
 }
 
 }  // namespace
@@ -58,8 +122,8 @@ struct CrsProjection::Impl {
     PJ_CONTEXT* ctx = nullptr;
     PJ* pj = nullptr;  // normalised for visualisation: (lon, lat) <-> (easting, northing)
     ~Impl() {
-        if (pj) proj_destroy(pj);
-        if (ctx) proj_context_destroy(ctx);
+        if (pj) Proj().destroy(pj);
+        if (ctx) Proj().context_destroy(ctx);
     }
 };
 
@@ -69,19 +133,20 @@ CrsProjection::CrsProjection(const std::string& crs) : impl_(std::make_unique<Im
         throw std::invalid_argument("CRS '" + crs +
                                     "' is not a projected CRS of the form EPSG:<code>");
     }
-    impl_->ctx = proj_context_create();
-    proj_log_level(impl_->ctx, PJ_LOG_NONE);
-    PJ* raw = proj_create_crs_to_crs(impl_->ctx, "EPSG:4326", name_.c_str(), nullptr);
+    const ProjApi& proj = Proj();
+    impl_->ctx = proj.context_create();
+    proj.log_level(impl_->ctx, PJ_LOG_NONE);
+    PJ* raw = proj.create_crs_to_crs(impl_->ctx, "EPSG:4326", name_.c_str(), nullptr);
     if (!raw) throw std::invalid_argument("unknown CRS '" + crs + "' (PROJ cannot create it)");
-    impl_->pj = proj_normalize_for_visualization(impl_->ctx, raw);
-    proj_destroy(raw);
+    impl_->pj = proj.normalize_for_visualization(impl_->ctx, raw);
+    proj.destroy(raw);
     if (!impl_->pj) throw std::invalid_argument("CRS '" + crs + "' cannot be normalised by PROJ");
     // A geographic CRS would hand back degrees and a projected one in feet would hand back feet:
     // check the target CRS type and its axis units explicitly.
-    PJ* target = proj_create(impl_->ctx, name_.c_str());
-    const bool projected = target && proj_get_type(target) == PJ_TYPE_PROJECTED_CRS;
+    PJ* target = proj.create(impl_->ctx, name_.c_str());
+    const bool projected = target && proj.get_type(target) == PJ_TYPE_PROJECTED_CRS;
     const bool metres = projected && AxesInMetres(impl_->ctx, target);
-    if (target) proj_destroy(target);
+    if (target) proj.destroy(target);
     if (!projected) throw std::invalid_argument("CRS '" + crs + "' is not a projected CRS");
     if (!metres) throw std::invalid_argument("CRS '" + crs + "' does not use metre units");
 }
@@ -90,14 +155,12 @@ CrsProjection::CrsProjection(CrsProjection&&) noexcept = default;
 CrsProjection& CrsProjection::operator=(CrsProjection&&) noexcept = default;
 
 Eigen::Vector2d CrsProjection::FromGeo(const GeoPoint& geo) const {
-    PJ_COORD c = proj_coord(geo.lon_deg, geo.lat_deg, 0, 0);
-    PJ_COORD out = proj_trans(impl_->pj, PJ_FWD, c);
+    const PJ_COORD out = Proj().trans(impl_->pj, PJ_FWD, Coord(geo.lon_deg, geo.lat_deg));
     return {out.xy.x, out.xy.y};
 }
 
 GeoPoint CrsProjection::ToGeo(const Eigen::Vector2d& en) const {
-    PJ_COORD c = proj_coord(en.x(), en.y(), 0, 0);
-    PJ_COORD out = proj_trans(impl_->pj, PJ_INV, c);
+    const PJ_COORD out = Proj().trans(impl_->pj, PJ_INV, Coord(en.x(), en.y()));
     GeoPoint geo;
     geo.lon_deg = out.lp.lam;
     geo.lat_deg = out.lp.phi;
