@@ -4,8 +4,10 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <thread>
 
 #ifdef __linux__
+#include <sched.h>
 #include <sys/mman.h>
 #endif
 
@@ -121,6 +123,15 @@ void EdtLayers(std::vector<float>& g, const GridSpec& s) {
 }
 
 }  // namespace
+
+bool SecondThreadAllowed(int threads) {
+    if (threads != 0) return threads >= 2;
+#ifdef __linux__
+    cpu_set_t allowed;
+    if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0) return CPU_COUNT(&allowed) >= 2;
+#endif
+    return std::thread::hardware_concurrency() >= 2;
+}
 
 template <typename T>
 void AssignLarge(std::vector<T>& v, std::size_t n, T value) {

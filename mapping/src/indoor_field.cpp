@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <future>
 #include <limits>
 #include <numeric>
 #include <optional>
@@ -278,14 +279,18 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
         }
     }
     const float trunc = float(config.truncation_m);
-    std::vector<float> corridor = internal::CorridorField(s, inside, trunc);
-    inside.clear();
-    inside.shrink_to_fit();
-
+    // The two transforms side by side when a second thread is allowed (the peak memory is the
+    // same: both results outlive the build, and the masks are a byte a voxel).
+    std::future<std::vector<float>> to_corridor =
+        std::async(SecondThreadAllowed(config.threads) ? std::launch::async : std::launch::deferred,
+                   [&s, &inside, trunc] { return internal::CorridorField(s, inside, trunc); });
     // Clamped to trunc below: beyond it the distances need not be exact.
     std::vector<float> centre = EuclideanDistanceTransform(s, seeds, trunc);
     seeds.clear();
     seeds.shrink_to_fit();
+    std::vector<float> corridor = to_corridor.get();
+    inside.clear();
+    inside.shrink_to_fit();
     // Exact distances to the walkway lines near each floor's surface.
     const double band = config.exact_band_m;
     for (const FloorRaster& r : rasters) {

@@ -1,9 +1,5 @@
 #include "driftcorr/mapping/road_network.h"
 
-#ifdef __linux__
-#include <sched.h>
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <future>
@@ -11,7 +7,6 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 #include "driftcorr/mapping/grid.h"
 
@@ -133,7 +128,8 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
     r.di = di;
     r.dj = dj;
     const std::size_t n = r.spec.size();
-    const std::launch second = config.SideBySide() ? std::launch::async : std::launch::deferred;
+    const std::launch second =
+        SecondThreadAllowed(config.threads) ? std::launch::async : std::launch::deferred;
     // Two threads: each allocates two of the four grids, then rasterises half the rows.
     auto centre_grids = std::async(second, [&r, n, inf] {
         AssignLarge(r.centre_exact, n, inf);
@@ -311,16 +307,6 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
 
 std::optional<ParamProblem> RoadFieldConfig::FindProblem() const {
     return CheckRows(kRoadFieldParams, *this);
-}
-
-bool RoadFieldConfig::SideBySide() const {
-    if (threads != 0) return threads >= 2;
-#ifdef __linux__
-    // The cores this process may run on (taskset, a container's CPU set), not the machine's.
-    cpu_set_t allowed;
-    if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0) return CPU_COUNT(&allowed) >= 2;
-#endif
-    return std::thread::hardware_concurrency() >= 2;
 }
 
 std::string RoadFieldConfig::Validate() const {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <future>
 #include <stdexcept>
 
 #include "driftcorr/mapping/grid.h"
@@ -76,11 +77,15 @@ TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_p
         stats->traversable_voxels = std::size_t(std::count(inside.begin(), inside.end(), 1));
     }
     const float trunc = float(config.truncation_m);
-    std::vector<float> corridor = internal::CorridorField(s, inside, trunc);
-    Mask().swap(inside);
+    // The two transforms side by side when a second thread is allowed.
+    std::future<std::vector<float>> to_corridor =
+        std::async(SecondThreadAllowed(config.threads) ? std::launch::async : std::launch::deferred,
+                   [&s, &inside, trunc] { return internal::CorridorField(s, inside, trunc); });
     // Clamped to trunc below: beyond it the distances need not be exact.
     std::vector<float> centre = EuclideanDistanceTransform(s, seeds, trunc);
     Mask().swap(seeds);
+    std::vector<float> corridor = to_corridor.get();
+    Mask().swap(inside);
     const float clearance = float(config.wall_clearance_m);
     for (std::size_t i = 0; i < centre.size(); ++i) {
         const float wall_term = clearance > 0.0f ? clearance + corridor[i] : 0.0f;

@@ -14,6 +14,7 @@
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/floor_plan.h"
 #include "driftcorr/mapping/geodesy.h"
+#include "driftcorr/mapping/grid.h"
 #include "driftcorr/mapping/osm_reader.h"
 #include "driftcorr/optim/anchor_fit.h"
 #include "driftcorr/pipeline/surface_io_loader.h"
@@ -217,10 +218,18 @@ AnchorFitResult CheckAnchor(const PreparedScenario& ps, const PipelineConfig& co
 
 // When the anchor check runs: at the end of the map stage, or (RunCorrection, when the map stage
 // may use a second thread) beside the correction, which does not read it.
-enum class AnchorCheck { kInMapStage, kBesideCorrection };
+enum class AnchorCheck { kInMapStage, kBesideCorrectionIfAllowed };
 
-AnchorCheck WhenToCheck(const PipelineConfig& config) {
-    return config.field.SideBySide() ? AnchorCheck::kBesideCorrection : AnchorCheck::kInMapStage;
+// Whether the scenario's map stage may use a second thread: the `threads` of its field's section.
+bool SideBySide(const io::Scenario& sc, const PipelineConfig& config) {
+    if (sc.mode != io::ScenarioMode::kIndoor3d) return SecondThreadAllowed(config.field.threads);
+    const bool surface = !sc.map.empty() && IsSurfaceLayer(sc.map.front());
+    return SecondThreadAllowed(surface ? config.surface_field.threads
+                                       : config.indoor_field.threads);
+}
+
+std::launch SecondThreadLaunch(const io::Scenario& sc, const PipelineConfig& config) {
+    return SideBySide(sc, config) ? std::launch::async : std::launch::deferred;
 }
 
 }  // namespace
@@ -339,12 +348,11 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
 PreparedScenario LoadAndPrepare(io::Scenario scenario, const PipelineConfig& config,
                                 AnchorCheck when) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::future<std::optional<Trajectory>> gt =
-        std::async(config.field.SideBySide() ? std::launch::async : std::launch::deferred,
-                   [&scenario]() -> std::optional<Trajectory> {
-                       if (!scenario.ground_truth) return std::nullopt;
-                       return io::LoadTrajectory(*scenario.ground_truth);
-                   });
+    std::future<std::optional<Trajectory>> gt = std::async(
+        SecondThreadLaunch(scenario, config), [&scenario]() -> std::optional<Trajectory> {
+            if (!scenario.ground_truth) return std::nullopt;
+            return io::LoadTrajectory(*scenario.ground_truth);
+        });
     Trajectory estimate = io::LoadTrajectory(scenario.estimate);
     std::optional<Trajectory> ground_truth = gt.get();
     const double load_s = Since(t0);
@@ -426,7 +434,8 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor, WalkHeights(ps.estimate, config.indoor_field));
     if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
-    if (!ps.anchor_fit && when == AnchorCheck::kInMapStage) ps.anchor_fit = CheckAnchor(ps, config);
+    const bool beside = when == AnchorCheck::kBesideCorrectionIfAllowed && SideBySide(sc, config);
+    if (!ps.anchor_fit && !beside) ps.anchor_fit = CheckAnchor(ps, config);
     ps.timings.map_s = Since(t0);
     return ps;
 }
@@ -490,14 +499,16 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    return RunCorrection(LoadAndPrepare(scenario_path, config, WhenToCheck(config)), config,
-                         progress);
+    return RunCorrection(
+        LoadAndPrepare(scenario_path, config, AnchorCheck::kBesideCorrectionIfAllowed), config,
+        progress);
 }
 
 CorrectionRun RunCorrection(io::Scenario scenario, const PipelineConfig& config,
                             const ProgressCallback& progress) {
-    return RunCorrection(LoadAndPrepare(std::move(scenario), config, WhenToCheck(config)), config,
-                         progress);
+    return RunCorrection(
+        LoadAndPrepare(std::move(scenario), config, AnchorCheck::kBesideCorrectionIfAllowed),
+        config, progress);
 }
 
 namespace {
@@ -525,7 +536,7 @@ CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
     // A scenario prepared without its anchor check has it done here, beside the correction.
     std::future<AnchorFitResult> check;
     if (!ps.anchor_fit) {
-        check = std::async(config.field.SideBySide() ? std::launch::async : std::launch::deferred,
+        check = std::async(SecondThreadLaunch(ps.scenario, config),
                            [&ps, &config] { return CheckAnchor(ps, config); });
     }
     const auto t0 = std::chrono::steady_clock::now();

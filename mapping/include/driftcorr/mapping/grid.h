@@ -58,6 +58,10 @@ bool SegmentRowSpan(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double r
 bool SegmentRowCells(const GridSpec& whole, int di, int dj, int j, const Eigen::Vector2d& a,
                      const Eigen::Vector2d& b, double reach, const CellBox& box, int& i0, int& i1);
 
+/// Whether a `threads` setting of the map stage (0: one per core the process may run on, by its
+/// CPU affinity: taskset, a container's CPU set) allows a second thread.
+bool SecondThreadAllowed(int threads);
+
 /// Fills `v` with n copies of `value` in memory the kernel may back with huge pages (Linux
 /// transparent huge pages in "madvise" mode; elsewhere an ordinary assign): a grid of millions of
 /// samples then costs hundreds of page faults instead of tens of thousands.

@@ -58,6 +58,11 @@ struct IndoorFieldConfig {
     double height_margin_m = 3.0;
     double exact_band_m = 1.0;      ///< exact walkway distances within this band; EDT beyond [m]
     double max_memory_mb = 1024.0;  ///< refuse fields larger than this [MB]
+    /// Threads of the map stage: with 2 or more, the two distance transforms (to the walkways
+    /// and to the walkable area's edge) run side by side, and the pipeline reads the ground truth
+    /// beside the estimate and checks the anchor beside the correction; 0: one per core the
+    /// process may run on.
+    int threads = 0;
 
     /// The first value kIndoorFieldParams or vertical_tolerance_m >= resolution_z_m does not
     /// allow.
@@ -90,6 +95,8 @@ inline constexpr Param<IndoorFieldConfig> kIndoorFieldParamRows[] = {
      "exact walkway distances within this band; EDT beyond"},
     {"max_memory_mb", Field<&IndoorFieldConfig::max_memory_mb>(), kPositive,
      "refuse fields larger than this"},
+    {"threads", Field<&IndoorFieldConfig::threads>(), kNonNegative,
+     "threads of the map stage (2: both distance transforms at once); 0: one per core"},
 };
 inline constexpr ParamTable<IndoorFieldConfig> kIndoorFieldParams{"indoor_field",
                                                                   kIndoorFieldParamRows};

@@ -79,14 +79,11 @@ struct RoadFieldConfig {
     /// The field is built and held in square tiles of about this side, one tile at a time
     /// (RasteriseRoadCorridor keeps only the tiles its corridor touches); 0: one grid [m]
     double tile_m = 256.0;
-    /// Threads of one run's map stage: with 2 or more, the rasterisation splits its rows and the
-    /// two distance transforms (to the centre lines and to the corridors) run side by side, and
-    /// the pipeline reads the ground truth beside the estimate and checks the anchor beside the
+    /// Threads of the map stage: with 2 or more, the rasterisation splits its rows and the two
+    /// distance transforms (to the centre lines and to the corridors) run side by side, and the
+    /// pipeline reads the ground truth beside the estimate and checks the anchor beside the
     /// correction; 0: one per core the process may run on.
     int threads = 0;
-
-    /// Whether `threads` (0: the cores the process may run on) allows a second thread.
-    bool SideBySide() const;
 
     /// The first value kRoadFieldParams does not allow.
     std::optional<ParamProblem> FindProblem() const;

@@ -43,6 +43,11 @@ struct SurfaceFieldConfig {
     double vertical_margin_m = 1.5;  ///< and this far below the lowest, above the highest point [m]
     double truncation_m = 5.0;       ///< distances are capped at this value [m]
     double max_memory_mb = 1024.0;   ///< refuse fields larger than this [MB]
+    /// Threads of the map stage: with 2 or more, the two distance transforms (to the surface and
+    /// to the traversable set's edge) run side by side, and the pipeline reads the ground truth
+    /// beside the estimate and checks the anchor beside the correction; 0: one per core the
+    /// process may run on.
+    int threads = 0;
 
     /// The first value kSurfaceFieldParams or vertical_tolerance_m >= resolution_z_m does not
     /// allow.
@@ -71,6 +76,8 @@ inline constexpr Param<SurfaceFieldConfig> kSurfaceFieldParamRows[] = {
      "distances are capped at this value"},
     {"max_memory_mb", Field<&SurfaceFieldConfig::max_memory_mb>(), kPositive,
      "refuse fields larger than this"},
+    {"threads", Field<&SurfaceFieldConfig::threads>(), kNonNegative,
+     "threads of the map stage (2: both distance transforms at once); 0: one per core"},
 };
 inline constexpr ParamTable<SurfaceFieldConfig> kSurfaceFieldParams{"surface_field",
                                                                     kSurfaceFieldParamRows};
