@@ -59,6 +59,15 @@ private:
     std::unordered_map<std::int64_t, int> segments_;
 };
 
+// Whether two blocks read the same window variables in the same order (fixed values aside).
+bool SameVariables(const TermBlock& a, const TermBlock& b) {
+    if (a.size() != b.size()) return false;
+    for (int k = 0; k < a.size(); ++k) {
+        if (a.var(k) != b.var(k)) return false;
+    }
+    return true;
+}
+
 }  // namespace
 
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m) {
@@ -282,8 +291,24 @@ void WindowProblem::BuildStructure(WindowUse use) {
             }
             return slots.Slot(r, c, hess_);
         };
+        const TermBlock* previous = nullptr;
         for (const auto& block : blocks_) {
             if (pass == 1) block_slot_begin_.push_back(static_cast<int>(block_slots_.size()));
+            // A step's blocks read the same variables one after the other: the pairs of the
+            // block before, already noted and numbered, in the same order.
+            if (previous != nullptr && SameVariables(*previous, *block)) {
+                if (pass == 1) {
+                    const int from = block_slot_begin_[block_slot_begin_.size() - 2];
+                    const int count = block->size() * (block->size() + 1) / 2;
+                    for (int k = 0; k < count; ++k) {
+                        const int e = block_slots_[std::size_t(from + k)];
+                        block_slots_.push_back(e);
+                    }
+                }
+                previous = block.get();
+                continue;
+            }
+            previous = block.get();
             for (int r = 0; r < block->size(); ++r) {
                 for (int c = 0; c <= r; ++c) {
                     const int vr = block->var(r), vc = block->var(c);
