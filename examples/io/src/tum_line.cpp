@@ -54,8 +54,8 @@ TumLine ParseTumLine(std::string_view line) {
 
 std::size_t FormatTumLine(char* buf, std::size_t size, double t_s, const Eigen::Vector3d& p,
                           const Eigen::Quaterniond& q) {
-    // std::to_chars with a precision rounds the exact binary value as glibc's printf does, at a
-    // tenth of its cost (a corrected drive is written in well under a millisecond).
+    // std::to_chars with a precision rounds the exact binary value as glibc's printf does,
+    // without parsing a format: a 4,541-pose drive is written in a third of the time.
     const double values[8] = {t_s, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w()};
     char* at = buf;
     char* const end = buf + size;
