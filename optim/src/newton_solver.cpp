@@ -37,45 +37,66 @@ std::vector<int> BandOrder(const WindowProblem& p) {
     return position;
 }
 
+// Where a variable or an entry has no place in the matrix: a held variable (its bounds equal).
+constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+
 // The Hessian's upper triangle in BandOrder, held by its envelope (the problem's pattern and a
-// full diagonal), and where each entry of HessianValues lands in it.
+// full diagonal), and where each entry of HessianValues lands in it. Held variables (a planar
+// walk's heights) are left out: their step is zero, and with their rows and columns zero and a
+// unit pivot they would add only zeros to the other entries of the factor and the solve.
 struct Pattern {
     SkylineLdlt matrix;
-    std::vector<int> position;  ///< per variable: its row and column in the matrix
+    std::vector<int> position;  ///< per variable: its row and column in the matrix; -1 if held
     std::vector<std::size_t> slot;      ///< per HessianStructure entry: index into matrix.values()
     std::vector<std::size_t> diagonal;  ///< per variable: index of its diagonal entry
     /// Per envelope entry: the variables of its row and column.
     std::vector<int> row_var, column_var;
 };
 
-Pattern BuildPattern(const WindowProblem& p) {
+Pattern BuildPattern(const WindowProblem& p, const std::vector<bool>& held) {
     const auto& structure = p.HessianStructure();
     const int n = p.NumVariables();
-    std::vector<int> position = BandOrder(p);
+    const std::vector<int> band = BandOrder(p);
+    std::vector<int> order(n);  // order[band position] = variable
+    for (int k = 0; k < n; ++k) order[band[k]] = k;
+    std::vector<int> position(n, -1);
+    int m = 0;
+    for (int q = 0; q < n; ++q) {
+        if (!held[order[q]]) position[order[q]] = m++;
+    }
     auto upper = [&](int r, int c) {  // (row, column) with row <= column
         const int a = position[r], b = position[c];
         return a <= b ? std::make_pair(a, b) : std::make_pair(b, a);
     };
-    std::vector<int> first(n);
-    for (int k = 0; k < n; ++k) first[k] = k;
+    std::vector<int> first(m);
+    for (int k = 0; k < m; ++k) first[k] = k;
     for (const auto& [r, c] : structure) {
+        if (held[r] || held[c]) continue;
         const auto [a, b] = upper(r, c);
         first[b] = std::min(first[b], a);
     }
     Pattern out{SkylineLdlt(std::move(first)), {}, {}, {}, {}, {}};
     out.slot.reserve(structure.size());
     for (const auto& [r, c] : structure) {
+        if (held[r] || held[c]) {
+            out.slot.push_back(kNone);
+            continue;
+        }
         const auto [a, b] = upper(r, c);
         out.slot.push_back(out.matrix.Index(a, b));
     }
     out.position = std::move(position);
-    for (int k = 0; k < n; ++k)
-        out.diagonal.push_back(out.matrix.Index(out.position[k], out.position[k]));
-    std::vector<int> var(n);
-    for (int k = 0; k < n; ++k) var[out.position[k]] = k;
+    for (int k = 0; k < n; ++k) {
+        const int at = out.position[k];
+        out.diagonal.push_back(at < 0 ? kNone : out.matrix.Index(at, at));
+    }
+    std::vector<int> var(m);
+    for (int k = 0; k < n; ++k) {
+        if (out.position[k] >= 0) var[out.position[k]] = k;
+    }
     out.row_var.resize(out.matrix.entries());
     out.column_var.resize(out.matrix.entries());
-    for (int c = 0; c < n; ++c) {
+    for (int c = 0; c < m; ++c) {
         for (int r = out.matrix.first_row(c); r <= c; ++r) {
             out.row_var[out.matrix.Index(r, c)] = var[r];
             out.column_var[out.matrix.Index(r, c)] = var[c];
@@ -104,7 +125,8 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         held[k] = lower[k] == upper[k];
         x[k] = std::clamp(x[k], lower[k], upper[k]);
     }
-    Pattern pattern = BuildPattern(problem);
+    Pattern pattern = BuildPattern(problem, held);
+    const int m = pattern.matrix.size();
 
     std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
     // The active set: held variables and those pressed against a bound by the gradient; they
@@ -128,7 +150,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     // Ipopt's scaling of the objective: its gradient at the start at most 100.
     const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
     double damping = 0.0;
-    std::vector<double> step(n), rhs(n);
+    std::vector<double> step(n, 0.0), rhs(m);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
     for (int it = 0;; ++it) {
@@ -149,12 +171,15 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         problem.HessianValues(x.data(), 1.0, nullptr, hessian.data());
         std::vector<double>& values = pattern.matrix.values();
         std::fill(values.begin(), values.end(), 0.0);
-        for (std::size_t e = 0; e < hessian.size(); ++e) values[pattern.slot[e]] += hessian[e];
+        for (std::size_t e = 0; e < hessian.size(); ++e) {
+            if (pattern.slot[e] != kNone) values[pattern.slot[e]] += hessian[e];
+        }
         for (std::size_t e = 0; e < values.size(); ++e) {
             if (active[pattern.row_var[e]] || active[pattern.column_var[e]]) values[e] = 0.0;
         }
         std::vector<double> diagonal(n);
         for (int k = 0; k < n; ++k) {
+            if (held[k]) continue;
             diagonal[k] = active[k] ? 1.0 : values[pattern.diagonal[k]];
             values[pattern.diagonal[k]] = diagonal[k];
         }
@@ -163,14 +188,19 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         bool moved = false;
         while (!moved) {
             for (int k = 0; k < n; ++k) {
+                if (held[k]) continue;
                 values[pattern.diagonal[k]] =
                     diagonal[k] +
                     (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
             }
             if (pattern.matrix.Factorize()) {
-                for (int k = 0; k < n; ++k) rhs[pattern.position[k]] = -grad[k];
+                for (int k = 0; k < n; ++k) {
+                    if (!held[k]) rhs[pattern.position[k]] = -grad[k];
+                }
                 pattern.matrix.Solve(rhs);
-                for (int k = 0; k < n; ++k) step[k] = rhs[pattern.position[k]];
+                for (int k = 0; k < n; ++k) {
+                    if (!held[k]) step[k] = rhs[pattern.position[k]];
+                }
                 for (int alpha_k = 0; alpha_k < kHalvings && !moved; ++alpha_k) {
                     const double alpha = std::ldexp(1.0, -alpha_k);
                     double decrease = 0.0;  // the model's, along the projected step
