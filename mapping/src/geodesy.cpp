@@ -42,20 +42,18 @@ namespace {
 // PROJ, with the thirty-odd libraries it links (curl, GnuTLS, Kerberos, LDAP, libtiff...), is
 // opened with dlopen the first time a projected CRS is used, not loaded into every process: it
 // adds about 5 ms to each start, and only a CRS anchor or --crs needs it. Its header gives the
-// types and the functions' signatures.
+// types and the functions' signatures; the list below names each function called, once
+// (X(name) stands for proj_<name>).
+#define DRIFTCORR_PROJ_FUNCTIONS(X)                                                               \
+    X(context_create)                                                                             \
+    X(context_destroy) X(log_level) X(create_crs_to_crs) X(normalize_for_visualization) X(create) \
+        X(get_type) X(destroy) X(crs_get_coordinate_system) X(cs_get_axis_count)                  \
+            X(cs_get_axis_info) X(trans)
+
 struct ProjApi {
-    decltype(&proj_context_create) context_create;
-    decltype(&proj_context_destroy) context_destroy;
-    decltype(&proj_log_level) log_level;
-    decltype(&proj_create_crs_to_crs) create_crs_to_crs;
-    decltype(&proj_normalize_for_visualization) normalize_for_visualization;
-    decltype(&proj_create) create;
-    decltype(&proj_get_type) get_type;
-    decltype(&proj_destroy) destroy;
-    decltype(&proj_crs_get_coordinate_system) crs_get_coordinate_system;
-    decltype(&proj_cs_get_axis_count) cs_get_axis_count;
-    decltype(&proj_cs_get_axis_info) cs_get_axis_info;
-    decltype(&proj_trans) trans;
+#define DRIFTCORR_PROJ_MEMBER(name) decltype(&proj_##name) name = nullptr;
+    DRIFTCORR_PROJ_FUNCTIONS(DRIFTCORR_PROJ_MEMBER)
+#undef DRIFTCORR_PROJ_MEMBER
 };
 
 ProjApi LoadProj() {
@@ -65,25 +63,17 @@ ProjApi LoadProj() {
         throw std::runtime_error(std::string("cannot load ") + DRIFTCORR_PROJ_SONAME +
                                  " (PROJ, for projected CRSs): " + (why ? why : "dlopen failed"));
     }
-    ProjApi api{};
+    ProjApi api;
     auto bind = [lib](auto& fn, const char* name) {
         fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(dlsym(lib, name));
         if (fn == nullptr) {
+            dlclose(lib);
             throw std::runtime_error(std::string(DRIFTCORR_PROJ_SONAME) + " has no " + name);
         }
     };
-    bind(api.context_create, "proj_context_create");
-    bind(api.context_destroy, "proj_context_destroy");
-    bind(api.log_level, "proj_log_level");
-    bind(api.create_crs_to_crs, "proj_create_crs_to_crs");
-    bind(api.normalize_for_visualization, "proj_normalize_for_visualization");
-    bind(api.create, "proj_create");
-    bind(api.get_type, "proj_get_type");
-    bind(api.destroy, "proj_destroy");
-    bind(api.crs_get_coordinate_system, "proj_crs_get_coordinate_system");
-    bind(api.cs_get_axis_count, "proj_cs_get_axis_count");
-    bind(api.cs_get_axis_info, "proj_cs_get_axis_info");
-    bind(api.trans, "proj_trans");
+#define DRIFTCORR_PROJ_BIND(name) bind(api.name, "proj_" #name);
+    DRIFTCORR_PROJ_FUNCTIONS(DRIFTCORR_PROJ_BIND)
+#undef DRIFTCORR_PROJ_BIND
     return api;
 }
 
@@ -91,6 +81,8 @@ const ProjApi& Proj() {
     static const ProjApi api = LoadProj();  // once; a failure is retried on the next call
     return api;
 }
+
+#undef DRIFTCORR_PROJ_FUNCTIONS
 
 /// True when every axis of the CRS's coordinate system is in metres (conversion factor 1).
 bool AxesInMetres(PJ_CONTEXT* ctx, const PJ* crs) {
