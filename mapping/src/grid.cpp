@@ -133,6 +133,10 @@ bool SecondThreadAllowed(int threads) {
     return std::thread::hardware_concurrency() >= 2;
 }
 
+std::launch SecondThreadLaunch(int threads) {
+    return SecondThreadAllowed(threads) ? std::launch::async : std::launch::deferred;
+}
+
 template <typename T>
 void AssignLarge(std::vector<T>& v, std::size_t n, T value) {
 #ifdef __linux__

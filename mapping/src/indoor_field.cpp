@@ -282,7 +282,7 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
     // The two transforms side by side when a second thread is allowed; the walkable mask (a
     // byte a voxel) then stays until both are done: hcu_eight's peak 224 -> 241 MB.
     std::future<std::vector<float>> to_corridor =
-        std::async(SecondThreadAllowed(config.threads) ? std::launch::async : std::launch::deferred,
+        std::async(SecondThreadLaunch(config.threads),
                    [&s, &inside, trunc] { return internal::CorridorField(s, inside, trunc); });
     // Clamped to trunc below: beyond it the distances need not be exact.
     std::vector<float> centre = EuclideanDistanceTransform(s, seeds, trunc);

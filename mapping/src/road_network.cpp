@@ -133,8 +133,7 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
     r.di = di;
     r.dj = dj;
     const std::size_t n = r.spec.size();
-    const std::launch second =
-        SecondThreadAllowed(config.threads) ? std::launch::async : std::launch::deferred;
+    const std::launch second = SecondThreadLaunch(config.threads);
     // Two threads: each allocates two of the four grids, then rasterises half the rows.
     auto centre_grids = std::async(second, [&r, n, inf] {
         AssignLarge(r.centre_exact, n, inf);

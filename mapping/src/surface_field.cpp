@@ -79,7 +79,7 @@ TraversableField BuildSurfaceField(const std::vector<Eigen::Vector3d>& surface_p
     const float trunc = float(config.truncation_m);
     // The two transforms side by side when a second thread is allowed.
     std::future<std::vector<float>> to_corridor =
-        std::async(SecondThreadAllowed(config.threads) ? std::launch::async : std::launch::deferred,
+        std::async(SecondThreadLaunch(config.threads),
                    [&s, &inside, trunc] { return internal::CorridorField(s, inside, trunc); });
     // Clamped to trunc below: beyond it the distances need not be exact.
     std::vector<float> centre = EuclideanDistanceTransform(s, seeds, trunc);

@@ -220,16 +220,11 @@ AnchorFitResult CheckAnchor(const PreparedScenario& ps, const PipelineConfig& co
 // may use a second thread) beside the correction, which does not read it.
 enum class AnchorCheck { kInMapStage, kBesideCorrectionIfAllowed };
 
-// Whether the scenario's map stage may use a second thread: the `threads` of its field's section.
-bool SideBySide(const io::Scenario& sc, const PipelineConfig& config) {
-    if (sc.mode != io::ScenarioMode::kIndoor3d) return SecondThreadAllowed(config.field.threads);
+// The `threads` setting of the scenario's map stage: that of its field's section.
+int MapThreads(const io::Scenario& sc, const PipelineConfig& config) {
+    if (sc.mode != io::ScenarioMode::kIndoor3d) return config.field.threads;
     const bool surface = !sc.map.empty() && IsSurfaceLayer(sc.map.front());
-    return SecondThreadAllowed(surface ? config.surface_field.threads
-                                       : config.indoor_field.threads);
-}
-
-std::launch SecondThreadLaunch(const io::Scenario& sc, const PipelineConfig& config) {
-    return SideBySide(sc, config) ? std::launch::async : std::launch::deferred;
+    return surface ? config.surface_field.threads : config.indoor_field.threads;
 }
 
 }  // namespace
@@ -348,11 +343,12 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
 PreparedScenario LoadAndPrepare(io::Scenario scenario, const PipelineConfig& config,
                                 AnchorCheck when) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::future<std::optional<Trajectory>> gt = std::async(
-        SecondThreadLaunch(scenario, config), [&scenario]() -> std::optional<Trajectory> {
-            if (!scenario.ground_truth) return std::nullopt;
-            return io::LoadTrajectory(*scenario.ground_truth);
-        });
+    std::future<std::optional<Trajectory>> gt =
+        std::async(SecondThreadLaunch(MapThreads(scenario, config)),
+                   [&scenario]() -> std::optional<Trajectory> {
+                       if (!scenario.ground_truth) return std::nullopt;
+                       return io::LoadTrajectory(*scenario.ground_truth);
+                   });
     Trajectory estimate = io::LoadTrajectory(scenario.estimate);
     std::optional<Trajectory> ground_truth = gt.get();
     const double load_s = Since(t0);
@@ -434,7 +430,8 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor, WalkHeights(ps.estimate, config.indoor_field));
     if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
-    const bool beside = when == AnchorCheck::kBesideCorrectionIfAllowed && SideBySide(sc, config);
+    const bool beside = when == AnchorCheck::kBesideCorrectionIfAllowed &&
+                        SecondThreadAllowed(MapThreads(sc, config));
     if (!ps.anchor_fit && !beside) ps.anchor_fit = CheckAnchor(ps, config);
     ps.timings.map_s = Since(t0);
     return ps;
@@ -536,7 +533,7 @@ CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
     // A scenario prepared without its anchor check has it done here, beside the correction.
     std::future<AnchorFitResult> check;
     if (!ps.anchor_fit) {
-        check = std::async(SecondThreadLaunch(ps.scenario, config),
+        check = std::async(SecondThreadLaunch(MapThreads(ps.scenario, config)),
                            [&ps, &config] { return CheckAnchor(ps, config); });
     }
     const auto t0 = std::chrono::steady_clock::now();

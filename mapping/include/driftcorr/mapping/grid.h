@@ -2,6 +2,7 @@
 // Regular sample grids and the exact Euclidean distance transform.
 #include <Eigen/Core>
 #include <cstdint>
+#include <future>
 #include <limits>
 #include <vector>
 
@@ -61,6 +62,9 @@ bool SegmentRowCells(const GridSpec& whole, int di, int dj, int j, const Eigen::
 /// Whether a `threads` setting of the map stage (0: one per core the process may run on, by its
 /// CPU affinity: taskset, a container's CPU set) allows a second thread.
 bool SecondThreadAllowed(int threads);
+/// The std::async policy of work that may run on that second thread: async when allowed,
+/// deferred (run by the thread that waits for it) otherwise.
+std::launch SecondThreadLaunch(int threads);
 
 /// Fills `v` with n copies of `value` in memory the kernel may back with huge pages (Linux
 /// transparent huge pages in "madvise" mode; elsewhere an ordinary assign): a grid of millions of
