@@ -37,7 +37,8 @@ std::vector<int> BandOrder(const WindowProblem& p) {
     return position;
 }
 
-// Where a variable or an entry has no place in the matrix: a held variable (its bounds equal).
+// The slot of a Hessian entry with no place in the matrix: it involves a held variable (one
+// whose bounds are equal).
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 
 // The Hessian's upper triangle in BandOrder, held by its envelope (the problem's pattern and a
@@ -46,9 +47,9 @@ constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 // unit pivot they would add only zeros to the other entries of the factor and the solve.
 struct Pattern {
     SkylineLdlt matrix;
-    std::vector<int> position;  ///< per variable: its row and column in the matrix; -1 if held
+    std::vector<int> variable;          ///< per row and column of the matrix: its variable
     std::vector<std::size_t> slot;      ///< per HessianStructure entry: index into matrix.values()
-    std::vector<std::size_t> diagonal;  ///< per variable: index of its diagonal entry
+    std::vector<std::size_t> diagonal;  ///< per row of the matrix: index of its diagonal entry
     /// Per envelope entry: the variables of its row and column.
     std::vector<int> row_var, column_var;
 };
@@ -59,11 +60,13 @@ Pattern BuildPattern(const WindowProblem& p, const std::vector<bool>& held) {
     const std::vector<int> band = BandOrder(p);
     std::vector<int> order(n);  // order[band position] = variable
     for (int k = 0; k < n; ++k) order[band[k]] = k;
-    std::vector<int> position(n, -1);
-    int m = 0;
+    std::vector<int> position(n, -1), variable;  // variable[row of the matrix]
     for (int q = 0; q < n; ++q) {
-        if (!held[order[q]]) position[order[q]] = m++;
+        if (held[order[q]]) continue;
+        position[order[q]] = static_cast<int>(variable.size());
+        variable.push_back(order[q]);
     }
+    const int m = static_cast<int>(variable.size());
     auto upper = [&](int r, int c) {  // (row, column) with row <= column
         const int a = position[r], b = position[c];
         return a <= b ? std::make_pair(a, b) : std::make_pair(b, a);
@@ -85,21 +88,14 @@ Pattern BuildPattern(const WindowProblem& p, const std::vector<bool>& held) {
         const auto [a, b] = upper(r, c);
         out.slot.push_back(out.matrix.Index(a, b));
     }
-    out.position = std::move(position);
-    for (int k = 0; k < n; ++k) {
-        const int at = out.position[k];
-        out.diagonal.push_back(at < 0 ? kNone : out.matrix.Index(at, at));
-    }
-    std::vector<int> var(m);
-    for (int k = 0; k < n; ++k) {
-        if (out.position[k] >= 0) var[out.position[k]] = k;
-    }
+    out.variable = std::move(variable);
+    for (int q = 0; q < m; ++q) out.diagonal.push_back(out.matrix.Index(q, q));
     out.row_var.resize(out.matrix.entries());
     out.column_var.resize(out.matrix.entries());
     for (int c = 0; c < m; ++c) {
         for (int r = out.matrix.first_row(c); r <= c; ++r) {
-            out.row_var[out.matrix.Index(r, c)] = var[r];
-            out.column_var[out.matrix.Index(r, c)] = var[c];
+            out.row_var[out.matrix.Index(r, c)] = out.variable[r];
+            out.column_var[out.matrix.Index(r, c)] = out.variable[c];
         }
     }
     return out;
@@ -150,7 +146,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     // Ipopt's scaling of the objective: its gradient at the start at most 100.
     const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
     double damping = 0.0;
-    std::vector<double> step(n, 0.0), rhs(m);
+    std::vector<double> step(n, 0.0), rhs(m), diagonal(m);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
     for (int it = 0;; ++it) {
@@ -177,30 +173,24 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         for (std::size_t e = 0; e < values.size(); ++e) {
             if (active[pattern.row_var[e]] || active[pattern.column_var[e]]) values[e] = 0.0;
         }
-        std::vector<double> diagonal(n);
-        for (int k = 0; k < n; ++k) {
-            if (held[k]) continue;
-            diagonal[k] = active[k] ? 1.0 : values[pattern.diagonal[k]];
-            values[pattern.diagonal[k]] = diagonal[k];
+        for (int q = 0; q < m; ++q) {
+            diagonal[q] = active[pattern.variable[q]] ? 1.0 : values[pattern.diagonal[q]];
+            values[pattern.diagonal[q]] = diagonal[q];
         }
         // Newton's step, damped (H + damping * max(|diag H|, 1)) until the system is positive
         // definite and the line search finds a decrease.
         bool moved = false;
         while (!moved) {
-            for (int k = 0; k < n; ++k) {
-                if (held[k]) continue;
-                values[pattern.diagonal[k]] =
-                    diagonal[k] +
-                    (active[k] ? 0.0 : damping * std::max(std::abs(diagonal[k]), 1.0));
+            for (int q = 0; q < m; ++q) {
+                values[pattern.diagonal[q]] =
+                    diagonal[q] + (active[pattern.variable[q]]
+                                       ? 0.0
+                                       : damping * std::max(std::abs(diagonal[q]), 1.0));
             }
             if (pattern.matrix.Factorize()) {
-                for (int k = 0; k < n; ++k) {
-                    if (!held[k]) rhs[pattern.position[k]] = -grad[k];
-                }
+                for (int q = 0; q < m; ++q) rhs[q] = -grad[pattern.variable[q]];
                 pattern.matrix.Solve(rhs);
-                for (int k = 0; k < n; ++k) {
-                    if (!held[k]) step[k] = rhs[pattern.position[k]];
-                }
+                for (int q = 0; q < m; ++q) step[pattern.variable[q]] = rhs[q];
                 for (int alpha_k = 0; alpha_k < kHalvings && !moved; ++alpha_k) {
                     const double alpha = std::ldexp(1.0, -alpha_k);
                     double decrease = 0.0;  // the model's, along the projected step
