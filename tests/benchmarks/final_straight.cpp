@@ -67,13 +67,19 @@ std::vector<double> PathLength(const PlanarTrajectory& t) {
     return s;
 }
 
-// The best scale a corrector could have learned before pose `from`: ground-truth path over the
-// estimate's path over the kScaleWindowM of path before it; the prior scale of 1 at the start.
+// The step scale between poses a and b: ground-truth path over the estimate's path.
+double PathRatio(const std::vector<double>& sg, const std::vector<double>& se, std::size_t a,
+                 std::size_t b) {
+    return (sg[b] - sg[a]) / std::max(se[b] - se[a], 1e-9);
+}
+
+// The best scale a corrector could have learned before pose `from`: the PathRatio of the
+// kScaleWindowM of path before it; the prior scale of 1 at the start.
 double ScaleBefore(const std::vector<double>& sg, const std::vector<double>& se, std::size_t from) {
     if (from == 0) return 1.0;
     std::size_t back = from;
     while (back > 0 && sg[from] - sg[back] < kScaleWindowM) --back;
-    return (sg[from] - sg[back]) / std::max(se[from] - se[back], 1e-9);
+    return PathRatio(sg, se, back, from);
 }
 
 // Direction of travel at pose i: the chord to the first pose kChordM further on (or from the
@@ -110,7 +116,7 @@ void Evaluate(const std::string& dir) {
         --k;
     }
     const double scale_before = ScaleBefore(sg, se, k);
-    const double scale_on = (sg[n - 1] - sg[k]) / std::max(se[n - 1] - se[k], 1e-9);
+    const double scale_on = PathRatio(sg, se, k, n - 1);
     double sum_sq = 0.0, final_err = 0.0;
     for (std::size_t i = k; i < n; ++i) {
         const double e = (sg[i] - sg[k]) - scale_before * (se[i] - se[k]);
@@ -148,8 +154,7 @@ void Evaluate(const std::string& dir) {
     for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
         const std::size_t from = cuts[c], to = cuts[c + 1];
         const double before = ScaleBefore(sg, se, from);
-        const double scale =
-            c + 2 == cuts.size() ? before : (sg[to] - sg[from]) / std::max(se[to] - se[from], 1e-9);
+        const double scale = c + 2 == cuts.size() ? before : PathRatio(sg, se, from, to);
         for (std::size_t i = from; i <= to; ++i) {
             every_sq += std::pow((sg[i] - sg[from]) - scale * (se[i] - se[from]), 2);
             causal_sq += std::pow((sg[i] - sg[from]) - before * (se[i] - se[from]), 2);
@@ -165,8 +170,8 @@ void Evaluate(const std::string& dir) {
         "straight %5.2f m\n",
         ps.scenario.name.c_str(), k, n, sg[n - 1] - sg[k], scale_before, scale_on, final_err,
         std::sqrt(sum_sq / double(n)), cuts.size() - 1, std::sqrt(every_sq / double(n)), first_end,
-        sg[first_end], sg[first_end] / std::max(se[first_end], 1e-9),
-        std::sqrt(first_sq / double(n)), std::sqrt(causal_sq / double(n)));
+        sg[first_end], PathRatio(sg, se, 0, first_end), std::sqrt(first_sq / double(n)),
+        std::sqrt(causal_sq / double(n)));
     std::fflush(stdout);
 }
 
