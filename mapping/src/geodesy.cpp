@@ -44,11 +44,12 @@ namespace {
 // adds about 5 ms to each start, and only a CRS anchor or --crs needs it. Its header gives the
 // types and the functions' signatures; the list below names each function called, once
 // (X(name) stands for proj_<name>).
-#define DRIFTCORR_PROJ_FUNCTIONS(X)                                                               \
-    X(context_create)                                                                             \
-    X(context_destroy) X(log_level) X(create_crs_to_crs) X(normalize_for_visualization) X(create) \
-        X(get_type) X(destroy) X(crs_get_coordinate_system) X(cs_get_axis_count)                  \
-            X(cs_get_axis_info) X(trans)
+// clang-format off
+#define DRIFTCORR_PROJ_FUNCTIONS(X)                                                  \
+    X(context_create) X(context_destroy) X(log_level) X(create_crs_to_crs)           \
+    X(normalize_for_visualization) X(create) X(get_type) X(destroy)                  \
+    X(crs_get_coordinate_system) X(cs_get_axis_count) X(cs_get_axis_info) X(trans)
+// clang-format on
 
 struct ProjApi {
 #define DRIFTCORR_PROJ_MEMBER(name) decltype(&proj_##name) name = nullptr;
