@@ -127,9 +127,11 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
     // The active set: held variables and those pressed against a bound by the gradient; they
     // stay where they are for the next step (projected Newton), and their gradient is left out.
+    // The gradient and the Hessian are evaluated together at each point the solve moves to: the
+    // Hessian is then wasted only at the point where the gradient says the solve has converged.
     std::vector<bool> active(n);
     auto projected_gradient = [&] {
-        problem.Gradient(x.data(), grad.data());
+        problem.GradientAndHessian(x.data(), grad.data(), hessian.data());
         for (int k = 0; k < n; ++k) {
             active[k] = held[k] || (x[k] <= lower[k] && grad[k] > 0.0) ||
                         (x[k] >= upper[k] && grad[k] < 0.0);
@@ -164,7 +166,6 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             break;
         }
         report.iterations = it + 1;
-        problem.HessianValues(x.data(), 1.0, nullptr, hessian.data());
         std::vector<double>& values = pattern.matrix.values();
         std::fill(values.begin(), values.end(), 0.0);
         for (std::size_t e = 0; e < hessian.size(); ++e) {

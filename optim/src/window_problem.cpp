@@ -392,13 +392,37 @@ double WindowProblem::Objective(const double* x) const {
 }
 
 void WindowProblem::Gradient(const double* x, double* grad) const {
-    std::fill(grad, grad + n_vars_, 0.0);
-    const BlockContext ctx = Context(x);
+    AccumulateBlocks(Context(x), x, 1.0, grad, nullptr);
+}
+
+void WindowProblem::GradientAndHessian(const double* x, double* grad, double* values) const {
+    DRIFTCORR_CHECK(block_slot_begin_.size() == blocks_.size(), "built with kLinearise");
+    AccumulateBlocks(Context(x), x, 1.0, grad, values);
+}
+
+// One pass over the blocks, each evaluated once for what is asked: the gradient summed into
+// `grad`, obj_factor times the Hessian into the slots of `values` (both zeroed first).
+void WindowProblem::AccumulateBlocks(const BlockContext& ctx, const double* x, double obj_factor,
+                                     double* grad, double* values) const {
+    if (grad) std::fill(grad, grad + n_vars_, 0.0);
+    if (values) std::fill(values, values + hess_.size(), 0.0);
     BlockVector g;
-    for (const auto& block : blocks_) {
-        block->Evaluate(ctx, block->Gather(x), &g, nullptr);
-        for (int k = 0; k < block->size(); ++k) {
-            if (block->var(k) >= 0) grad[block->var(k)] += g[k];
+    BlockMatrix h;
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+        const TermBlock& block = *blocks_[b];
+        block.Evaluate(ctx, block.Gather(x), grad ? &g : nullptr, values ? &h : nullptr);
+        if (grad) {
+            for (int k = 0; k < block.size(); ++k) {
+                if (block.var(k) >= 0) grad[block.var(k)] += g[k];
+            }
+        }
+        if (values) {
+            const int* slot = block_slots_.data() + block_slot_begin_[b];
+            for (int r = 0; r < block.size(); ++r) {
+                for (int c = 0; c <= r; ++c, ++slot) {
+                    if (*slot >= 0) values[*slot] += obj_factor * h(r, c);
+                }
+            }
         }
     }
 }
@@ -422,19 +446,8 @@ void WindowProblem::JacobianValues(const double* x, double* values) const {
 void WindowProblem::HessianValues(const double* x, double obj_factor, const double* lambda,
                                   double* values) const {
     DRIFTCORR_CHECK(block_slot_begin_.size() == blocks_.size(), "built with kLinearise");
-    std::fill(values, values + hess_.size(), 0.0);
     const BlockContext ctx = Context(x);
-    BlockMatrix h;
-    for (std::size_t b = 0; b < blocks_.size(); ++b) {
-        const TermBlock& block = *blocks_[b];
-        block.Evaluate(ctx, block.Gather(x), nullptr, &h);
-        const int* slot = block_slots_.data() + block_slot_begin_[b];
-        for (int r = 0; r < block.size(); ++r) {
-            for (int c = 0; c <= r; ++c, ++slot) {
-                if (*slot >= 0) values[*slot] += obj_factor * h(r, c);
-            }
-        }
-    }
+    AccumulateBlocks(ctx, x, obj_factor, nullptr, values);
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {
         const auto& fs = (*ctx.samples)[constraint_pose_[k] - first_];
         if (!fs) continue;
