@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <ostream>
 #include <random>
@@ -246,6 +247,47 @@ TEST(Edt, SingleFeatureGivesScaledDistance) {
     EXPECT_FLOAT_EQ(d[s.Index(2, 3)], 0.0f);
     EXPECT_FLOAT_EQ(d[s.Index(5, 7 - 3)], 0.5f * std::sqrt(9.0f + 1.0f));
     EXPECT_FLOAT_EQ(d[s.Index(8, 3)], 3.0f);
+}
+
+// The strip-wise transform laid under exact distances gives the floats of the whole-grid
+// transform followed by the merge, across strip boundaries (256 rows) and caps that reach over
+// them.
+TEST(Edt, MergedCappedTransformEqualsTransformThenMerge) {
+    const float inf = std::numeric_limits<float>::infinity();
+    std::size_t finite_transforms = 0, capped_out = 0;
+    unsigned seed = 1;
+    for (int ny : {1, 2, 255, 256, 257, 300, 700}) {
+        for (double density : {0.0005, 0.004, 0.05}) {
+            for (double cap : {0.5, 3.0, 20.0}) {
+                GridSpec s;
+                s.origin_m = Eigen::Vector3d(-3.0, 1.0, 0.0);
+                s.resolution_m = 0.5;
+                s.nx = 37, s.ny = ny;
+                const std::vector<std::uint8_t> mask = RandomMask(s, density, ++seed);
+                std::mt19937 rng(seed);
+                std::uniform_real_distribution<float> value(-1.0f, 30.0f);
+                std::bernoulli_distribution known(0.2);
+                std::vector<float> exact(s.size());
+                for (float& e : exact) e = known(rng) ? value(rng) : inf;
+                const float offset = seed % 2 ? -0.25f : 0.0f, ceiling = 12.0f;
+                const std::vector<float> edt = EuclideanDistanceTransform(s, mask, cap);
+                std::vector<float> merged = exact;
+                MergeCappedDistanceTransform(s, mask, cap, offset, ceiling, merged);
+                for (std::size_t n = 0; n < s.size(); ++n) {
+                    const float expected =
+                        std::min(ceiling, exact[n] < inf ? exact[n] : edt[n] + offset);
+                    ASSERT_EQ(std::memcmp(&merged[n], &expected, sizeof(float)), 0)
+                        << "ny " << ny << ", density " << density << ", cap " << cap << ", sample "
+                        << n << ": " << merged[n] << " against " << expected;
+                    finite_transforms += exact[n] == inf && edt[n] < ceiling;
+                    capped_out += exact[n] == inf && edt[n] == inf && density > 0.001;
+                }
+            }
+        }
+    }
+    // Both cases occur: distances the transform gives and samples beyond the cap.
+    EXPECT_GT(finite_transforms, 1000u);
+    EXPECT_GT(capped_out, 1000u);
 }
 
 // ---- Cubic B-spline field -----------------------------------------------------------------

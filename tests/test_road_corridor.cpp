@@ -153,11 +153,11 @@ TEST(RoadCorridor, MemoryCapCountsTheHeldTiles) {
     const RoadNetwork net = Town();
     std::vector<FieldDisc> one_disc = {{{100.0, 80.0}, 10.0}};
     RoadFieldConfig cfg = Config(16.0);
-    // The whole field (about 540 x 500 samples, 18 bytes each at peak) exceeds 2 MB; the
+    // The whole field (449 x 369 samples, 10 bytes each at peak: 1.6 MB) exceeds 1 MB; the
     // tiles near one disc (a few 36 x 36 tiles, 8 bytes a sample, plus one tile's work) do not.
-    cfg.max_memory_mb = 2.0;
+    cfg.max_memory_mb = 1.0;
     RoadFieldConfig whole = Config(0.0);
-    whole.max_memory_mb = 2.0;
+    whole.max_memory_mb = 1.0;
     EXPECT_THROW(RasteriseRoads(net, kRegion, whole), std::invalid_argument);
     EXPECT_NO_THROW(RasteriseRoadCorridor(net, kRegion, one_disc, cfg));
     cfg.max_memory_mb = 0.01;

@@ -173,6 +173,61 @@ std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
     return g;
 }
 
+void MergeCappedDistanceTransform(const GridSpec& spec, const std::vector<std::uint8_t>& feature,
+                                  double cap_m, float offset_m, float ceiling_m,
+                                  std::vector<float>& exact) {
+    DRIFTCORR_CHECK(spec.nz == 1 && std::isfinite(cap_m), "a 2-D grid and a finite cap");
+    DRIFTCORR_CHECK(feature.size() == spec.size() && exact.size() == spec.size(),
+                    "feature mask and exact distances must match the grid");
+    constexpr int kStrip = 256;  // rows a strip
+    const std::size_t nx = std::size_t(spec.nx);
+    const int ny = spec.ny;
+    // As EuclideanDistanceTransform: squared column distances beyond cap2 are infinity. A column
+    // distance the strip's pass gets wrong (a feature more than `ahead` rows below the strip
+    // left out) is more than ahead >= cap_cells + 1 cells, so it is infinity either way.
+    const double cap_cells = cap_m / spec.resolution_m + 1.0;
+    const float cap2 = float(cap_cells * cap_cells);
+    const int ahead = int(std::ceil(cap_cells)) + 1;
+    const float res = static_cast<float>(spec.resolution_m);
+    std::vector<float> col(std::size_t(std::min(ny, kStrip + ahead)) * nx), carried(nx, kInf);
+    std::vector<float> d(nx), z(nx + 1);
+    std::vector<int> v(nx);
+    for (int j0 = 0; j0 < ny; j0 += kStrip) {
+        const int j1 = std::min(ny, j0 + kStrip), end = std::min(ny, j1 + ahead);
+        // Down the rows from the row above the strip (carried), then back up from its end.
+        for (int j = j0; j < end; ++j) {
+            const std::uint8_t* f = feature.data() + std::size_t(j) * nx;
+            float* row = col.data() + std::size_t(j - j0) * nx;
+            if (j == 0) {
+                for (std::size_t i = 0; i < nx; ++i) row[i] = f[i] ? 0.0f : kInf;
+                continue;
+            }
+            const float* above = j == j0 ? carried.data() : row - nx;
+            for (std::size_t i = 0; i < nx; ++i) row[i] = f[i] ? 0.0f : above[i] + 1.0f;
+        }
+        std::copy_n(col.data() + std::size_t(j1 - 1 - j0) * nx, nx, carried.data());
+        for (int j = end - 2; j >= j0; --j) {
+            const float* below = col.data() + std::size_t(j + 1 - j0) * nx;
+            float* row = col.data() + std::size_t(j - j0) * nx;
+            for (std::size_t i = 0; i < nx; ++i) row[i] = std::min(row[i], below[i] + 1.0f);
+        }
+        // Along each row, then the merge (a row of `exact` is read only for itself).
+        for (int j = j0; j < j1; ++j) {
+            float* row = col.data() + std::size_t(j - j0) * nx;
+            for (std::size_t i = 0; i < nx; ++i) {
+                const float sq = row[i] * row[i];
+                row[i] = sq > cap2 ? kInf : sq;
+            }
+            Edt1d(row, int(nx), d.data(), v.data(), z.data());
+            float* out = exact.data() + std::size_t(j) * nx;
+            for (std::size_t i = 0; i < nx; ++i) {
+                const float transform = d[i] == kInf ? kInf : std::sqrt(d[i]) * res;
+                out[i] = std::min(ceiling_m, out[i] < kInf ? out[i] : transform + offset_m);
+            }
+        }
+    }
+}
+
 std::vector<float> SignedDistanceTransform(const GridSpec& spec,
                                            const std::vector<std::uint8_t>& inside) {
     std::vector<std::uint8_t> outside(inside.size());

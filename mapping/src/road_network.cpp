@@ -68,10 +68,9 @@ void RasteriseSegment(Raster& r, const Eigen::Vector2d& a, const Eigen::Vector2d
     }
 }
 
-// Bytes a sample of a road field takes at the build's peak: the exact band's two distances and
-// the two masks (4 + 4 + 1 + 1) and the two transforms' results (4 + 4). kitti00 cvo's 5.17 M
-// samples: 89 MiB of its 99 MiB peak.
-constexpr double kPeakBytesPerSample = 18.0;
+// Bytes a sample of a road field takes at the build's peak: the two distances (the exact band's,
+// the transforms laid under them in place) and the two masks (4 + 4 + 1 + 1).
+constexpr double kPeakBytesPerSample = 10.0;
 
 // The grid over `box` (samples on box.min() + k * resolution), not yet checked against the cap.
 GridSpec GridOver(const Eigen::AlignedBox2d& box, const RoadFieldConfig& c) {
@@ -156,29 +155,18 @@ std::pair<std::vector<float>, std::vector<float>> DistanceSamples(const RoadNetw
     upper_rows.get();
     // Both fields are capped at the truncation; the corridor's takes half a cell off the
     // distance to an inside sample, so beyond truncation + a cell nothing is needed. Each
-    // transform, and the exact band laid over it, in its own thread.
+    // transform is laid under its exact band in place, in its own thread.
     const double cap = config.truncation_m + config.resolution_m;
     const float trunc = float(config.truncation_m), half = float(0.5 * config.resolution_m);
-    std::future<std::vector<float>> to_corridor =
-        std::async(second, [&r, cap, n, trunc, half, inf] {
-            std::vector<float> corridor = EuclideanDistanceTransform(r.spec, r.inside, cap);
-            // Beyond the band: the distance to the nearest inside sample overestimates the distance
-            // to the corridor edge (which lies between that sample and the next one) by up to one
-            // cell; minus half a cell centres the error (same convention as
-            // SignedDistanceTransform).
-            for (std::size_t i = 0; i < n; ++i) {
-                const float exact = r.corridor_exact[i];
-                corridor[i] = std::min(trunc, exact < inf ? exact : corridor[i] - half);
-            }
-            return corridor;
-        });
-    std::vector<float> centre = EuclideanDistanceTransform(r.spec, r.centre_seed, cap);
-    for (std::size_t i = 0; i < n; ++i) {
-        const float exact = r.centre_exact[i];
-        centre[i] = std::min(trunc, exact < inf ? exact : centre[i]);
-    }
-    std::vector<float> corridor = to_corridor.get();
-    return {std::move(centre), std::move(corridor)};
+    // Beyond the band: the distance to the nearest inside sample overestimates the distance to
+    // the corridor edge (which lies between that sample and the next one) by up to one cell;
+    // minus half a cell centres the error (same convention as SignedDistanceTransform).
+    auto corridor_done = std::async(second, [&r, cap, trunc, half] {
+        MergeCappedDistanceTransform(r.spec, r.inside, cap, -half, trunc, r.corridor_exact);
+    });
+    MergeCappedDistanceTransform(r.spec, r.centre_seed, cap, 0.0f, trunc, r.centre_exact);
+    corridor_done.get();
+    return {std::move(r.centre_exact), std::move(r.corridor_exact)};
 }
 
 // The samples [i0, i1) x [j0, j1) of `from` (a sub-grid of the same resolution).

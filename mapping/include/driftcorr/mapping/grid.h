@@ -83,6 +83,17 @@ std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
                                               const std::vector<std::uint8_t>& feature,
                                               double cap_m = std::numeric_limits<double>::infinity());
 
+/// EuclideanDistanceTransform(spec, feature, cap_m) of a 2-D grid (spec.nz == 1) laid under
+/// exact distances known near the features, without a grid of its own: every sample of `exact`
+/// becomes min(ceiling_m, exact) where it is finite, min(ceiling_m, transform + offset_m) where it
+/// is +infinity; the same floats as the transform followed by that merge. The transform runs a
+/// strip of rows at a time (its columns' pass looks beyond the strip as far as the cap), so it
+/// needs memory for a strip, not for the grid. Preconditions: spec.nz == 1, cap_m finite,
+/// feature.size() == exact.size() == spec.size().
+void MergeCappedDistanceTransform(const GridSpec& spec, const std::vector<std::uint8_t>& feature,
+                                  double cap_m, float offset_m, float ceiling_m,
+                                  std::vector<float>& exact);
+
 /// Signed distance to a set: negative inside (distance to the nearest outside sample, minus
 /// half a cell), positive outside (distance to the nearest inside sample, minus half a cell), so
 /// that the zero level lies between the last inside and the first outside sample.
