@@ -171,7 +171,10 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         for (std::size_t e = 0; e < hessian.size(); ++e) {
             if (pattern.slot[e] != kNone) values[pattern.slot[e]] += hessian[e];
         }
-        for (std::size_t e = 0; e < values.size(); ++e) {
+        // The rows and columns of active variables: zero (a scale at its bound; seldom any).
+        bool any_active = false;
+        for (int q = 0; q < m; ++q) any_active = any_active || active[pattern.variable[q]];
+        for (std::size_t e = 0; any_active && e < values.size(); ++e) {
             if (active[pattern.row_var[e]] || active[pattern.column_var[e]]) values[e] = 0.0;
         }
         for (int q = 0; q < m; ++q) {

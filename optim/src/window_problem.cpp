@@ -31,6 +31,25 @@ public:
         lo_[r] = std::min(lo_[r], c);
         hi_[r] = std::max(hi_[r], c);
     }
+    /// Note(r, c) for every pair of the block's variables (held ones left out), in a pass over
+    /// them: the pairs with row r reach down to the block's least variable and up to r itself
+    /// (a row at or above split: up to the block's last variable below split).
+    void NoteBlock(const TermBlock& block) {
+        int least = INT_MAX, below_split = -1;
+        for (int k = 0; k < block.size(); ++k) {
+            const int v = block.var(k);
+            if (v < 0) continue;
+            least = std::min(least, v);
+            if (v < split_) below_split = std::max(below_split, v);
+        }
+        if (least >= split_) return;
+        for (int k = 0; k < block.size(); ++k) {
+            const int v = block.var(k);
+            if (v < 0) continue;
+            lo_[v] = std::min(lo_[v], least);
+            hi_[v] = std::max(hi_[v], v < split_ ? v : below_split);
+        }
+    }
     void Allocate() {
         offset_.assign(lo_.size() + 1, 0);
         for (std::size_t r = 0; r < lo_.size(); ++r) {
@@ -280,51 +299,51 @@ void WindowProblem::BuildStructure(WindowUse use) {
     }
     if (use != WindowUse::kSolve) return;
     // Pass 1 notes every pair the blocks and the constraints' Hessians touch, pass 2 numbers
-    // them in the order they are met.
+    // them in the order they are met. A step's blocks read the same variables one after the
+    // other: such a block takes the pairs of the block before, already noted and numbered.
     SlotTable slots(n_vars_, PoseVar(last_, 3) + 1);
+    auto same_as_previous = [&](std::size_t b) {
+        return b > 0 && SameVariables(*blocks_[b - 1], *blocks_[b]);
+    };
+    auto pose_pairs = [&](std::size_t i, auto&& slot) {
+        const int x = PoseVar(i, 0), y = PoseVar(i, 1), z = PoseVar(i, 2);
+        return std::array<int, 6>{slot(x, x), slot(y, x), slot(y, y),
+                                  slot(z, x), slot(z, y), slot(z, z)};
+    };
+    std::size_t pairs = 0;
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+        pairs += std::size_t(blocks_[b]->size() * (blocks_[b]->size() + 1) / 2);
+        if (!same_as_previous(b)) slots.NoteBlock(*blocks_[b]);
+    }
+    for (std::size_t i = first_; i <= last_; ++i) {
+        pose_pairs(i, [&](int r, int c) {
+            slots.Note(r, c);
+            return -1;
+        });
+    }
+    slots.Allocate();
     block_slot_begin_.reserve(blocks_.size());
-    for (int pass = 0; pass < 2; ++pass) {
-        auto slot = [&](int r, int c) {
-            if (pass == 0) {
-                slots.Note(r, c);
-                return -1;
-            }
-            return slots.Slot(r, c, hess_);
-        };
-        const TermBlock* previous = nullptr;
-        for (const auto& block : blocks_) {
-            if (pass == 1) block_slot_begin_.push_back(static_cast<int>(block_slots_.size()));
-            // A step's blocks read the same variables one after the other: the pairs of the
-            // block before, already noted and numbered, in the same order.
-            if (previous != nullptr && SameVariables(*previous, *block)) {
-                if (pass == 1) {
-                    const int from = block_slot_begin_[block_slot_begin_.size() - 2];
-                    const int count = block->size() * (block->size() + 1) / 2;
-                    for (int k = 0; k < count; ++k) {
-                        const int e = block_slots_[std::size_t(from + k)];
-                        block_slots_.push_back(e);
-                    }
-                }
-                previous = block.get();
-                continue;
-            }
-            previous = block.get();
-            for (int r = 0; r < block->size(); ++r) {
-                for (int c = 0; c <= r; ++c) {
-                    const int vr = block->var(r), vc = block->var(c);
-                    const int e = vr >= 0 && vc >= 0 ? slot(vr, vc) : -1;
-                    if (pass == 1) block_slots_.push_back(e);
-                }
+    block_slots_.reserve(pairs);
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+        const TermBlock& block = *blocks_[b];
+        block_slot_begin_.push_back(static_cast<int>(block_slots_.size()));
+        if (same_as_previous(b)) {
+            const std::size_t from = std::size_t(block_slot_begin_[b - 1]);
+            const std::size_t count = std::size_t(block.size() * (block.size() + 1) / 2);
+            for (std::size_t k = 0; k < count; ++k) block_slots_.push_back(block_slots_[from + k]);
+            continue;
+        }
+        for (int r = 0; r < block.size(); ++r) {
+            for (int c = 0; c <= r; ++c) {
+                const int vr = block.var(r), vc = block.var(c);
+                block_slots_.push_back(vr >= 0 && vc >= 0 ? slots.Slot(vr, vc, hess_) : -1);
             }
         }
-        if (pass == 1) pose_hess_slot_.resize(last_ - first_ + 1);
-        for (std::size_t i = first_; i <= last_; ++i) {
-            const int x = PoseVar(i, 0), y = PoseVar(i, 1), z = PoseVar(i, 2);
-            const std::array<int, 6> e = {slot(x, x), slot(y, x), slot(y, y),
-                                          slot(z, x), slot(z, y), slot(z, z)};
-            if (pass == 1) pose_hess_slot_[i - first_] = e;
-        }
-        if (pass == 0) slots.Allocate();
+    }
+    pose_hess_slot_.resize(last_ - first_ + 1);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        pose_hess_slot_[i - first_] =
+            pose_pairs(i, [&](int r, int c) { return slots.Slot(r, c, hess_); });
     }
 }
 
