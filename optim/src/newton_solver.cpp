@@ -124,14 +124,12 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     Pattern pattern = BuildPattern(problem, held);
     const int m = pattern.matrix.size();
 
-    std::vector<double> grad(n), hessian(problem.HessianStructure().size()), trial(n);
+    const std::size_t entries = problem.HessianStructure().size();
+    std::vector<double> grad(n), hessian(entries), trial(n), trial_grad(n), trial_hessian(entries);
     // The active set: held variables and those pressed against a bound by the gradient; they
     // stay where they are for the next step (projected Newton), and their gradient is left out.
-    // The gradient and the Hessian are evaluated together at each point the solve moves to: the
-    // Hessian is then wasted only at the point where the gradient says the solve has converged.
     std::vector<bool> active(n);
-    auto projected_gradient = [&] {
-        problem.GradientAndHessian(x.data(), grad.data(), hessian.data());
+    auto project_gradient = [&] {
         for (int k = 0; k < n; ++k) {
             active[k] = held[k] || (x[k] <= lower[k] && grad[k] > 0.0) ||
                         (x[k] >= upper[k] && grad[k] < 0.0);
@@ -139,15 +137,20 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         }
     };
     SolveReport report;
-    double f = problem.Objective(x.data());
+    // The objective, its gradient and its Hessian are evaluated together: the Hessian is wasted
+    // only where the gradient says the solve has converged.
+    double f = problem.ObjectiveGradientHessian(x.data(), grad.data(), hessian.data());
     if (!std::isfinite(f)) {
         report.message = "objective not finite at the starting point";
         return report;
     }
-    projected_gradient();
+    project_gradient();
     // Ipopt's scaling of the objective: its gradient at the start at most 100.
     const double scale = std::min(1.0, 100.0 / std::max(MaxAbs(grad), 1e-300));
     double damping = 0.0;
+    // Whether the last line search took its first trial: the next first trial is then evaluated
+    // with its gradient and Hessian (most are taken; a trial not taken wastes them).
+    bool speculate = true;
     std::vector<double> step(n, 0.0), rhs(m), diagonal(m);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
@@ -183,7 +186,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         }
         // Newton's step, damped (H + damping * max(|diag H|, 1)) until the system is positive
         // definite and the line search finds a decrease.
-        bool moved = false;
+        bool moved = false, evaluated = false;
         while (!moved) {
             for (int q = 0; q < m; ++q) {
                 values[pattern.diagonal[q]] =
@@ -203,11 +206,18 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
                         decrease += grad[k] * (trial[k] - x[k]);
                     }
                     if (!(decrease < 0.0)) break;
-                    const double f_trial = problem.Objective(trial.data());
-                    if (std::isfinite(f_trial) && f_trial <= f + kArmijo * decrease) {
+                    const bool full = alpha_k == 0 && speculate;
+                    const double f_trial =
+                        full ? problem.ObjectiveGradientHessian(trial.data(), trial_grad.data(),
+                                                                trial_hessian.data())
+                             : problem.Objective(trial.data());
+                    const bool taken = std::isfinite(f_trial) && f_trial <= f + kArmijo * decrease;
+                    if (alpha_k == 0) speculate = taken;
+                    if (taken) {
                         x.swap(trial);
                         f = f_trial;
                         moved = true;
+                        evaluated = full;
                         if (alpha_k == 0)
                             damping =
                                 damping / kDampingGrowth < 1e-8 ? 0.0 : damping / kDampingGrowth;
@@ -228,7 +238,13 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             }
             break;
         }
-        projected_gradient();
+        if (evaluated) {
+            grad.swap(trial_grad);
+            hessian.swap(trial_hessian);
+        } else {
+            problem.ObjectiveGradientHessian(x.data(), grad.data(), hessian.data());
+        }
+        project_gradient();
     }
     report.objective = f;
     if (Usable(report.status)) problem.Store(x.data());

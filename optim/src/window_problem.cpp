@@ -404,32 +404,32 @@ Eigen::Vector3d WindowProblem::PosePosition(const double* x, std::size_t pose) c
 }
 
 double WindowProblem::Objective(const double* x) const {
-    const BlockContext ctx = Context(x);
-    double f = 0.0;
-    for (const auto& block : blocks_) f += block->Evaluate(ctx, block->Gather(x), nullptr, nullptr);
-    return f;
+    return AccumulateBlocks(Context(x), x, 1.0, nullptr, nullptr);
 }
 
 void WindowProblem::Gradient(const double* x, double* grad) const {
     AccumulateBlocks(Context(x), x, 1.0, grad, nullptr);
 }
 
-void WindowProblem::GradientAndHessian(const double* x, double* grad, double* values) const {
+double WindowProblem::ObjectiveGradientHessian(const double* x, double* grad,
+                                               double* values) const {
     DRIFTCORR_CHECK(block_slot_begin_.size() == blocks_.size(), "built with kLinearise");
-    AccumulateBlocks(Context(x), x, 1.0, grad, values);
+    return AccumulateBlocks(Context(x), x, 1.0, grad, values);
 }
 
-// One pass over the blocks, each evaluated once for what is asked: the gradient summed into
-// `grad`, obj_factor times the Hessian into the slots of `values` (both zeroed first).
-void WindowProblem::AccumulateBlocks(const BlockContext& ctx, const double* x, double obj_factor,
-                                     double* grad, double* values) const {
+// One pass over the blocks, each evaluated once for what is asked: their costs summed (the
+// objective, returned), the gradient summed into `grad`, obj_factor times the Hessian into the
+// slots of `values` (both zeroed first).
+double WindowProblem::AccumulateBlocks(const BlockContext& ctx, const double* x, double obj_factor,
+                                       double* grad, double* values) const {
     if (grad) std::fill(grad, grad + n_vars_, 0.0);
     if (values) std::fill(values, values + hess_.size(), 0.0);
+    double f = 0.0;
     BlockVector g;
     BlockMatrix h;
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
         const TermBlock& block = *blocks_[b];
-        block.Evaluate(ctx, block.Gather(x), grad ? &g : nullptr, values ? &h : nullptr);
+        f += block.Evaluate(ctx, block.Gather(x), grad ? &g : nullptr, values ? &h : nullptr);
         if (grad) {
             for (int k = 0; k < block.size(); ++k) {
                 if (block.var(k) >= 0) grad[block.var(k)] += g[k];
@@ -444,6 +444,7 @@ void WindowProblem::AccumulateBlocks(const BlockContext& ctx, const double* x, d
             }
         }
     }
+    return f;
 }
 
 void WindowProblem::Constraints(const double* x, double* g) const {

@@ -92,9 +92,10 @@ public:
     const std::vector<std::pair<int, int>>& HessianStructure() const { return hess_; }
     void HessianValues(const double* x, double obj_factor, const double* lambda,
                        double* values) const;
-    /// Gradient(x) and HessianValues(x, 1, none) in one pass over the blocks (each evaluated
-    /// once), the same values to the last bit. Precondition: use == kSolve.
-    void GradientAndHessian(const double* x, double* grad, double* values) const;
+    /// Objective(x), returned, with Gradient(x) and HessianValues(x, 1, none) in one pass over
+    /// the blocks (each evaluated once); the same values to the last bit. Precondition:
+    /// use == kSolve.
+    double ObjectiveGradientHessian(const double* x, double* grad, double* values) const;
 
     /// Every term of the objective linearised at x, appended to `terms` (TermBlock::Linearise;
     /// variables held fixed outside the window and zero derivatives left out). The sum over the
@@ -142,8 +143,8 @@ private:
     /// only in a window with constraints (left zero otherwise: no term reads it).
     const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
     void BuildStructure(WindowUse use);
-    void AccumulateBlocks(const BlockContext& ctx, const double* x, double obj_factor,
-                          double* grad, double* values) const;
+    double AccumulateBlocks(const BlockContext& ctx, const double* x, double obj_factor,
+                            double* grad, double* values) const;
 
     TrajectoryState& state_;
     const TraversableField* field_;
