@@ -64,17 +64,16 @@ bool MakeStencil(const GridSpec& s, const Eigen::Vector3d& p, Stencil& st) {
     return true;
 }
 
-// Accumulates value, gradient (in grid units) and Hessian (grid units) of one field.
-void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& st,
-                FieldSample& out) {
+// Accumulates value, gradient (in grid units) and Hessian (grid units) of one field. The planar
+// instance leaves out the products with a unit weight and the zero derivatives along z of the
+// general one, which come to the same bits: the z components +0, the others unchanged (x * 1).
+template <bool kPlanar>
+void AccumulateLayers(const GridSpec& s, const std::vector<float>& v, const Stencil& st,
+                      FieldSample& out) {
     double val = 0, gx = 0, gy = 0, gz = 0, hxx = 0, hxy = 0, hyy = 0, hxz = 0, hyz = 0, hzz = 0;
-    const int nk = st.planar ? 1 : 4;
-    for (int c = 0; c < nk; ++c) {
-        const double wz = st.planar ? 1.0 : st.bz.w[c];
-        const double dz = st.planar ? 0.0 : st.bz.dw[c];
-        const double ddz = st.planar ? 0.0 : st.bz.ddw[c];
+    for (int c = 0; c < (kPlanar ? 1 : 4); ++c) {
         for (int b = 0; b < 4; ++b) {
-            const float* row = &v[s.Index(st.i0, st.j0 + b, st.k0 + (st.planar ? 0 : c))];
+            const float* row = &v[s.Index(st.i0, st.j0 + b, st.k0 + c)];
             double r = 0, rd = 0, rdd = 0;
             for (int a = 0; a < 4; ++a) {
                 r += st.bx.w[a] * row[a];
@@ -82,16 +81,26 @@ void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& s
                 rdd += st.bx.ddw[a] * row[a];
             }
             const double wy = st.by.w[b], dy = st.by.dw[b], ddy = st.by.ddw[b];
-            val += r * wy * wz;
-            gx += rd * wy * wz;
-            gy += r * dy * wz;
-            gz += r * wy * dz;
-            hxx += rdd * wy * wz;
-            hxy += rd * dy * wz;
-            hyy += r * ddy * wz;
-            hxz += rd * wy * dz;
-            hyz += r * dy * dz;
-            hzz += r * wy * ddz;
+            if constexpr (kPlanar) {
+                val += r * wy;
+                gx += rd * wy;
+                gy += r * dy;
+                hxx += rdd * wy;
+                hxy += rd * dy;
+                hyy += r * ddy;
+            } else {
+                const double wz = st.bz.w[c], dz = st.bz.dw[c], ddz = st.bz.ddw[c];
+                val += r * wy * wz;
+                gx += rd * wy * wz;
+                gy += r * dy * wz;
+                gz += r * wy * dz;
+                hxx += rdd * wy * wz;
+                hxy += rd * dy * wz;
+                hyy += r * ddy * wz;
+                hxz += rd * wy * dz;
+                hyz += r * dy * dz;
+                hzz += r * wy * ddz;
+            }
         }
     }
     const double inv = 1.0 / s.resolution_m, invz = 1.0 / s.dz(), inv2 = inv * inv;
@@ -99,6 +108,15 @@ void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& s
     out.gradient = Eigen::Vector3d(gx * inv, gy * inv, gz * invz);
     out.hessian << hxx * inv2, hxy * inv2, hxz * inv * invz, hxy * inv2, hyy * inv2,
         hyz * inv * invz, hxz * inv * invz, hyz * inv * invz, hzz * invz * invz;
+}
+
+void Accumulate(const GridSpec& s, const std::vector<float>& v, const Stencil& st,
+                FieldSample& out) {
+    if (st.planar) {
+        AccumulateLayers<true>(s, v, st, out);
+    } else {
+        AccumulateLayers<false>(s, v, st, out);
+    }
 }
 
 // The value alone, summed as Accumulate sums it (the same bits).
