@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <random>
@@ -367,6 +369,57 @@ TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kHeadingBiasWalk)] > 0, c.all_terms);
     EXPECT_GT(seen[static_cast<int>(TermFamily::kScaleRange)], 0);
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kBoundaryPrior)] > 0, c.boundary_prior);
+}
+
+// A block's gradient and Hessian are exact zeros outside the variables it says it reads, so the
+// one-pass sums (each block adding only those) are bit for bit the sums over every entry.
+TEST_P(WindowDerivatives, OnePassSumsEqualTheSumsOverEveryEntry) {
+    const WindowCase c = GetParam();
+    WindowProblem p = Problem();
+    std::mt19937 rng(c.seed + 2000u);
+    const std::vector<double> x = Perturbed(p, rng);
+    const int n = p.NumVariables();
+    std::map<std::pair<int, int>, std::size_t> slot;
+    for (std::size_t e = 0; e < p.HessianStructure().size(); ++e) slot[p.HessianStructure()[e]] = e;
+    double f_every = 0.0;
+    std::vector<double> g_every(n, 0.0), h_every(p.HessianStructure().size(), 0.0);
+    std::size_t unread = 0;
+    for (const auto& block : p.Blocks()) {
+        BlockVector g;
+        BlockMatrix h;
+        f_every += block->Evaluate(p.Context(x.data()), block->Gather(x.data()), &g, &h);
+        for (int r = 0; r < block->size(); ++r) {
+            const bool read = (block->reads() >> r) & 1u;
+            unread += !read;
+            if (!read) {
+                EXPECT_EQ(g[r], 0.0) << ToString(block->family()) << " gradient " << r;
+                for (int k = 0; k < block->size(); ++k) {
+                    EXPECT_EQ(h(r, k), 0.0) << ToString(block->family()) << " Hessian " << r;
+                }
+            }
+            const int vr = block->var(r);
+            if (vr < 0) continue;
+            g_every[vr] += g[r];
+            for (int k = 0; k <= r; ++k) {
+                const int vk = block->var(k);
+                if (vk >= 0) h_every[slot.at({std::max(vr, vk), std::min(vr, vk)})] += h(r, k);
+            }
+        }
+    }
+    EXPECT_GT(unread, 0u);  // the step blocks read fewer than their nine variables
+    std::vector<double> g(n), h(p.HessianStructure().size());
+    const double f = p.ObjectiveGradientHessian(x.data(), g.data(), h.data());
+    EXPECT_EQ(std::memcmp(&f, &f_every, sizeof f), 0) << f << " against " << f_every;
+    EXPECT_EQ(std::memcmp(g.data(), g_every.data(), g.size() * sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(h.data(), h_every.data(), h.size() * sizeof(double)), 0);
+    std::vector<double> g_alone(n), h_alone(h.size());
+    p.Gradient(x.data(), g_alone.data());
+    p.HessianValues(x.data(), 1.0, std::vector<double>(p.NumConstraints(), 0.0).data(),
+                    h_alone.data());
+    EXPECT_EQ(std::memcmp(g.data(), g_alone.data(), g.size() * sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(h.data(), h_alone.data(), h.size() * sizeof(double)), 0);
+    const double f_alone = p.Objective(x.data());
+    EXPECT_EQ(std::memcmp(&f, &f_alone, sizeof f), 0);
 }
 
 // The Newton solver and Ipopt on the same soft window of a drifting estimate (heading bias

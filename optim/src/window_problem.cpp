@@ -322,24 +322,33 @@ void WindowProblem::BuildStructure(WindowUse use) {
         });
     }
     slots.Allocate();
-    block_slot_begin_.reserve(blocks_.size());
-    block_slots_.reserve(pairs);
+    // Every pair of a block's variables is numbered (the Hessian's structure), but the block's
+    // entries list only the pairs of variables it reads: the others are exact zeros.
+    block_entry_begin_.reserve(blocks_.size() + 1);
+    block_entries_.reserve(pairs);
+    std::vector<int> triangle;  // the current block's slots, (r, c <= r) at r (r + 1) / 2 + c
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
         const TermBlock& block = *blocks_[b];
-        block_slot_begin_.push_back(static_cast<int>(block_slots_.size()));
-        if (same_as_previous(b)) {
-            const std::size_t from = std::size_t(block_slot_begin_[b - 1]);
-            const std::size_t count = std::size_t(block.size() * (block.size() + 1) / 2);
-            for (std::size_t k = 0; k < count; ++k) block_slots_.push_back(block_slots_[from + k]);
-            continue;
+        block_entry_begin_.push_back(static_cast<int>(block_entries_.size()));
+        if (!same_as_previous(b)) {
+            triangle.clear();
+            for (int r = 0; r < block.size(); ++r) {
+                for (int c = 0; c <= r; ++c) {
+                    const int vr = block.var(r), vc = block.var(c);
+                    triangle.push_back(vr >= 0 && vc >= 0 ? slots.Slot(vr, vc, hess_) : -1);
+                }
+            }
         }
+        const unsigned reads = block.reads();
         for (int r = 0; r < block.size(); ++r) {
             for (int c = 0; c <= r; ++c) {
-                const int vr = block.var(r), vc = block.var(c);
-                block_slots_.push_back(vr >= 0 && vc >= 0 ? slots.Slot(vr, vc, hess_) : -1);
+                const int slot = triangle[std::size_t(r * (r + 1) / 2 + c)];
+                if (slot < 0 || !((reads >> r) & 1u) || !((reads >> c) & 1u)) continue;
+                block_entries_.push_back({c * block.size() + r, slot});
             }
         }
     }
+    block_entry_begin_.push_back(static_cast<int>(block_entries_.size()));
     pose_hess_slot_.resize(last_ - first_ + 1);
     for (std::size_t i = first_; i <= last_; ++i) {
         pose_hess_slot_[i - first_] =
@@ -413,7 +422,7 @@ void WindowProblem::Gradient(const double* x, double* grad) const {
 
 double WindowProblem::ObjectiveGradientHessian(const double* x, double* grad,
                                                double* values) const {
-    DRIFTCORR_CHECK(block_slot_begin_.size() == blocks_.size(), "built with kLinearise");
+    DRIFTCORR_CHECK(block_entry_begin_.size() == blocks_.size() + 1, "built with kLinearise");
     return AccumulateBlocks(Context(x), x, 1.0, grad, values);
 }
 
@@ -425,24 +434,12 @@ double WindowProblem::AccumulateBlocks(const BlockContext& ctx, const double* x,
     if (grad) std::fill(grad, grad + n_vars_, 0.0);
     if (values) std::fill(values, values + hess_.size(), 0.0);
     double f = 0.0;
-    BlockVector g;
-    BlockMatrix h;
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
-        const TermBlock& block = *blocks_[b];
-        f += block.Evaluate(ctx, block.Gather(x), grad ? &g : nullptr, values ? &h : nullptr);
-        if (grad) {
-            for (int k = 0; k < block.size(); ++k) {
-                if (block.var(k) >= 0) grad[block.var(k)] += g[k];
-            }
-        }
-        if (values) {
-            const int* slot = block_slots_.data() + block_slot_begin_[b];
-            for (int r = 0; r < block.size(); ++r) {
-                for (int c = 0; c <= r; ++c, ++slot) {
-                    if (*slot >= 0) values[*slot] += obj_factor * h(r, c);
-                }
-            }
-        }
+        // The entries exist only in a problem built with kSolve, and only `values` needs them.
+        const BlockEntry* begin = values ? block_entries_.data() + block_entry_begin_[b] : nullptr;
+        const BlockEntry* end =
+            values ? block_entries_.data() + block_entry_begin_[b + 1] : nullptr;
+        f += blocks_[b]->Accumulate(ctx, x, obj_factor, grad, values, begin, end);
     }
     return f;
 }
@@ -465,7 +462,7 @@ void WindowProblem::JacobianValues(const double* x, double* values) const {
 
 void WindowProblem::HessianValues(const double* x, double obj_factor, const double* lambda,
                                   double* values) const {
-    DRIFTCORR_CHECK(block_slot_begin_.size() == blocks_.size(), "built with kLinearise");
+    DRIFTCORR_CHECK(block_entry_begin_.size() == blocks_.size() + 1, "built with kLinearise");
     const BlockContext ctx = Context(x);
     AccumulateBlocks(ctx, x, obj_factor, nullptr, values);
     for (std::size_t k = 0; k < constraint_pose_.size(); ++k) {

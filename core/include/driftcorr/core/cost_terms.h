@@ -12,6 +12,8 @@
 // positions in the East-North-Up map frame [m], yaw CCW from East [rad], s the step-length scale.
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
+#include <initializer_list>
 
 namespace driftcorr {
 
@@ -40,6 +42,14 @@ struct Linearisation {
 
 enum StepVar : int { kXa = 0, kYa, kZa, kYawA, kXb, kYb, kZb, kYawB, kScale, kStepVars };
 
+/// The variables a term's value depends on, one bit per variable (bit k: variable k). A term
+/// that declares `kReads` computes its gradient and Hessian as exact zeros (+-0) outside them.
+constexpr std::uint16_t ReadsOf(std::initializer_list<int> vars) {
+    std::uint16_t bits = 0;
+    for (int v : vars) bits = std::uint16_t(bits | (1u << v));
+    return bits;
+}
+
 /// Step length along the observed step direction: r = u(yaw_a + direction) . (p_b - p_a) - s * L.
 /// Smooth at zero length, so stationary steps (L = 0) need no special case.
 /// With robust_k > 0 the likelihood is heavy-tailed (Cauchy, width k sigmas):
@@ -47,6 +57,7 @@ enum StepVar : int { kXa = 0, kYa, kZa, kYawA, kXb, kYb, kZb, kYawB, kScale, kSt
 /// so a step the odometry dropped (frame-to-frame registration returning ~0 while the platform
 /// moved) is an outlier the other terms can overrule, instead of a hard pull to zero.
 struct StepLengthTerm {
+    static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb, kScale});
     double length_m, direction_rad, sigma_m, weight;
     double robust_k = 0.0;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
@@ -60,6 +71,7 @@ struct StepLengthTerm {
 using SpeedVector = Eigen::Matrix<double, 12, 1>;
 using SpeedMatrix = Eigen::Matrix<double, 12, 12>;
 struct SpeedChangeTerm {
+    static constexpr std::uint16_t kReads = ReadsOf({0, 1, 3, 4, 5, 7, 8, 9});
     double direction_ab_rad, dt_ab_s, direction_bc_rad, dt_bc_s, sigma_mps, weight;
     double Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const;
     Linearisation<12> Linearise(const SpeedVector& x) const;
@@ -68,6 +80,7 @@ struct SpeedChangeTerm {
 /// Sideways motion relative to the observed step direction: r = n(yaw_a + direction) . (p_b - p_a),
 /// n the left normal. Ties the heading variables to the direction the positions move in.
 struct StepDirectionTerm {
+    static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb, kScale});
     double direction_rad, sigma_m, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
@@ -75,6 +88,7 @@ struct StepDirectionTerm {
 
 /// Heading change: r = yaw_b - yaw_a - dheading (headings unwrapped).
 struct HeadingChangeTerm {
+    static constexpr std::uint16_t kReads = ReadsOf({kYawA, kYawB});
     double dheading_rad, sigma_rad, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
@@ -102,6 +116,7 @@ struct ScaleRangeTerm {
 
 /// Heading preservation prior (turns are small): r = yaw_b - yaw_a.
 struct HeadingPreservationTerm {
+    static constexpr std::uint16_t kReads = ReadsOf({kYawA, kYawB});
     double sigma_rad, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
@@ -109,6 +124,7 @@ struct HeadingPreservationTerm {
 
 /// Height change: r = z_b - z_a - dup.
 struct HeightChangeTerm {
+    static constexpr std::uint16_t kReads = ReadsOf({kZa, kZb});
     double dup_m, sigma_m, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;

@@ -8,7 +8,9 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
+#include <type_traits>
 #include <vector>
 
 #include "driftcorr/core/cost_terms.h"
@@ -63,13 +65,24 @@ struct BlockContext {
     std::size_t first_pose = 0;  ///< the window's first pose: samples[pose - first_pose]
 };
 
+/// A Hessian entry a block adds to: `local` indexes the block's local Hessian (column-major,
+/// size() rows), `slot` the problem's Hessian values.
+struct BlockEntry {
+    int local, slot;
+};
+
 class TermBlock {
 public:
-    TermBlock(TermFamily family, int size) : family_(family), size_(size) {}
+    /// `reads`: the local variables the cost depends on (core ReadsOf); its gradient and Hessian
+    /// are exact zeros elsewhere, which WindowProblem then does not add up.
+    TermBlock(TermFamily family, int size, std::uint16_t reads = 0xFFFF)
+        : family_(family), size_(size), reads_(std::uint16_t(reads & ((1u << size) - 1))) {}
     virtual ~TermBlock() = default;
 
     TermFamily family() const { return family_; }
     int size() const { return size_; }
+    /// Bit k set: the cost depends on local variable k.
+    std::uint16_t reads() const { return reads_; }
     /// The pose a per-pose term (map distance) belongs to; -1 for the others.
     int pose() const { return pose_; }
     void set_pose(int pose) { pose_ = pose; }
@@ -90,6 +103,20 @@ public:
     /// Cost at the local values x (size()), and on request its gradient and Hessian over them.
     virtual double Evaluate(const BlockContext& ctx, const BlockVector& x, BlockVector* grad,
                             BlockMatrix* hess) const = 0;
+    /// Evaluates the block at the window point x and adds what is asked for: the gradient over
+    /// the variables it reads into `grad` (by window variable; none if null), obj_factor times
+    /// its Hessian into `values` at the entries [begin, end) (none if null). Returns the cost.
+    /// The same sums as Evaluate on Gather(x), added entry by entry.
+    virtual double Accumulate(const BlockContext& ctx, const double* x, double obj_factor,
+                              double* grad, double* values, const BlockEntry* begin,
+                              const BlockEntry* end) const {
+        BlockVector g;
+        BlockMatrix h;
+        const double cost = Evaluate(ctx, Gather(x), grad ? &g : nullptr, values ? &h : nullptr);
+        if (grad) AddGradient(g.data(), grad);
+        if (values) AddHessian(h.data(), obj_factor, values, begin, end);
+        return cost;
+    }
     /// The term's linearisation at x appended to `out` (usually one residual; none when the
     /// term contributes nothing at x, e.g. a map term off the field), over local variables:
     /// LinearisedTerm::var holds local indices here; WindowProblem maps them to window
@@ -97,9 +124,26 @@ public:
     virtual void Linearise(const BlockContext& ctx, const BlockVector& x,
                            std::vector<LinearisedTerm>& out) const = 0;
 
+protected:
+    // What a block does not read has exact zeros (+-0) in its gradient and Hessian, and adding
+    // them would change no sum (a sum from +0 is never -0, and x + (+-0) = x otherwise): only
+    // the variables it reads are added.
+    void AddGradient(const double* g, double* grad) const {
+        for (unsigned bits = reads_; bits != 0; bits &= bits - 1) {
+            const int k = __builtin_ctz(bits);
+            if (var_[k] >= 0) grad[var_[k]] += g[k];
+        }
+    }
+    static void AddHessian(const double* h, double obj_factor, double* values,
+                           const BlockEntry* begin, const BlockEntry* end) {
+        for (const BlockEntry* e = begin; e != end; ++e)
+            values[e->slot] += obj_factor * h[e->local];
+    }
+
 private:
     TermFamily family_;
     int size_;
+    std::uint16_t reads_;
     int pose_ = -1;
     std::array<int, kMaxBlockVars> var_{};
     std::array<double, kMaxBlockVars> fixed_{};
@@ -115,6 +159,16 @@ LinearisedTerm FromLinearisation(const Linearisation<N>& lin) {
     return t;
 }
 
+/// The variables a core term reads: its kReads where it declares them, else all N.
+template <class Term, int N, class = void>
+struct TermReads {
+    static constexpr std::uint16_t value = std::uint16_t((1u << N) - 1);
+};
+template <class Term, int N>
+struct TermReads<Term, N, std::void_t<decltype(Term::kReads)>> {
+    static constexpr std::uint16_t value = Term::kReads;
+};
+
 /// A core term (core/cost_terms.h) over N local variables whose Evaluate takes an N-vector and
 /// whose Linearise returns a Linearisation<N>.
 template <class Term, int N>
@@ -122,7 +176,8 @@ class CoreTermBlock final : public TermBlock {
 public:
     using Vector = Eigen::Matrix<double, N, 1>;
     using Matrix = Eigen::Matrix<double, N, N>;
-    CoreTermBlock(TermFamily family, const Term& term) : TermBlock(family, N), term_(term) {}
+    CoreTermBlock(TermFamily family, const Term& term)
+        : TermBlock(family, N, TermReads<Term, N>::value), term_(term) {}
 
     double Evaluate(const BlockContext&, const BlockVector& x, BlockVector* grad,
                     BlockMatrix* hess) const override {
@@ -132,6 +187,19 @@ public:
         const double cost = term_.Evaluate(v, grad ? &g : nullptr, hess ? &h : nullptr);
         if (grad) *grad = g;
         if (hess) *hess = h;
+        return cost;
+    }
+    /// Evaluate and the additions on the term's own fixed-size vectors, without the copies.
+    double Accumulate(const BlockContext&, const double* x, double obj_factor, double* grad,
+                      double* values, const BlockEntry* begin,
+                      const BlockEntry* end) const override {
+        Vector v;
+        for (int k = 0; k < N; ++k) v[k] = var(k) >= 0 ? x[var(k)] : fixed(k);
+        Vector g;
+        Matrix h;
+        const double cost = term_.Evaluate(v, grad ? &g : nullptr, values ? &h : nullptr);
+        if (grad) AddGradient(g.data(), grad);
+        if (values) AddHessian(h.data(), obj_factor, values, begin, end);
         return cost;
     }
     void Linearise(const BlockContext&, const BlockVector& x,

@@ -156,9 +156,10 @@ private:
     int bias_first_ = 0, bias_last_ = -1, bias_var0_ = 0;  // bias segments in the window
     std::vector<std::size_t> constraint_pose_;
     std::vector<std::unique_ptr<TermBlock>> blocks_;
-    /// Per block, the Hessian slots of its local lower triangle (r, c <= r) at
-    /// block_slot_begin_[b] + r (r + 1) / 2 + c; -1 where a variable is held fixed.
-    std::vector<int> block_slot_begin_, block_slots_;
+    /// Block b's entries, [block_entry_begin_[b], block_entry_begin_[b + 1]): the lower triangle
+    /// over the variables it reads, those held fixed left out.
+    std::vector<int> block_entry_begin_;
+    std::vector<BlockEntry> block_entries_;
     std::vector<std::pair<int, int>> jac_, hess_;
     std::vector<std::array<int, 6>> pose_hess_slot_;
     mutable std::vector<double> cache_x_;
