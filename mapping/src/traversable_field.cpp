@@ -95,6 +95,13 @@ std::optional<double> TraversableField::CentreValue(const Eigen::Vector3d& p_enu
     return tiles_[k].centre.Value(p_enu);
 }
 
+std::optional<double> TraversableField::CorridorValue(const Eigen::Vector3d& p_enu) const {
+    if (!tiled()) return corridor_.Value(p_enu);
+    const int k = TileAt(p_enu);
+    if (k < 0) return std::nullopt;
+    return tiles_[k].corridor.Value(p_enu);
+}
+
 std::optional<FieldSample> TraversableField::QueryCentreBilinear(const Eigen::Vector3d& p_enu) const {
     return QueryOne(p_enu, true, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
         return f.QueryBilinear(p);

@@ -24,8 +24,8 @@ double OffRoadShare(const TrajectoryState& s, const TraversableField& field, std
                     std::size_t last, double limit_m) {
     std::size_t off = 0;
     for (std::size_t i = first; i <= last; ++i) {
-        auto q = field.Query(s.poses[i].p);
-        if (!q || q->centre.value > limit_m) ++off;
+        const auto d = field.CentreValue(s.poses[i].p);
+        if (!d || *d > limit_m) ++off;
     }
     return double(off) / double(last - first + 1);
 }
@@ -36,8 +36,8 @@ std::vector<std::uint8_t> GateConstraints(const TrajectoryState& s, const Traver
     std::vector<std::uint8_t> flags(last - first + 1, 0);
     if (!field || !m.hard_corridor) return flags;
     for (std::size_t i = first; i <= last; ++i) {
-        auto q = field->Query(s.poses[i].p);
-        flags[i - first] = q && q->corridor.value <= m.corridor_gate_m;
+        const auto d = field->CorridorValue(s.poses[i].p);
+        flags[i - first] = d && *d <= m.corridor_gate_m;
     }
     return flags;
 }
@@ -63,9 +63,8 @@ double CorridorExcess(const TrajectoryState& s, const TraversableField& field, c
     double excess = 0.0;
     for (std::size_t k = 0; k < flags.size(); ++k) {
         if (!flags[k]) continue;
-        const auto q = field.Query(s.poses[first + k].p);
-        excess =
-            std::max(excess, (q ? q->corridor.value : field.truncation_m()) - m.corridor_slack_m);
+        const auto d = field.CorridorValue(s.poses[first + k].p);
+        excess = std::max(excess, d.value_or(field.truncation_m()) - m.corridor_slack_m);
     }
     return excess;
 }

@@ -58,6 +58,8 @@ public:
         }
         entries_.assign(offset_.back(), -1);
     }
+    /// At least the number of pairs below split (each row's span holds its pairs).
+    std::size_t Capacity() const { return entries_.size(); }
     /// The slot of (r, c) in `hess` (appended on first use). Precondition: (r, c) was noted.
     int Slot(int r, int c, std::vector<std::pair<int, int>>& hess) {
         if (r < c) std::swap(r, c);
@@ -322,6 +324,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
         });
     }
     slots.Allocate();
+    hess_.reserve(slots.Capacity() + 16);
     // Every pair of a block's variables is numbered (the Hessian's structure), but the block's
     // entries list only the pairs of variables it reads: the others are exact zeros.
     block_entry_begin_.reserve(blocks_.size() + 1);

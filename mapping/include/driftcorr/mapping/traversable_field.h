@@ -43,6 +43,8 @@ public:
     std::optional<FieldSample> QueryCentre(const Eigen::Vector3d& p_enu) const;
     /// QueryCentre's value alone (the same number), without the derivatives.
     std::optional<double> CentreValue(const Eigen::Vector3d& p_enu) const;
+    /// Query's corridor value alone (the same number), without the derivatives.
+    std::optional<double> CorridorValue(const Eigen::Vector3d& p_enu) const;
     /// InterpolatedField::QueryBilinear of the centre / corridor distance (the paper's method).
     std::optional<FieldSample> QueryCentreBilinear(const Eigen::Vector3d& p_enu) const;
     std::optional<FieldSample> QueryCorridorBilinear(const Eigen::Vector3d& p_enu) const;
