@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "driftcorr/core/check.h"
@@ -54,7 +55,7 @@ struct Pattern {
     std::vector<int> row_var, column_var;
 };
 
-Pattern BuildPattern(const WindowProblem& p, const std::vector<bool>& held) {
+Pattern BuildPattern(const WindowProblem& p, const std::vector<std::uint8_t>& held) {
     const auto& structure = p.HessianStructure();
     const int n = p.NumVariables();
     const std::vector<int> band = BandOrder(p);
@@ -116,7 +117,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     std::vector<double> lower(n), upper(n), x(n);
     problem.Bounds(lower.data(), upper.data(), nullptr, nullptr);
     problem.InitialPoint(x.data());
-    std::vector<bool> held(n);
+    std::vector<std::uint8_t> held(n);  // bytes, not bits: read in every loop
     for (int k = 0; k < n; ++k) {
         held[k] = lower[k] == upper[k];
         x[k] = std::clamp(x[k], lower[k], upper[k]);
@@ -128,7 +129,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     std::vector<double> grad(n), hessian(entries), trial(n), trial_grad(n), trial_hessian(entries);
     // The active set: held variables and those pressed against a bound by the gradient; they
     // stay where they are for the next step (projected Newton), and their gradient is left out.
-    std::vector<bool> active(n);
+    std::vector<std::uint8_t> active(n);
     auto project_gradient = [&] {
         for (int k = 0; k < n; ++k) {
             active[k] = held[k] || (x[k] <= lower[k] && grad[k] > 0.0) ||
