@@ -12,11 +12,6 @@ namespace {
 
 constexpr double kInfBound = 1e19;
 
-template <class Term, int N>
-std::unique_ptr<TermBlock> Core(TermFamily family, const Term& term) {
-    return std::make_unique<CoreTermBlock<Term, N>>(family, term);
-}
-
 // The Hessian's slots by (row, column), row >= column. Below `split` (the pose variables) a row
 // couples with a short span of columns [lo, hi] (a pose with the two before it; a scale or bias
 // segment with its poses), held as one entry per column of the span (-1: no slot yet). Pairs of
@@ -124,7 +119,8 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
       first_(first),
       last_(last),
       prior_(std::move(boundary_prior)),
-      var_first_(prior_ ? first - 1 : first) {
+      var_first_(prior_ ? first - 1 : first),
+      arena_((last - first + 2) * kArenaBytesPerPose) {
     DRIFTCORR_CHECK(first >= 1 && first <= last && last < state.poses.size(), "bad window");
     DRIFTCORR_CHECK(constrained.size() == last - first + 1, "one constraint flag per window pose");
     seg_first_ = state.scale_segment[first];
@@ -145,6 +141,10 @@ WindowProblem::WindowProblem(TrajectoryState& state, const TraversableField* fie
         if (constrained[k] && field_) constraint_pose_.push_back(first + k);
     }
     BuildStructure(use);
+}
+
+WindowProblem::~WindowProblem() {
+    for (TermBlock* block : blocks_) block->~TermBlock();
 }
 
 int WindowProblem::PoseVar(std::size_t pose, int component) const {
@@ -281,7 +281,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
     for (std::size_t i = first_; i <= last_; ++i) {
         AddStepBlocks(i);
         if (field_) {
-            blocks_.push_back(std::make_unique<MapDistanceBlock>(
+            blocks_.push_back(Make<MapDistanceBlock>(
                 MapDistanceTerm{cfg_.map_sigma_m, cfg_.map_giveup_m, cfg_.map_weight},
                 static_cast<int>(i)));
             for (int c = 0; c < 3; ++c) blocks_.back()->Bind(c, PoseVar(i, c), 0.0);
@@ -290,8 +290,7 @@ void WindowProblem::BuildStructure(WindowUse use) {
     AddScaleBlocks();
     if (HasBias()) AddBiasBlocks();
     if (prior_) {
-        blocks_.push_back(
-            std::make_unique<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
+        blocks_.push_back(Make<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
         for (int c = 0; c < 4; ++c) blocks_.back()->Bind(c, PoseVar(first_ - 1, c), 0.0);
         if (prior_->HasScale()) blocks_.back()->Bind(4, ScaleVar(prior_->scale_segment), 0.0);
     }

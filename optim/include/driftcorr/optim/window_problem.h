@@ -13,6 +13,8 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <memory_resource>
+#include <new>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -77,6 +79,10 @@ public:
                   WindowUse use = WindowUse::kSolve,
                   std::optional<PosePriorTerm> boundary_prior = std::nullopt);
 
+    ~WindowProblem();
+    WindowProblem(const WindowProblem&) = delete;
+    WindowProblem& operator=(const WindowProblem&) = delete;
+
     int NumVariables() const { return n_vars_; }
     int NumConstraints() const { return static_cast<int>(constraint_pose_.size()); }
     void InitialPoint(double* x) const;
@@ -116,7 +122,7 @@ public:
     int BiasVar(int segment) const;
 
     /// The window's terms, each one unit (optim/term_block.h), and what they read at x.
-    const std::vector<std::unique_ptr<TermBlock>>& Blocks() const { return blocks_; }
+    const std::vector<TermBlock*>& Blocks() const { return blocks_; }
     BlockContext Context(const double* x) const;
 
     /// Writes a solution back into the trajectory state.
@@ -143,6 +149,16 @@ private:
     /// only in a window with constraints (left zero otherwise: no term reads it).
     const std::vector<std::optional<TraversableSample>>& Samples(const double* x) const;
     void BuildStructure(WindowUse use);
+    /// A block of type Block made in the window's arena (freed with the window, all at once).
+    template <class Block, class... Args>
+    TermBlock* Make(Args&&... args) {
+        return new (arena_.allocate(sizeof(Block), alignof(Block)))
+            Block(std::forward<Args>(args)...);
+    }
+    template <class Term, int N>
+    TermBlock* Core(TermFamily family, const Term& term) {
+        return Make<CoreTermBlock<Term, N>>(family, term);
+    }
     double AccumulateBlocks(const BlockContext& ctx, const double* x, double obj_factor,
                             double* grad, double* values) const;
 
@@ -155,7 +171,11 @@ private:
     int seg_first_ = 0, seg_last_ = 0, n_vars_ = 0;
     int bias_first_ = 0, bias_last_ = -1, bias_var0_ = 0;  // bias segments in the window
     std::vector<std::size_t> constraint_pose_;
-    std::vector<std::unique_ptr<TermBlock>> blocks_;
+    /// The blocks' memory: a window's eight or so blocks a pose, made and freed together, not
+    /// one allocation each (the first buffer sized for them).
+    static constexpr std::size_t kArenaBytesPerPose = 2048;
+    std::pmr::monotonic_buffer_resource arena_;
+    std::vector<TermBlock*> blocks_;  ///< in arena_
     /// Block b's entries, [block_entry_begin_[b], block_entry_begin_[b + 1]): the lower triangle
     /// over the variables it reads, those held fixed left out.
     std::vector<int> block_entry_begin_;
