@@ -80,7 +80,7 @@ struct SpeedChangeTerm {
 /// Sideways motion relative to the observed step direction: r = n(yaw_a + direction) . (p_b - p_a),
 /// n the left normal. Ties the heading variables to the direction the positions move in.
 struct StepDirectionTerm {
-    static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb, kScale});
+    static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb});
     double direction_rad, sigma_m, weight;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
