@@ -328,25 +328,28 @@ void WindowProblem::BuildStructure(WindowUse use) {
     // entries list only the pairs of variables it reads: the others are exact zeros.
     block_entry_begin_.reserve(blocks_.size() + 1);
     block_entries_.reserve(pairs);
-    std::vector<int> triangle;  // the current block's slots, (r, c <= r) at r (r + 1) / 2 + c
+    // The current block's slots, (r, c <= r) at r (r + 1) / 2 + c.
+    std::array<int, kMaxBlockVars*(kMaxBlockVars + 1) / 2> triangle{};
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
         const TermBlock& block = *blocks_[b];
         block_entry_begin_.push_back(static_cast<int>(block_entries_.size()));
         if (!same_as_previous(b)) {
-            triangle.clear();
+            int* t = triangle.data();
             for (int r = 0; r < block.size(); ++r) {
                 for (int c = 0; c <= r; ++c) {
                     const int vr = block.var(r), vc = block.var(c);
-                    triangle.push_back(vr >= 0 && vc >= 0 ? slots.Slot(vr, vc, hess_) : -1);
+                    *t++ = vr >= 0 && vc >= 0 ? slots.Slot(vr, vc, hess_) : -1;
                 }
             }
         }
+        // The pairs of read variables, in the triangle's order.
         const unsigned reads = block.reads();
-        for (int r = 0; r < block.size(); ++r) {
-            for (int c = 0; c <= r; ++c) {
+        for (unsigned rows = reads; rows != 0; rows &= rows - 1) {
+            const int r = __builtin_ctz(rows);
+            for (unsigned columns = reads & ((2u << r) - 1); columns != 0; columns &= columns - 1) {
+                const int c = __builtin_ctz(columns);
                 const int slot = triangle[std::size_t(r * (r + 1) / 2 + c)];
-                if (slot < 0 || !((reads >> r) & 1u) || !((reads >> c) & 1u)) continue;
-                block_entries_.push_back({c * block.size() + r, slot});
+                if (slot >= 0) block_entries_.push_back({c * block.size() + r, slot});
             }
         }
     }
