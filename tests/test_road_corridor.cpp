@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "driftcorr/mapping/road_network.h"
@@ -168,6 +169,39 @@ TEST(RoadCorridor, MemoryCapCountsTheHeldTiles) {
         EXPECT_NE(std::string(e.what()).find("tiles"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("resolution"), std::string::npos) << e.what();
     }
+}
+
+// The value-only reads give Query's numbers to the last bit, and miss where it misses: on the
+// one grid, on held tiles, on tiles not held and off the grid.
+TEST(RoadCorridor, ValueReadsEqualQuery) {
+    const RoadNetwork net = Town();
+    std::vector<FieldDisc> discs;
+    for (double x = 0.0; x <= 200.0; x += 2.0) discs.push_back({{x, 0.0}, 12.0});
+    const TraversableField one = RasteriseRoads(net, kRegion, Config(0.0));
+    const TraversableField tiled = RasteriseRoadCorridor(net, kRegion, discs, Config(16.0));
+    ASSERT_TRUE(tiled.tiled());
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> ux(-60.0, 260.0), uy(-60.0, 220.0);
+    int hits = 0, misses = 0;
+    for (const TraversableField* field : {&one, &tiled}) {
+        for (int k = 0; k < 3000; ++k) {
+            const Eigen::Vector3d p(ux(rng), uy(rng), 0.0);
+            const auto q = field->Query(p);
+            const auto centre = field->CentreValue(p), corridor = field->CorridorValue(p);
+            ASSERT_EQ(q.has_value(), centre.has_value()) << p.transpose();
+            ASSERT_EQ(q.has_value(), corridor.has_value()) << p.transpose();
+            if (!q) {
+                ++misses;
+                continue;
+            }
+            ++hits;
+            EXPECT_EQ(std::memcmp(&*centre, &q->centre.value, sizeof(double)), 0) << p.transpose();
+            EXPECT_EQ(std::memcmp(&*corridor, &q->corridor.value, sizeof(double)), 0)
+                << p.transpose();
+        }
+    }
+    EXPECT_GT(hits, 1000);
+    EXPECT_GT(misses, 500);
 }
 
 TEST(RoadCorridor, NegativeTileSizeIsRejected) {
