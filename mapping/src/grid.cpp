@@ -49,32 +49,54 @@ void Edt1d(const float* f, int n, float* d, int* v, float* z, float w = 1.0f) {
     }
 }
 
-// The first pass, along y, on the feature mask itself: in a column the squared distance (in cells)
-// to the nearest feature is that to the last one before or the next one after, a sweep down the
-// rows and one back up, each a whole row at a time (the lower envelope is only needed once
-// distances differ from 0 and infinity). Squared distances beyond cap2 become infinity.
+// The first pass, along y, on the feature mask itself: in a column the distance (in cells) to the
+// nearest feature is that to the last one before or the next one after, a sweep down the rows and
+// one back up, each a whole row at a time (the lower envelope is only needed once distances
+// differ from 0 and infinity). The sweep down over `rows` rows; `above`: its values in the row
+// before the first (none: no row before it).
+void SweepDown(const std::uint8_t* f, float* d, std::size_t nx, int rows, const float* above) {
+    for (int j = 0; j < rows; ++j) {
+        const std::uint8_t* fr = f + std::size_t(j) * nx;
+        float* row = d + std::size_t(j) * nx;
+        const float* before = j > 0 ? row - nx : above;
+        if (before == nullptr) {
+            for (std::size_t i = 0; i < nx; ++i) row[i] = fr[i] ? 0.0f : kInf;
+        } else {
+            for (std::size_t i = 0; i < nx; ++i) row[i] = fr[i] ? 0.0f : before[i] + 1.0f;
+        }
+    }
+}
+
+// The sweep back up over `rows` rows, from the last.
+void SweepUp(float* d, std::size_t nx, int rows) {
+    for (int j = rows - 2; j >= 0; --j) {
+        const float* below = d + std::size_t(j + 1) * nx;
+        float* row = d + std::size_t(j) * nx;
+        for (std::size_t i = 0; i < nx; ++i) row[i] = std::min(row[i], below[i] + 1.0f);
+    }
+}
+
+// Column distances to squared ones, those beyond cap2 infinity.
+void SquareCapped(float* d, std::size_t n, float cap2) {
+    for (std::size_t i = 0; i < n; ++i) {
+        const float sq = d[i] * d[i];
+        d[i] = sq > cap2 ? kInf : sq;
+    }
+}
+
+// A squared distance in cells to metres.
+float ToMetres(float squared_cells, float res) {
+    return squared_cells == kInf ? kInf : std::sqrt(squared_cells) * res;
+}
+
+// The first pass, along y, of every slab: the two sweeps, then squared, beyond cap2 infinity.
 void FeatureColumns(const std::vector<std::uint8_t>& feature, const GridSpec& s,
                     std::vector<float>& g, float cap2) {
     const std::size_t nx = std::size_t(s.nx), slab = nx * std::size_t(s.ny);
     for (std::size_t base = 0; base < g.size(); base += slab) {
-        const std::uint8_t* f = feature.data() + base;
-        float* d = g.data() + base;
-        for (std::size_t i = 0; i < nx; ++i) d[i] = f[i] ? 0.0f : kInf;
-        for (int j = 1; j < s.ny; ++j) {
-            const std::uint8_t* fr = f + j * nx;
-            const float* above = d + (j - 1) * nx;
-            float* row = d + j * nx;
-            for (std::size_t i = 0; i < nx; ++i) row[i] = fr[i] ? 0.0f : above[i] + 1.0f;
-        }
-        for (int j = s.ny - 2; j >= 0; --j) {
-            const float* below = d + (j + 1) * nx;
-            float* row = d + j * nx;
-            for (std::size_t i = 0; i < nx; ++i) row[i] = std::min(row[i], below[i] + 1.0f);
-        }
-        for (std::size_t i = 0; i < slab; ++i) {
-            const float sq = d[i] * d[i];
-            d[i] = sq > cap2 ? kInf : sq;
-        }
+        SweepDown(feature.data() + base, g.data() + base, nx, s.ny, nullptr);
+        SweepUp(g.data() + base, nx, s.ny);
+        SquareCapped(g.data() + base, slab, cap2);
     }
 }
 
@@ -169,7 +191,7 @@ std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
     EdtRows(g, spec);
     if (spec.nz > 1) EdtLayers(g, spec);
     const float res = static_cast<float>(spec.resolution_m);
-    for (float& x : g) x = (x == kInf) ? kInf : std::sqrt(x) * res;
+    for (float& x : g) x = ToMetres(x, res);
     return g;
 }
 
@@ -195,34 +217,18 @@ void MergeCappedDistanceTransform(const GridSpec& spec, const std::vector<std::u
     for (int j0 = 0; j0 < ny; j0 += kStrip) {
         const int j1 = std::min(ny, j0 + kStrip), end = std::min(ny, j1 + ahead);
         // Down the rows from the row above the strip (carried), then back up from its end.
-        for (int j = j0; j < end; ++j) {
-            const std::uint8_t* f = feature.data() + std::size_t(j) * nx;
-            float* row = col.data() + std::size_t(j - j0) * nx;
-            if (j == 0) {
-                for (std::size_t i = 0; i < nx; ++i) row[i] = f[i] ? 0.0f : kInf;
-                continue;
-            }
-            const float* above = j == j0 ? carried.data() : row - nx;
-            for (std::size_t i = 0; i < nx; ++i) row[i] = f[i] ? 0.0f : above[i] + 1.0f;
-        }
+        SweepDown(feature.data() + std::size_t(j0) * nx, col.data(), nx, end - j0,
+                  j0 > 0 ? carried.data() : nullptr);
         std::copy_n(col.data() + std::size_t(j1 - 1 - j0) * nx, nx, carried.data());
-        for (int j = end - 2; j >= j0; --j) {
-            const float* below = col.data() + std::size_t(j + 1 - j0) * nx;
-            float* row = col.data() + std::size_t(j - j0) * nx;
-            for (std::size_t i = 0; i < nx; ++i) row[i] = std::min(row[i], below[i] + 1.0f);
-        }
+        SweepUp(col.data(), nx, end - j0);
         // Along each row, then the merge (a row of `exact` is read only for itself).
         for (int j = j0; j < j1; ++j) {
             float* row = col.data() + std::size_t(j - j0) * nx;
-            for (std::size_t i = 0; i < nx; ++i) {
-                const float sq = row[i] * row[i];
-                row[i] = sq > cap2 ? kInf : sq;
-            }
+            SquareCapped(row, nx, cap2);
             Edt1d(row, int(nx), d.data(), v.data(), z.data());
             float* out = exact.data() + std::size_t(j) * nx;
             for (std::size_t i = 0; i < nx; ++i) {
-                const float transform = d[i] == kInf ? kInf : std::sqrt(d[i]) * res;
-                out[i] = std::min(ceiling_m, out[i] < kInf ? out[i] : transform + offset_m);
+                out[i] = std::min(ceiling_m, out[i] < kInf ? out[i] : ToMetres(d[i], res) + offset_m);
             }
         }
     }

@@ -96,8 +96,13 @@ public:
     /// The local values at the window point x (fixed values where var(k) < 0).
     BlockVector Gather(const double* x) const {
         BlockVector v(size_);
-        for (int k = 0; k < size_; ++k) v[k] = var_[k] >= 0 ? x[var_[k]] : fixed_[k];
+        GatherInto(x, v);
         return v;
+    }
+    /// Gather into a vector of size() entries (a fixed-size one too).
+    template <class Vector>
+    void GatherInto(const double* x, Vector& v) const {
+        for (int k = 0; k < size_; ++k) v[k] = var_[k] >= 0 ? x[var_[k]] : fixed_[k];
     }
 
     /// Cost at the local values x (size()), and on request its gradient and Hessian over them.
@@ -194,7 +199,7 @@ public:
                       double* values, const BlockEntry* begin,
                       const BlockEntry* end) const override {
         Vector v;
-        for (int k = 0; k < N; ++k) v[k] = var(k) >= 0 ? x[var(k)] : fixed(k);
+        GatherInto(x, v);
         Vector g;
         Matrix h;
         const double cost = term_.Evaluate(v, grad ? &g : nullptr, values ? &h : nullptr);
