@@ -14,31 +14,35 @@ SkylineLdlt::SkylineLdlt(std::vector<int> first_row) : first_(std::move(first_ro
     }
     values_.assign(start_.back(), 0.0);
     factor_.assign(start_.back(), 0.0);
+    std::size_t height = 1;
+    for (std::size_t j = 0; j < first_.size(); ++j) height = std::max(height, j - first_[j] + 1);
+    h_.assign(height, 0.0);
 }
 
 // Column by column (A = U^T D U, U unit upper): for rows i of column j in turn,
 // h_i = a_ij - sum_k u_ki h_k over the rows k both columns hold, then u_ij = h_i / d_i and
-// d_j = a_jj - sum_i u_ij h_i.
+// d_j = a_jj - sum_i u_ij h_i. Each row is scaled as soon as its h_i is known (h_ keeps the
+// unscaled ones for the rows below), so the divisions overlap the next rows' sums; every sum
+// runs in the same order as when the rows are scaled after the column's sums.
 bool SkylineLdlt::Factorize() {
     std::copy(values_.begin(), values_.end(), factor_.begin());
     const int n = size();
     for (int j = 0; j < n; ++j) {
         const int fj = first_[j];
         double* col = factor_.data() + start_[j];  // col[i - fj]: row i of column j
+        double* h = h_.data();                     // h[i - fj]: row i of column j before scaling
+        double d = col[j - fj];
         for (int i = fj; i < j; ++i) {
             const int k0 = std::max(first_[i], fj);
             const double* ui = factor_.data() + start_[i] + (k0 - first_[i]);
-            const double* hk = col + (k0 - fj);
+            const double* hk = h + (k0 - fj);
             double dot = 0.0;
             for (int k = 0; k < i - k0; ++k) dot += ui[k] * hk[k];
-            col[i - fj] -= dot;
-        }
-        double d = col[j - fj];
-        for (int i = fj; i < j; ++i) {
-            const double h = col[i - fj];
-            const double u = h / factor_[start_[i] + std::size_t(i - first_[i])];
+            const double hi = col[i - fj] - dot;
+            h[i - fj] = hi;
+            const double u = hi / factor_[start_[i] + std::size_t(i - first_[i])];
             col[i - fj] = u;
-            d -= u * h;
+            d -= u * hi;
         }
         col[j - fj] = d;
         if (!(d > 0.0)) return false;  // the rest would divide by it

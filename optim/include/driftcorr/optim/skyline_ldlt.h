@@ -37,6 +37,7 @@ private:
     std::vector<int> first_;
     std::vector<std::size_t> start_;
     std::vector<double> values_, factor_;  // factor_: U above the diagonal (A = U^T D U), D on it
+    std::vector<double> h_;                // Factorize's column before scaling
 };
 
 }  // namespace driftcorr
