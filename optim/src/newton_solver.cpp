@@ -22,19 +22,26 @@ constexpr int kHalvings = 12;
 // its LDL^T fills in only within them, without a graph analysis per window.
 std::vector<int> BandOrder(const WindowProblem& p) {
     const int n = p.NumVariables(), poses = p.PoseVar(p.last(), 3) + 1;
-    std::vector<int> key(n);
-    for (int k = 0; k < n; ++k) key[k] = k < poses ? k : -1;
+    std::vector<int> key(n - poses, -1);  // per segment variable
     for (const auto& [r, c] : p.HessianStructure()) {
-        if (r >= poses && c < poses) key[r] = std::max(key[r], c);
+        if (r >= poses && c < poses) key[r - poses] = std::max(key[r - poses], c);
     }
-    std::vector<int> order(n);  // order[position] = variable
-    for (int k = 0; k < n; ++k) order[k] = k;
-    // Ties: a pose variable before the segments placed after it, segments in their own order.
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-        return std::make_pair(key[a], a >= poses) < std::make_pair(key[b], b >= poses);
-    });
-    std::vector<int> position(n);
-    for (int k = 0; k < n; ++k) position[order[k]] = k;
+    // The segment variables by key (ties in their own order), each placed right after the pose
+    // variable its key names; those coupled with no pose variable (key -1) first.
+    std::vector<int> segments(n - poses);
+    for (int k = 0; k < n - poses; ++k) segments[k] = k;
+    std::stable_sort(segments.begin(), segments.end(),
+                     [&](int a, int b) { return key[a] < key[b]; });
+    std::vector<int> position(n);  // position[variable] = its place in the order
+    int next = 0;
+    auto segment = segments.begin();
+    for (; segment != segments.end() && key[*segment] < 0; ++segment)
+        position[poses + *segment] = next++;
+    for (int k = 0; k < poses; ++k) {
+        position[k] = next++;
+        for (; segment != segments.end() && key[*segment] == k; ++segment)
+            position[poses + *segment] = next++;
+    }
     return position;
 }
 
@@ -51,8 +58,6 @@ struct Pattern {
     std::vector<int> variable;          ///< per row and column of the matrix: its variable
     std::vector<std::size_t> slot;      ///< per HessianStructure entry: index into matrix.values()
     std::vector<std::size_t> diagonal;  ///< per row of the matrix: index of its diagonal entry
-    /// Per envelope entry: the variables of its row and column.
-    std::vector<int> row_var, column_var;
 };
 
 Pattern BuildPattern(const WindowProblem& p, const std::vector<std::uint8_t>& held) {
@@ -79,7 +84,7 @@ Pattern BuildPattern(const WindowProblem& p, const std::vector<std::uint8_t>& he
         const auto [a, b] = upper(r, c);
         first[b] = std::min(first[b], a);
     }
-    Pattern out{SkylineLdlt(std::move(first)), {}, {}, {}, {}, {}};
+    Pattern out{SkylineLdlt(std::move(first)), {}, {}, {}};
     out.slot.reserve(structure.size());
     for (const auto& [r, c] : structure) {
         if (held[r] || held[c]) {
@@ -91,14 +96,6 @@ Pattern BuildPattern(const WindowProblem& p, const std::vector<std::uint8_t>& he
     }
     out.variable = std::move(variable);
     for (int q = 0; q < m; ++q) out.diagonal.push_back(out.matrix.Index(q, q));
-    out.row_var.resize(out.matrix.entries());
-    out.column_var.resize(out.matrix.entries());
-    for (int c = 0; c < m; ++c) {
-        for (int r = out.matrix.first_row(c); r <= c; ++r) {
-            out.row_var[out.matrix.Index(r, c)] = out.variable[r];
-            out.column_var[out.matrix.Index(r, c)] = out.variable[c];
-        }
-    }
     return out;
 }
 
@@ -178,8 +175,12 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
         // The rows and columns of active variables: zero (a scale at its bound; seldom any).
         bool any_active = false;
         for (int q = 0; q < m; ++q) any_active = any_active || active[pattern.variable[q]];
-        for (std::size_t e = 0; any_active && e < values.size(); ++e) {
-            if (active[pattern.row_var[e]] || active[pattern.column_var[e]]) values[e] = 0.0;
+        for (int c = 0; any_active && c < m; ++c) {
+            const bool column_active = active[pattern.variable[c]];
+            for (int r = pattern.matrix.first_row(c); r <= c; ++r) {
+                if (column_active || active[pattern.variable[r]])
+                    values[pattern.matrix.Index(r, c)] = 0.0;
+            }
         }
         for (int q = 0; q < m; ++q) {
             diagonal[q] = active[pattern.variable[q]] ? 1.0 : values[pattern.diagonal[q]];
