@@ -1167,8 +1167,24 @@ protected:
     }
 };
 
+// The numbers of two texts of the same shape, each pair within `tolerance`.
+void ExpectSameNumbers(const std::string& a, const std::string& b, double tolerance) {
+    std::istringstream sa(a), sb(b);
+    std::size_t n = 0;
+    for (double x, y; sa >> x;) {
+        ASSERT_TRUE(sb >> y) << "the second text ends after " << n << " numbers";
+        ASSERT_NEAR(x, y, tolerance) << "number " << n;
+        ++n;
+    }
+    double extra;
+    EXPECT_FALSE(sb >> extra) << "the second text has more than " << n << " numbers";
+    EXPECT_GT(n, 0u);
+}
+
 // The scenario's own anchor (48.98, 8.39, yaw 0, enu) given on the command line gives the same
-// corrected trajectory as the scenario file.
+// corrected trajectory as the scenario file. Not to the last digit: the command line has no
+// altitude (the scenario's is 115 m), so the map's projection differs in its rounding, and the
+// final solve stops at a tolerance, not where every such difference has been washed out.
 TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
     const CaseDirs c = MakeCase("FileAndAnchor");
     const fs::path via_scenario = c.out_dir.parent_path() / "via_scenario.tum";
@@ -1179,7 +1195,7 @@ TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
                           {"--anchor", "48.98,8.39,0", "--frame", "enu"}), c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     ASSERT_EQ(r.exit_code, kExitOk);
-    EXPECT_EQ(ReadFile(c.output), ReadFile(via_scenario));
+    ExpectSameNumbers(ReadFile(c.output), ReadFile(via_scenario), 1e-6);
 }
 
 /// The TUM lines `t x y z qx qy qz qw` of `tum` as positions only, `t x y z`.

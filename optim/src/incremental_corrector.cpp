@@ -53,8 +53,11 @@ struct SavedPoses {
     }
 };
 
-NewtonOptions NewtonFrom(const IpoptOptions& opt) {
-    return {opt.max_iterations, opt.tolerance, opt.acceptable_tolerance};
+// The Newton solver's limits: the Ipopt options' (a window's), or with the final solve's own
+// tolerance (refine_newton_tolerance).
+NewtonOptions NewtonFrom(const IpoptOptions& opt, const CorrectorConfig& cfg, bool refine) {
+    const double tolerance = refine ? cfg.refine_newton_tolerance : opt.tolerance;
+    return {opt.max_iterations, tolerance, std::max(opt.acceptable_tolerance, tolerance)};
 }
 
 // The largest excess of a flagged pose's corridor distance over corridor_slack_m (0 if none).
@@ -89,7 +92,7 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
     if (hard) result.constrained_poses = constrained;
     if (!hard || constrained == 0) {
         WindowProblem problem(s, field, cfg.model, first, last, none, WindowUse::kSolve, prior);
-        SolveReport rep = cfg.window_newton ? SolveWithNewton(problem, NewtonFrom(opt))
+        SolveReport rep = cfg.window_newton ? SolveWithNewton(problem, NewtonFrom(opt, cfg, hard))
                                             : SolveWithIpopt(problem, opt);
         result.iterations += rep.iterations;
         return rep;
@@ -98,7 +101,7 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
         const SavedPoses saved(s, first - 1, last);
         const std::vector<double> saved_scales = s.scales, saved_biases = s.biases;
         WindowProblem soft(s, field, cfg.model, first, last, none, WindowUse::kSolve, prior);
-        SolveReport rep = SolveWithNewton(soft, NewtonFrom(opt));
+        SolveReport rep = SolveWithNewton(soft, NewtonFrom(opt, cfg, hard));
         result.iterations += rep.iterations;
         if (Usable(rep.status)) {
             const double excess = CorridorExcess(s, *field, cfg.model, first, flags);
