@@ -8,15 +8,16 @@ namespace driftcorr {
 
 SkylineLdlt::SkylineLdlt(std::vector<int> first_row) : first_(std::move(first_row)) {
     start_.assign(first_.size() + 1, 0);
+    std::size_t tallest = 1;  // the highest column
     for (std::size_t j = 0; j < first_.size(); ++j) {
         DRIFTCORR_CHECK(first_[j] >= 0 && first_[j] <= int(j), "an envelope row below its column");
-        start_[j + 1] = start_[j] + (j - std::size_t(first_[j]) + 1);
+        const std::size_t height = j - std::size_t(first_[j]) + 1;
+        start_[j + 1] = start_[j] + height;
+        tallest = std::max(tallest, height);
     }
     values_.assign(start_.back(), 0.0);
     factor_.assign(start_.back(), 0.0);
-    std::size_t height = 1;
-    for (std::size_t j = 0; j < first_.size(); ++j) height = std::max(height, j - first_[j] + 1);
-    h_.assign(height, 0.0);
+    h_.assign(tallest, 0.0);
 }
 
 // Column by column (A = U^T D U, U unit upper): for rows i of column j in turn,
