@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "driftcorr/core/check.h"
@@ -15,6 +16,17 @@ namespace {
 // halvings before the damping grows instead, and the damping beyond which the solve gives up.
 constexpr double kArmijo = 1e-4, kDampingFirst = 1e-4, kDampingGrowth = 8.0, kDampingMax = 1e10;
 constexpr int kHalvings = 12;
+
+// Armijo's condition as Ipopt tests it: the trial's objective may exceed the required decrease
+// by ten rounding units of the objective. Near the optimum of a window whose objective sums
+// thousands of terms, the decrease a step promises falls below the rounding of that sum while
+// the gradient is still above the tolerance; an exact test then rejects every step and halving,
+// and the damping grows until the step is nothing.
+bool SufficientDecrease(double f_trial, double f, double decrease) {
+    return std::isfinite(f_trial) &&
+           (f_trial - f) - kArmijo * decrease <=
+               10.0 * std::numeric_limits<double>::epsilon() * std::abs(f);
+}
 
 // The order the factorisation takes the variables in: the problem's, except for the variables
 // after the poses' (scale and heading-rate bias segments), each of which goes right after the
@@ -152,11 +164,30 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     std::vector<double> step(n, 0.0), rhs(m), diagonal(m);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
+    // Where the method can go no further: acceptable if the gradient is small enough for that.
+    auto stop_short = [&](double error) {
+        if (error <= options.acceptable_tolerance) {
+            report.status = SolveStatus::kAcceptable;
+            report.message = "Solved_To_Acceptable_Level";
+        } else {
+            report.status = SolveStatus::kFailed;
+            report.message = "Search_Direction_Becomes_Too_Small";
+        }
+    };
+    // Steps in a row taken within the objective's rounding but without lowering it.
+    int stalls = 0;
     for (int it = 0;; ++it) {
         const double error = scale * MaxAbs(grad);
         if (error <= options.tolerance) {
             report.status = SolveStatus::kSuccess;
             report.message = "Solve_Succeeded";
+            break;
+        }
+        // Two such steps: the gradient left is below what the objective resolves (the gradient
+        // of a window's objective can stay above the tolerance by rounding alone), as Ipopt
+        // stops at repeated tiny steps.
+        if (stalls >= 2) {
+            stop_short(error);
             break;
         }
         if (it >= options.max_iterations) {
@@ -213,9 +244,10 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
                         full ? problem.ObjectiveGradientHessian(trial.data(), trial_grad.data(),
                                                                 trial_hessian.data())
                              : problem.Objective(trial.data());
-                    const bool taken = std::isfinite(f_trial) && f_trial <= f + kArmijo * decrease;
+                    const bool taken = SufficientDecrease(f_trial, f, decrease);
                     if (alpha_k == 0) speculate = taken;
                     if (taken) {
+                        stalls = f_trial < f ? 0 : stalls + 1;
                         x.swap(trial);
                         f = f_trial;
                         moved = true;
@@ -231,13 +263,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             if (damping > kDampingMax) break;
         }
         if (!moved) {  // no decrease along any damped step: as far as this method goes
-            if (error <= options.acceptable_tolerance) {
-                report.status = SolveStatus::kAcceptable;
-                report.message = "Solved_To_Acceptable_Level";
-            } else {
-                report.status = SolveStatus::kFailed;
-                report.message = "Search_Direction_Becomes_Too_Small";
-            }
+            stop_short(error);
             break;
         }
         if (evaluated) {

@@ -5,14 +5,16 @@
 // LDL^T factorisation of its envelope (skyline_ldlt.h; each scale or bias variable ordered right
 // after the last pose it touches) costs O(poses). Where the Hessian is not positive definite (the
 // map term is not convex) a multiple of its diagonal is added, as Ipopt corrects the inertia of its
-// own system; steps are accepted by a backtracking (Armijo) line search on the objective. Variables
-// whose bounds coincide (heights in planar mode) are held; the scale variables are kept inside
-// their bounds by projection.
+// own system; steps are accepted by a backtracking (Armijo) line search on the objective, tested
+// as Ipopt tests it (within ten rounding units of the objective). Variables whose bounds coincide
+// (heights in planar mode) are held; the scale variables are kept inside their bounds by
+// projection.
 //
 // Convergence is Ipopt's test for an unconstrained problem: the gradient's largest component,
 // with the objective scaled as Ipopt scales it (to a gradient of at most 100 at the start),
 // below `tolerance`; `acceptable_tolerance` where the line search can no longer decrease the
-// objective. The constrained program (the hard corridor) stays with Ipopt (ipopt_solver.h).
+// objective, or where two steps in a row were taken within its rounding without lowering it.
+// The constrained program (the hard corridor) stays with Ipopt (ipopt_solver.h).
 #include "driftcorr/optim/solve_status.h"
 #include "driftcorr/optim/window_problem.h"
 
