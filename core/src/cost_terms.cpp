@@ -7,34 +7,49 @@
 namespace driftcorr {
 namespace {
 
-// Accumulates 0.5 * w * (r / sigma)^2 given r, its gradient J and Hessian Hr.
+// The loss of a Gaussian term on the form's residual: 0.5 * w * (r / sigma)^2.
 template <int N>
-double Gaussian(double r, const Eigen::Matrix<double, N, 1>& j,
-                const Eigen::Matrix<double, N, N>* hr, double sigma, double weight,
-                Eigen::Matrix<double, N, 1>* grad, Eigen::Matrix<double, N, N>* hess) {
+void GaussianLoss(double sigma, double weight, ResidualForm<N>& f) {
     const double k = weight / (sigma * sigma);
-    if (grad) *grad = k * r * j;
-    if (hess) {
-        *hess = k * j * j.transpose();
-        if (hr) *hess += k * r * (*hr);
-    }
-    return 0.5 * k * r * r;
+    f.g = k * f.r;
+    f.a = k;
+    f.b = k * f.r;
+    f.cost = 0.5 * k * f.r * f.r;
 }
 
-// Accumulates w * k^2 / 2 * log(1 + (r / sigma)^2 / k^2) given r, its gradient J and Hessian Hr.
+// The loss of a Cauchy term on the form's residual: w * k^2 / 2 * log(1 + (r / sigma)^2 / k^2).
 template <int N>
-double Cauchy(double r, const Eigen::Matrix<double, N, 1>& j,
-              const Eigen::Matrix<double, N, N>* hr, double sigma, double k, double weight,
-              Eigen::Matrix<double, N, 1>* grad, Eigen::Matrix<double, N, N>* hess) {
-    const double z = r / sigma, k2 = k * k, q = 1.0 + z * z / k2;
+void CauchyLoss(double sigma, double k, double weight, ResidualForm<N>& f) {
+    const double z = f.r / sigma, k2 = k * k, q = 1.0 + z * z / k2;
     const double rho_z = weight * z / q;                          // d rho / d z
     const double rho_zz = weight * (1.0 - z * z / k2) / (q * q);  // d2 rho / d z2
-    if (grad) *grad = (rho_z / sigma) * j;
+    f.g = rho_z / sigma;
+    f.a = rho_zz / (sigma * sigma);
+    f.b = rho_z / sigma;
+    f.cost = 0.5 * weight * k2 * std::log(q);
+}
+
+// The form's cost, with its gradient and Hessian dense on request.
+template <int N>
+double Dense(const ResidualForm<N>& f, Eigen::Matrix<double, N, 1>* grad,
+             Eigen::Matrix<double, N, N>* hess) {
+    if (grad) *grad = f.g * f.j;
     if (hess) {
-        *hess = (rho_zz / (sigma * sigma)) * j * j.transpose();
-        if (hr) *hess += (rho_z / sigma) * (*hr);
+        *hess = f.a * f.j * f.j.transpose();
+        if (f.has_hr) *hess += f.b * f.hr;
     }
-    return 0.5 * weight * k2 * std::log(q);
+    return f.cost;
+}
+
+// A linear residual r = x[b] - x[a] - offset over N variables.
+template <int N>
+ResidualForm<N> Difference(const Eigen::Matrix<double, N, 1>& x, int a, int b, double offset) {
+    ResidualForm<N> f;
+    f.r = x[b] - x[a] - offset;
+    f.j.setZero();
+    f.j[b] = 1.0;
+    f.j[a] = -1.0;
+    return f;
 }
 
 // The Gauss-Newton linearisation of a Gaussian term (see Linearisation).
@@ -54,13 +69,6 @@ Linearisation<N> LinearCauchy(double r, const Eigen::Matrix<double, N, 1>& j, do
     return {r, j, info, info * r * r};
 }
 
-// A residual of the step block with its Jacobian J and Hessian Hr (Hr set only when asked for).
-struct StepResidual {
-    double r;
-    StepVector j;
-    StepMatrix hr;
-};
-
 // Displacement and direction angle of a step block.
 struct StepGeometry {
     double dx, dy, c, s;
@@ -71,20 +79,13 @@ StepGeometry Geometry(const StepVector& x, double direction_rad) {
     return {x[kXb] - x[kXa], x[kYb] - x[kYa], std::cos(phi), std::sin(phi)};
 }
 
-double LinearYawDifference(const StepVector& x, double offset, double sigma, double weight,
-                           StepVector* grad, StepMatrix* hess) {
-    StepVector j = StepVector::Zero();
-    j[kYawB] = 1.0;
-    j[kYawA] = -1.0;
-    return Gaussian<9>(x[kYawB] - x[kYawA] - offset, j, nullptr, sigma, weight, grad, hess);
-}
-
-StepResidual StepLengthResidual(const StepVector& x, double length_m, double direction_rad,
-                                bool with_hr) {
+// The step's residual with its Jacobian J and, when asked for, its Hessian Hr.
+ResidualForm<9> StepLengthResidual(const StepVector& x, double length_m, double direction_rad,
+                                   bool with_hr) {
     const StepGeometry g = Geometry(x, direction_rad);
     const double along = g.c * g.dx + g.s * g.dy;  // projection of the displacement
     const double side = -g.s * g.dx + g.c * g.dy;
-    StepResidual res;
+    ResidualForm<9> res;
     res.r = along - x[kScale] * length_m;
     StepVector& j = res.j;
     j.setZero();
@@ -92,6 +93,7 @@ StepResidual StepLengthResidual(const StepVector& x, double length_m, double dir
     j[kYawA] = side;
     j[kScale] = -length_m;
     if (!with_hr) return res;
+    res.has_hr = true;
     StepMatrix& hr = res.hr;
     hr.setZero();
     // d2 along / d yaw_a^2 = -along; d2 along / d yaw_a d(x_b, y_b) = (-s, c) = -(d2/d(x_a, y_a)).
@@ -103,16 +105,17 @@ StepResidual StepLengthResidual(const StepVector& x, double length_m, double dir
     return res;
 }
 
-StepResidual StepDirectionResidual(const StepVector& x, double direction_rad, bool with_hr) {
+ResidualForm<9> StepDirectionResidual(const StepVector& x, double direction_rad, bool with_hr) {
     const StepGeometry g = Geometry(x, direction_rad);
     const double along = g.c * g.dx + g.s * g.dy;
-    StepResidual res;
+    ResidualForm<9> res;
     res.r = -g.s * g.dx + g.c * g.dy;
     StepVector& j = res.j;
     j.setZero();
     j[kXa] = g.s, j[kYa] = -g.c, j[kXb] = -g.s, j[kYb] = g.c;
     j[kYawA] = -along;
     if (!with_hr) return res;
+    res.has_hr = true;
     StepMatrix& hr = res.hr;
     hr.setZero();
     hr(kYawA, kYawA) = -res.r;
@@ -126,23 +129,28 @@ StepResidual StepDirectionResidual(const StepVector& x, double direction_rad, bo
 // r = v[b] - v[a] - offset, linear.
 Linearisation<9> LinearDifference(const StepVector& x, int a, int b, double offset, double sigma,
                                   double weight) {
-    StepVector j = StepVector::Zero();
-    j[b] = 1.0;
-    j[a] = -1.0;
-    return LinearGaussian<9>(x[b] - x[a] - offset, j, sigma, weight);
+    const ResidualForm<9> f = Difference(x, a, b, offset);
+    return LinearGaussian<9>(f.r, f.j, sigma, weight);
 }
 
 }  // namespace
 
+ResidualForm<9> StepLengthTerm::Form(const StepVector& x, bool with_hessian) const {
+    ResidualForm<9> f = StepLengthResidual(x, length_m, direction_rad, with_hessian);
+    if (robust_k <= 0.0) {
+        GaussianLoss(sigma_m, weight, f);
+    } else {
+        CauchyLoss(sigma_m, robust_k, weight, f);
+    }
+    return f;
+}
+
 double StepLengthTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    const StepResidual res = StepLengthResidual(x, length_m, direction_rad, hess != nullptr);
-    const StepMatrix* hr = hess ? &res.hr : nullptr;
-    if (robust_k <= 0.0) return Gaussian<9>(res.r, res.j, hr, sigma_m, weight, grad, hess);
-    return Cauchy<9>(res.r, res.j, hr, sigma_m, robust_k, weight, grad, hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<9> StepLengthTerm::Linearise(const StepVector& x) const {
-    const StepResidual res = StepLengthResidual(x, length_m, direction_rad, false);
+    const ResidualForm<9> res = StepLengthResidual(x, length_m, direction_rad, false);
     if (robust_k <= 0.0) return LinearGaussian<9>(res.r, res.j, sigma_m, weight);
     return LinearCauchy<9>(res.r, res.j, sigma_m, robust_k, weight);
 }
@@ -191,12 +199,16 @@ void SpeedResidual(const SpeedChangeTerm& t, const SpeedVector& x, double* r, Sp
 
 }  // namespace
 
+ResidualForm<12> SpeedChangeTerm::Form(const SpeedVector& x, bool with_hessian) const {
+    ResidualForm<12> f;
+    SpeedResidual(*this, x, &f.r, &f.j, with_hessian ? &f.hr : nullptr);
+    f.has_hr = with_hessian;
+    GaussianLoss(sigma_mps, weight, f);
+    return f;
+}
+
 double SpeedChangeTerm::Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const {
-    double r;
-    SpeedVector j;
-    SpeedMatrix hr;
-    SpeedResidual(*this, x, &r, &j, &hr);
-    return Gaussian<12>(r, j, &hr, sigma_mps, weight, grad, hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<12> SpeedChangeTerm::Linearise(const SpeedVector& x) const {
@@ -206,29 +218,46 @@ Linearisation<12> SpeedChangeTerm::Linearise(const SpeedVector& x) const {
     return LinearGaussian<12>(r, j, sigma_mps, weight);
 }
 
+ResidualForm<9> StepDirectionTerm::Form(const StepVector& x, bool with_hessian) const {
+    ResidualForm<9> f = StepDirectionResidual(x, direction_rad, with_hessian);
+    GaussianLoss(sigma_m, weight, f);
+    return f;
+}
+
 double StepDirectionTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    const StepResidual res = StepDirectionResidual(x, direction_rad, hess != nullptr);
-    return Gaussian<9>(res.r, res.j, hess ? &res.hr : nullptr, sigma_m, weight, grad, hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<9> StepDirectionTerm::Linearise(const StepVector& x) const {
-    const StepResidual res = StepDirectionResidual(x, direction_rad, false);
+    const ResidualForm<9> res = StepDirectionResidual(x, direction_rad, false);
     return LinearGaussian<9>(res.r, res.j, sigma_m, weight);
 }
 
+ResidualForm<9> HeadingChangeTerm::Form(const StepVector& x, bool) const {
+    ResidualForm<9> f = Difference(x, kYawA, kYawB, dheading_rad);
+    GaussianLoss(sigma_rad, weight, f);
+    return f;
+}
+
 double HeadingChangeTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    return LinearYawDifference(x, dheading_rad, sigma_rad, weight, grad, hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<9> HeadingChangeTerm::Linearise(const StepVector& x) const {
     return LinearDifference(x, kYawA, kYawB, dheading_rad, sigma_rad, weight);
 }
 
+ResidualForm<3> HeadingChangeBiasTerm::Form(const Eigen::Vector3d& x, bool) const {
+    ResidualForm<3> f;
+    f.r = x[1] - x[0] - dheading_rad - x[2] * dt_s;
+    f.j = Eigen::Vector3d(-1.0, 1.0, -dt_s);
+    GaussianLoss(sigma_rad, weight, f);
+    return f;
+}
+
 double HeadingChangeBiasTerm::Evaluate(const Eigen::Vector3d& x, Eigen::Vector3d* grad,
                                        Eigen::Matrix3d* hess) const {
-    const Eigen::Vector3d j(-1.0, 1.0, -dt_s);
-    return Gaussian<3>(x[1] - x[0] - dheading_rad - x[2] * dt_s, j, nullptr, sigma_rad, weight, grad,
-                       hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<3> HeadingChangeBiasTerm::Linearise(const Eigen::Vector3d& x) const {
@@ -239,9 +268,11 @@ Linearisation<3> HeadingChangeBiasTerm::Linearise(const Eigen::Vector3d& x) cons
 // Outside the range: r and dr/ds = +-1; inside: r = 0, dr/ds = 0.
 double ScaleRangeTerm::Evaluate(const Vector1d& x, Vector1d* grad, Vector1d* hess) const {
     const double s = x[0];
-    const double r = s > max ? s - max : (s < min ? min - s : 0.0);
-    const Vector1d j(s > max ? 1.0 : (s < min ? -1.0 : 0.0));
-    return Gaussian<1>(r, j, nullptr, sigma, weight, grad, hess);
+    ResidualForm<1> f;
+    f.r = s > max ? s - max : (s < min ? min - s : 0.0);
+    f.j = Vector1d(s > max ? 1.0 : (s < min ? -1.0 : 0.0));
+    GaussianLoss(sigma, weight, f);
+    return Dense(f, grad, hess);
 }
 
 Linearisation<1> ScaleRangeTerm::Linearise(const Vector1d& x) const {
@@ -250,20 +281,29 @@ Linearisation<1> ScaleRangeTerm::Linearise(const Vector1d& x) const {
     return LinearGaussian<1>(r, Vector1d(s > max ? 1.0 : (s < min ? -1.0 : 0.0)), sigma, weight);
 }
 
+ResidualForm<9> HeadingPreservationTerm::Form(const StepVector& x, bool) const {
+    ResidualForm<9> f = Difference(x, kYawA, kYawB, 0.0);
+    GaussianLoss(sigma_rad, weight, f);
+    return f;
+}
+
 double HeadingPreservationTerm::Evaluate(const StepVector& x, StepVector* grad,
                                          StepMatrix* hess) const {
-    return LinearYawDifference(x, 0.0, sigma_rad, weight, grad, hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<9> HeadingPreservationTerm::Linearise(const StepVector& x) const {
     return LinearDifference(x, kYawA, kYawB, 0.0, sigma_rad, weight);
 }
 
+ResidualForm<9> HeightChangeTerm::Form(const StepVector& x, bool) const {
+    ResidualForm<9> f = Difference(x, kZa, kZb, dup_m);
+    GaussianLoss(sigma_m, weight, f);
+    return f;
+}
+
 double HeightChangeTerm::Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const {
-    StepVector j = StepVector::Zero();
-    j[kZb] = 1.0;
-    j[kZa] = -1.0;
-    return Gaussian<9>(x[kZb] - x[kZa] - dup_m, j, nullptr, sigma_m, weight, grad, hess);
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<9> HeightChangeTerm::Linearise(const StepVector& x) const {
@@ -273,7 +313,11 @@ Linearisation<9> HeightChangeTerm::Linearise(const StepVector& x) const {
 double RandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
                                      Eigen::Matrix2d* hess) const {
     const Eigen::Vector2d j(-1.0, 1.0);
-    if (robust_k <= 0.0) return Gaussian<2>(x[1] - x[0], j, nullptr, sigma, weight, grad, hess);
+    if (robust_k <= 0.0) {
+        ResidualForm<2> f = Difference(x, 0, 1, 0.0);
+        GaussianLoss(sigma, weight, f);
+        return Dense(f, grad, hess);
+    }
     const double r = (x[1] - x[0]) / sigma, k2 = robust_k * robust_k;
     const double q = 1.0 + r * r / k2;
     const double rho_r = weight * r / q;                         // d rho / d r

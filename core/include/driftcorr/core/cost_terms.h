@@ -40,6 +40,26 @@ struct Linearisation {
     double chi2 = 0.0;
 };
 
+/// A term of one scalar residual r(x) under its loss rho (Gaussian or Cauchy), as the loss's
+/// derivatives make its cost, gradient and Hessian of it:
+///   cost = rho(r),  gradient = g J,  Hessian = a J J^T + b Hr,
+/// J = dr/dx and Hr the residual's own Hessian (has_hr: computed, when the Hessian was asked for
+/// and the residual is not linear). A term's Evaluate returns these sums dense; a caller that
+/// needs a few entries of the Hessian (optim's term blocks) takes them from the form.
+template <int N>
+struct ResidualForm {
+    double r = 0.0;
+    Eigen::Matrix<double, N, 1> j;
+    Eigen::Matrix<double, N, N> hr;
+    bool has_hr = false;
+    double cost = 0.0, g = 0.0, a = 0.0, b = 0.0;
+    /// Hessian entry (row, col), the same sum as the dense Hessian's.
+    double Hessian(int row, int col) const {
+        const double h = (a * j[row]) * j[col];
+        return has_hr ? h + b * hr(row, col) : h;
+    }
+};
+
 enum StepVar : int { kXa = 0, kYa, kZa, kYawA, kXb, kYb, kZb, kYawB, kScale, kStepVars };
 
 /// The variables a term's value depends on, one bit per variable (bit k: variable k). A term
@@ -60,6 +80,7 @@ struct StepLengthTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb, kScale});
     double length_m, direction_rad, sigma_m, weight;
     double robust_k = 0.0;
+    ResidualForm<9> Form(const StepVector& x, bool with_hessian) const;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
 };
@@ -73,6 +94,7 @@ using SpeedMatrix = Eigen::Matrix<double, 12, 12>;
 struct SpeedChangeTerm {
     static constexpr std::uint16_t kReads = ReadsOf({0, 1, 3, 4, 5, 7, 8, 9});
     double direction_ab_rad, dt_ab_s, direction_bc_rad, dt_bc_s, sigma_mps, weight;
+    ResidualForm<12> Form(const SpeedVector& x, bool with_hessian) const;
     double Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedMatrix* hess) const;
     Linearisation<12> Linearise(const SpeedVector& x) const;
 };
@@ -82,6 +104,7 @@ struct SpeedChangeTerm {
 struct StepDirectionTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb});
     double direction_rad, sigma_m, weight;
+    ResidualForm<9> Form(const StepVector& x, bool with_hessian) const;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
 };
@@ -90,6 +113,7 @@ struct StepDirectionTerm {
 struct HeadingChangeTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kYawA, kYawB});
     double dheading_rad, sigma_rad, weight;
+    ResidualForm<9> Form(const StepVector& x, bool with_hessian) const;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
 };
@@ -100,6 +124,7 @@ struct HeadingChangeTerm {
 /// bias's prior once instead of every step's heading sigma.
 struct HeadingChangeBiasTerm {
     double dheading_rad, dt_s, sigma_rad, weight;
+    ResidualForm<3> Form(const Eigen::Vector3d& x, bool with_hessian) const;
     double Evaluate(const Eigen::Vector3d& x, Eigen::Vector3d* grad, Eigen::Matrix3d* hess) const;
     Linearisation<3> Linearise(const Eigen::Vector3d& x) const;
 };
@@ -118,6 +143,7 @@ struct ScaleRangeTerm {
 struct HeadingPreservationTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kYawA, kYawB});
     double sigma_rad, weight;
+    ResidualForm<9> Form(const StepVector& x, bool with_hessian) const;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
 };
@@ -126,6 +152,7 @@ struct HeadingPreservationTerm {
 struct HeightChangeTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kZa, kZb});
     double dup_m, sigma_m, weight;
+    ResidualForm<9> Form(const StepVector& x, bool with_hessian) const;
     double Evaluate(const StepVector& x, StepVector* grad, StepMatrix* hess) const;
     Linearisation<9> Linearise(const StepVector& x) const;
 };
