@@ -13,7 +13,6 @@ void GaussianLoss(double sigma, double weight, ResidualForm<N>& f) {
     const double k = weight / (sigma * sigma);
     f.g = k * f.r;
     f.a = k;
-    f.b = k * f.r;
     f.cost = 0.5 * k * f.r * f.r;
 }
 
@@ -25,7 +24,6 @@ void CauchyLoss(double sigma, double k, double weight, ResidualForm<N>& f) {
     const double rho_zz = weight * (1.0 - z * z / k2) / (q * q);  // d2 rho / d z2
     f.g = rho_z / sigma;
     f.a = rho_zz / (sigma * sigma);
-    f.b = rho_z / sigma;
     f.cost = 0.5 * weight * k2 * std::log(q);
 }
 
@@ -36,7 +34,7 @@ double Dense(const ResidualForm<N>& f, Eigen::Matrix<double, N, 1>* grad,
     if (grad) *grad = f.g * f.j;
     if (hess) {
         *hess = f.a * f.j * f.j.transpose();
-        if (f.has_hr) *hess += f.b * f.hr;
+        if (f.has_hr) *hess += f.g * f.hr;
     }
     return f.cost;
 }

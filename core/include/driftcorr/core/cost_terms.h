@@ -40,23 +40,23 @@ struct Linearisation {
     double chi2 = 0.0;
 };
 
-/// A term of one scalar residual r(x) under its loss rho (Gaussian or Cauchy), as the loss's
-/// derivatives make its cost, gradient and Hessian of it:
-///   cost = rho(r),  gradient = g J,  Hessian = a J J^T + b Hr,
-/// J = dr/dx and Hr the residual's own Hessian (has_hr: computed, when the Hessian was asked for
-/// and the residual is not linear). A term's Evaluate returns these sums dense; a caller that
-/// needs a few entries of the Hessian (optim's term blocks) takes them from the form.
+/// A term of one scalar residual r(x) under its loss rho (Gaussian or Cauchy), held as the pieces
+/// its cost and derivatives are made of: g = rho'(r), a = rho''(r), J = dr/dx and Hr the
+/// residual's own Hessian (has_hr: computed, when the Hessian was asked for and r is not linear),
+///   cost = rho(r),  gradient = g J,  Hessian = a J J^T + g Hr.
+/// A term's Evaluate returns these sums dense; a caller that needs a few entries of the Hessian
+/// (optim's term blocks) takes them from the form.
 template <int N>
 struct ResidualForm {
     double r = 0.0;
     Eigen::Matrix<double, N, 1> j;
     Eigen::Matrix<double, N, N> hr;
     bool has_hr = false;
-    double cost = 0.0, g = 0.0, a = 0.0, b = 0.0;
+    double cost = 0.0, g = 0.0, a = 0.0;
     /// Hessian entry (row, col), the same sum as the dense Hessian's.
     double Hessian(int row, int col) const {
         const double h = (a * j[row]) * j[col];
-        return has_hr ? h + b * hr(row, col) : h;
+        return has_hr ? h + g * hr(row, col) : h;
     }
 };
 
