@@ -210,10 +210,8 @@ double SpeedChangeTerm::Evaluate(const SpeedVector& x, SpeedVector* grad, SpeedM
 }
 
 Linearisation<12> SpeedChangeTerm::Linearise(const SpeedVector& x) const {
-    double r;
-    SpeedVector j;
-    SpeedResidual(*this, x, &r, &j, nullptr);
-    return LinearGaussian<12>(r, j, sigma_mps, weight);
+    const ResidualForm<12> f = Form(x, false);
+    return LinearGaussian<12>(f.r, f.j, sigma_mps, weight);
 }
 
 ResidualForm<9> StepDirectionTerm::Form(const StepVector& x, bool with_hessian) const {
@@ -259,24 +257,27 @@ double HeadingChangeBiasTerm::Evaluate(const Eigen::Vector3d& x, Eigen::Vector3d
 }
 
 Linearisation<3> HeadingChangeBiasTerm::Linearise(const Eigen::Vector3d& x) const {
-    const Eigen::Vector3d j(-1.0, 1.0, -dt_s);
-    return LinearGaussian<3>(x[1] - x[0] - dheading_rad - x[2] * dt_s, j, sigma_rad, weight);
+    const ResidualForm<3> f = Form(x, false);
+    return LinearGaussian<3>(f.r, f.j, sigma_rad, weight);
 }
 
 // Outside the range: r and dr/ds = +-1; inside: r = 0, dr/ds = 0.
-double ScaleRangeTerm::Evaluate(const Vector1d& x, Vector1d* grad, Vector1d* hess) const {
+ResidualForm<1> ScaleRangeTerm::Form(const Vector1d& x, bool) const {
     const double s = x[0];
     ResidualForm<1> f;
     f.r = s > max ? s - max : (s < min ? min - s : 0.0);
     f.j = Vector1d(s > max ? 1.0 : (s < min ? -1.0 : 0.0));
     GaussianLoss(sigma, weight, f);
-    return Dense(f, grad, hess);
+    return f;
+}
+
+double ScaleRangeTerm::Evaluate(const Vector1d& x, Vector1d* grad, Vector1d* hess) const {
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<1> ScaleRangeTerm::Linearise(const Vector1d& x) const {
-    const double s = x[0];
-    const double r = s > max ? s - max : (s < min ? min - s : 0.0);
-    return LinearGaussian<1>(r, Vector1d(s > max ? 1.0 : (s < min ? -1.0 : 0.0)), sigma, weight);
+    const ResidualForm<1> f = Form(x, false);
+    return LinearGaussian<1>(f.r, f.j, sigma, weight);
 }
 
 ResidualForm<9> HeadingPreservationTerm::Form(const StepVector& x, bool) const {
@@ -308,27 +309,25 @@ Linearisation<9> HeightChangeTerm::Linearise(const StepVector& x) const {
     return LinearDifference(x, kZa, kZb, dup_m, sigma_m, weight);
 }
 
-double RandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
-                                     Eigen::Matrix2d* hess) const {
-    const Eigen::Vector2d j(-1.0, 1.0);
+ResidualForm<2> RandomWalkTerm::Form(const Eigen::Vector2d& x, bool) const {
+    ResidualForm<2> f = Difference(x, 0, 1, 0.0);
     if (robust_k <= 0.0) {
-        ResidualForm<2> f = Difference(x, 0, 1, 0.0);
         GaussianLoss(sigma, weight, f);
-        return Dense(f, grad, hess);
+    } else {
+        CauchyLoss(sigma, robust_k, weight, f);
     }
-    const double r = (x[1] - x[0]) / sigma, k2 = robust_k * robust_k;
-    const double q = 1.0 + r * r / k2;
-    const double rho_r = weight * r / q;                         // d rho / d r
-    const double rho_rr = weight * (1.0 - r * r / k2) / (q * q);  // d2 rho / d r2
-    if (grad) *grad = (rho_r / sigma) * j;
-    if (hess) *hess = (rho_rr / (sigma * sigma)) * j * j.transpose();
-    return 0.5 * weight * k2 * std::log(q);
+    return f;
+}
+
+double RandomWalkTerm::Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad,
+                                Eigen::Matrix2d* hess) const {
+    return Dense(Form(x, hess != nullptr), grad, hess);
 }
 
 Linearisation<2> RandomWalkTerm::Linearise(const Eigen::Vector2d& x) const {
-    const Eigen::Vector2d j(-1.0, 1.0);
-    if (robust_k <= 0.0) return LinearGaussian<2>(x[1] - x[0], j, sigma, weight);
-    return LinearCauchy<2>(x[1] - x[0], j, sigma, robust_k, weight);
+    const ResidualForm<2> f = Difference(x, 0, 1, 0.0);
+    if (robust_k <= 0.0) return LinearGaussian<2>(f.r, f.j, sigma, weight);
+    return LinearCauchy<2>(f.r, f.j, sigma, robust_k, weight);
 }
 
 double ScalePriorTerm::Evaluate(double s, double* grad, double* hess) const {

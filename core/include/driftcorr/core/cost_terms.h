@@ -135,6 +135,7 @@ struct HeadingChangeBiasTerm {
 using Vector1d = Eigen::Matrix<double, 1, 1>;
 struct ScaleRangeTerm {
     double min, max, sigma, weight;
+    ResidualForm<1> Form(const Vector1d& x, bool with_hessian) const;
     double Evaluate(const Vector1d& x, Vector1d* grad, Vector1d* hess) const;
     Linearisation<1> Linearise(const Vector1d& x) const;
 };
@@ -167,6 +168,7 @@ struct HeightChangeTerm {
 struct RandomWalkTerm {
     double sigma, weight;
     double robust_k = 0.0;
+    ResidualForm<2> Form(const Eigen::Vector2d& x, bool with_hessian) const;
     double Evaluate(const Eigen::Vector2d& x, Eigen::Vector2d* grad, Eigen::Matrix2d* hess) const;
     Linearisation<2> Linearise(const Eigen::Vector2d& x) const;
 };

@@ -174,14 +174,8 @@ struct TermReads<Term, N, std::void_t<decltype(Term::kReads)>> {
     static constexpr std::uint16_t value = Term::kReads;
 };
 
-/// Whether a core term gives its derivatives as a ResidualForm (Form).
-template <class Term, class = void>
-struct HasForm : std::false_type {};
-template <class Term>
-struct HasForm<Term, std::void_t<decltype(&Term::Form)>> : std::true_type {};
-
-/// A core term (core/cost_terms.h) over N local variables whose Evaluate takes an N-vector and
-/// whose Linearise returns a Linearisation<N>.
+/// A core term (core/cost_terms.h) of one residual over N local variables: its Form, Evaluate and
+/// Linearise take an N-vector (Form gives a ResidualForm<N>, Linearise a Linearisation<N>).
 template <class Term, int N>
 class CoreTermBlock final : public TermBlock {
 public:
@@ -200,33 +194,24 @@ public:
         if (hess) *hess = h;
         return cost;
     }
-    /// Evaluate and the additions on the term's own fixed-size vectors, without the copies; a
-    /// term of one residual (core ResidualForm) gives only the Hessian entries [begin, end) asks
-    /// for, not all N x N (the same sums).
+    /// Evaluate's sums from the term's residual form (core ResidualForm), on its own fixed-size
+    /// vectors: only the gradient entries of the variables it reads and the Hessian entries
+    /// [begin, end) lists, not all N x N.
     double Accumulate(const BlockContext&, const double* x, double obj_factor, double* grad,
                       double* values, const BlockEntry* begin,
                       const BlockEntry* end) const override {
         Vector v;
         GatherInto(x, v);
-        if constexpr (HasForm<Term>::value) {
-            const ResidualForm<N> f = term_.Form(v, values != nullptr);
-            for (unsigned bits = grad ? reads() : 0u; bits != 0; bits &= bits - 1) {
-                const int k = __builtin_ctz(bits);
-                if (var(k) >= 0) grad[var(k)] += f.g * f.j[k];
-            }
-            if (values) {
-                for (const BlockEntry* e = begin; e != end; ++e)
-                    values[e->slot] += obj_factor * f.Hessian(e->local % N, e->local / N);
-            }
-            return f.cost;
-        } else {
-            Vector g;
-            Matrix h;
-            const double cost = term_.Evaluate(v, grad ? &g : nullptr, values ? &h : nullptr);
-            if (grad) AddGradient(g.data(), grad);
-            if (values) AddHessian(h.data(), obj_factor, values, begin, end);
-            return cost;
+        const ResidualForm<N> f = term_.Form(v, values != nullptr);
+        for (unsigned bits = grad ? reads() : 0u; bits != 0; bits &= bits - 1) {
+            const int k = __builtin_ctz(bits);
+            if (var(k) >= 0) grad[var(k)] += f.g * f.j[k];
         }
+        if (values) {
+            for (const BlockEntry* e = begin; e != end; ++e)
+                values[e->slot] += obj_factor * f.Hessian(e->local % N, e->local / N);
+        }
+        return f.cost;
     }
     void Linearise(const BlockContext&, const BlockVector& x,
                    std::vector<LinearisedTerm>& out) const override {
