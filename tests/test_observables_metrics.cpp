@@ -46,6 +46,27 @@ TEST(Check, ABrokenInvariantThrowsWithFileLineAndCondition) {
     }
 }
 
+// A level walk at 1 Hz with +-0.15 m of barometer ripple, a 6 m climb from t = 30 to 42, level
+// again. A pose is level when its +-10 s hold at most 0.9 m of height change: the level span
+// ends at t = 21 (its +-10 s reach 0.35 m up the climb) and starts again at t = 51 (they reach
+// back to 5.35 m); the arrays' ends cut the spans short.
+TEST(Observables, LevelSpansEndAWindowHalfBeforeAClimbAndStartOneAfter) {
+    std::vector<double> t, up;
+    for (int k = 0; k <= 80; ++k) {
+        t.push_back(k);
+        const double ripple = (k % 2 == 0) ? 0.15 : -0.15;
+        up.push_back(ripple + (k <= 30 ? 0.0 : k >= 42 ? 6.0 : 0.5 * (k - 30)));
+    }
+    const std::vector<std::uint8_t> level = LevelSpans(t, up, 20.0, 0.9);
+    ASSERT_EQ(level.size(), t.size());
+    for (int k = 0; k <= 21; ++k) EXPECT_TRUE(level[k]) << k;
+    for (int k = 22; k <= 50; ++k) EXPECT_FALSE(level[k]) << k;
+    for (int k = 51; k <= 80; ++k) EXPECT_TRUE(level[k]) << k;
+    // A profile of one sample is level; an empty one has no poses.
+    EXPECT_TRUE(LevelSpans({0.0}, {3.0}, 20.0, 1.0)[0]);
+    EXPECT_TRUE(LevelSpans({}, {}, 20.0, 1.0).empty());
+}
+
 TEST(Observables, SquareWithYawHasKnownLengthsTurnsAndUnwrappedHeadings) {
     // A 10 m square driven counter-clockwise, facing along each side; the yaw of pose 3 is given
     // wrapped (-pi/2), the unwrapped headings climb to 2 pi.

@@ -126,4 +126,29 @@ std::size_t RepairSpeedEpisodes(std::vector<StepObservation>& obs, double max_ac
     return episodes;
 }
 
+std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
+                                     const std::vector<double>& up_m, double window_s,
+                                     double height_m) {
+    DRIFTCORR_CHECK(t_s.size() == up_m.size(), "one time per height");
+    const std::size_t n = t_s.size();
+    const double half_s = 0.5 * window_s;
+    std::vector<std::uint8_t> level(n, 0);
+    // Indices of the span's running minimum and maximum (monotone queues over [lo, hi]).
+    std::vector<std::size_t> lows, highs;
+    std::size_t low_head = 0, high_head = 0, lo = 0, hi = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        for (; hi < n && t_s[hi] <= t_s[i] + half_s; ++hi) {
+            while (lows.size() > low_head && up_m[lows.back()] >= up_m[hi]) lows.pop_back();
+            while (highs.size() > high_head && up_m[highs.back()] <= up_m[hi]) highs.pop_back();
+            lows.push_back(hi);
+            highs.push_back(hi);
+        }
+        while (t_s[lo] < t_s[i] - half_s) ++lo;
+        while (lows[low_head] < lo) ++low_head;
+        while (highs[high_head] < lo) ++high_head;
+        level[i] = up_m[highs[high_head]] - up_m[lows[low_head]] <= height_m;
+    }
+    return level;
+}
+
 }  // namespace driftcorr

@@ -277,7 +277,7 @@ bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
         const bool prior =
             family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset ||
             family == TermFamily::kScaleRange || family == TermFamily::kHeadingBiasWalk ||
-            family == TermFamily::kBoundaryPrior;
+            family == TermFamily::kBoundaryPrior || family == TermFamily::kFloorHeight;
         const bool estimable = r.families[f].redundancy >= kMinRedundancy;
         factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
         changed = changed || factor[f] > 1.01;

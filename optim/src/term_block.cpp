@@ -41,6 +41,8 @@ const char* ToString(TermFamily family) {
             return "heading bias walk";
         case TermFamily::kBoundaryPrior:
             return "boundary prior";
+        case TermFamily::kFloorHeight:
+            return "floor height";
         case TermFamily::kMapOffset:
             return "map offset";
     }

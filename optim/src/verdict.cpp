@@ -8,6 +8,7 @@
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
+#include "driftcorr/core/observables.h"
 
 namespace driftcorr {
 namespace {
@@ -199,7 +200,9 @@ void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor
         for (double z : c.floor_heights_m) d = std::min(d, std::abs(up_m - z));
         return d;
     };
-    std::size_t flagged = 0, lo = 0, hi = 0;
+    const std::vector<std::uint8_t> level =
+        LevelSpans(est.t_s, est.up_m, c.level_window_s, c.level_height_m);
+    std::size_t flagged = 0;
     std::optional<std::size_t> run_start;
     double longest_s = 0.0, worst_m = 0.0, run_worst_m = 0.0;
     for (std::size_t i = 0; i <= cor.size(); ++i) {
@@ -207,11 +210,7 @@ void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor
         double off_m = 0.0;
         if (i < cor.size()) {
             off_m = floor_distance(cor.up_m[i]);
-            while (est.t_s[lo] < est.t_s[i] - half_s) ++lo;
-            while (hi + 1 < est.size() && est.t_s[hi + 1] <= est.t_s[i] + half_s) ++hi;
-            const auto range =
-                std::minmax_element(est.up_m.begin() + lo, est.up_m.begin() + hi + 1);
-            off = off_m > c.off_floor_m && *range.second - *range.first <= c.level_height_m;
+            off = off_m > c.off_floor_m && level[i];
         }
         if (off) {
             if (!run_start) run_start = i, run_worst_m = 0.0;

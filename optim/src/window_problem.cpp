@@ -277,6 +277,40 @@ void WindowProblem::AddBiasBlocks() {
     }
 }
 
+// ModelConfig::floor_sigma_m: a pose where the estimate is level is drawn to the floor nearest to
+// its height when the window is built (the scale prior's form: a walk from a fixed floor). The
+// estimate's heights and times come from the steps (their sums), over the window and the half
+// level window on each side that the state holds: online, a pose near the newest one is judged
+// on what came so far.
+void WindowProblem::AddFloorBlocks() {
+    const std::vector<double>& floors = cfg_.floor_heights_m;
+    const double half_s = 0.5 * cfg_.floor_level_window_s;
+    std::size_t lo = first_, hi = last_;
+    for (double span_s = 0.0; lo > 0 && span_s <= half_s; --lo) span_s += state_.obs[lo].dt_s;
+    for (double span_s = 0.0; hi + 1 < state_.obs.size() && span_s <= half_s;) {
+        span_s += state_.obs[++hi].dt_s;
+    }
+    std::vector<double> t_s(hi - lo + 1, 0.0), up_m(hi - lo + 1, 0.0);
+    for (std::size_t i = lo + 1; i <= hi; ++i) {
+        t_s[i - lo] = t_s[i - lo - 1] + std::max(state_.obs[i].dt_s, 0.0);
+        up_m[i - lo] = up_m[i - lo - 1] + state_.obs[i].dup_m;
+    }
+    const std::vector<std::uint8_t> level =
+        LevelSpans(t_s, up_m, cfg_.floor_level_window_s, cfg_.floor_level_height_m);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        if (!level[i - lo]) continue;
+        const double z = state_.poses[i].p.z();
+        const double floor = *std::min_element(
+            floors.begin(), floors.end(),
+            [z](double a, double b) { return std::abs(a - z) < std::abs(b - z); });
+        blocks_.push_back(
+            Core<RandomWalkTerm, 2>(TermFamily::kFloorHeight,
+                                    RandomWalkTerm{cfg_.floor_sigma_m, 1.0, cfg_.floor_robust_k}));
+        blocks_.back()->Bind(0, -1, floor);
+        blocks_.back()->Bind(1, PoseVar(i, 2), 0.0);
+    }
+}
+
 void WindowProblem::BuildStructure(WindowUse use) {
     for (std::size_t i = first_; i <= last_; ++i) {
         AddStepBlocks(i);
@@ -289,6 +323,9 @@ void WindowProblem::BuildStructure(WindowUse use) {
     }
     AddScaleBlocks();
     if (HasBias()) AddBiasBlocks();
+    if (field_ && !state_.fix_height && cfg_.floor_sigma_m > 0.0 && !cfg_.floor_heights_m.empty()) {
+        AddFloorBlocks();
+    }
     if (prior_) {
         blocks_.push_back(Make<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));
         for (int c = 0; c < 4; ++c) blocks_.back()->Bind(c, PoseVar(first_ - 1, c), 0.0);

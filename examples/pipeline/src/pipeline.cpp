@@ -258,6 +258,7 @@ CorrectorConfig PedestrianCorrectorDefaults() {
     m.heading_rw_rad_per_sqrt_s = 0.03;
     m.height_sigma_m = 0.05;
     m.height_sigma_rel = 0.25;
+    m.floor_sigma_m = 0.2;
     m.heading_bias_segment_s = 0.0;
     m.scale_range_min = 0.9;
     m.scale_range_max = 1.5;
@@ -459,12 +460,20 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
     }
 }
 
-VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config) {
-    VerdictConfig v = config.verdict;
-    if (sc.mode != io::ScenarioMode::kIndoor3d) return v;
+std::vector<double> FloorHeights(const io::Scenario& sc, const PipelineConfig& config) {
+    std::vector<double> heights;
+    if (sc.mode != io::ScenarioMode::kIndoor3d) return heights;
     for (const io::MapLayerSpec& layer : sc.map) {
         if (layer.format != io::MapFormat::kGeoJson || !layer.floor_z_m) continue;
         const double z = *layer.floor_z_m + config.indoor_field.device_height_m;
+        if (std::find(heights.begin(), heights.end(), z) == heights.end()) heights.push_back(z);
+    }
+    return heights;
+}
+
+VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config) {
+    VerdictConfig v = config.verdict;
+    for (double z : FloorHeights(sc, config)) {
         if (std::find(v.floor_heights_m.begin(), v.floor_heights_m.end(), z) ==
             v.floor_heights_m.end()) {
             v.floor_heights_m.push_back(z);
@@ -473,8 +482,11 @@ VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config) {
     return v;
 }
 
-const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config) {
-    return sc.mode == io::ScenarioMode::kIndoor3d ? config.indoor_corrector : config.corrector;
+CorrectorConfig CorrectorFor(const io::Scenario& sc, const PipelineConfig& config) {
+    if (sc.mode != io::ScenarioMode::kIndoor3d) return config.corrector;
+    CorrectorConfig c = config.indoor_corrector;
+    c.model.floor_heights_m = FloorHeights(sc, config);
+    return c;
 }
 
 CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& config,

@@ -1,6 +1,7 @@
 #pragma once
 // What a drifting trajectory measures well, per step i (from pose i-1 to pose i): the step length,
 // the step's direction relative to the heading, the heading change and the height change.
+#include <cstdint>
 #include <vector>
 
 #include "driftcorr/core/types.h"
@@ -45,5 +46,13 @@ std::vector<double> UnwrappedHeadings(const PlanarTrajectory& traj, double stati
 /// Returns the number of episodes. obs as ComputeObservations returns it (obs[0] unused).
 std::size_t RepairSpeedEpisodes(std::vector<StepObservation>& obs, double max_accel_mps2,
                                 double window_s, double max_episode_s, double deviation);
+
+/// Where a height profile is level: result[i] is 1 when up_m stays within height_m (max - min)
+/// over the samples with t in [t_s[i] - window_s / 2, t_s[i] + window_s / 2] (those the arrays
+/// hold: at their ends the span is cut short). A barometer reads a level walk 0.6-0.7 m peak to
+/// peak and a stair climb about 4 m in 20 s. Precondition: t_s ascending, one time per height.
+std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
+                                     const std::vector<double>& up_m, double window_s,
+                                     double height_m);
 
 }  // namespace driftcorr

@@ -3,6 +3,7 @@
 // sampling-independent units so the same values serve 10 Hz cars and 2 Hz pedestrian steps.
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "driftcorr/core/params.h"
 
@@ -53,6 +54,19 @@ struct ModelConfig {
     // Height change (indoor3d): sigma = height_sigma_m + height_sigma_rel * |dup|.
     double height_sigma_m = 0.05;     ///< [m]
     double height_sigma_rel = 0.05;   ///< [-]
+    /// Floors (indoor3d): a pose where the estimate's height stays level (within
+    /// floor_level_height_m over the floor_level_window_s around it: LevelSpans) stands on a
+    /// floor, so its height is drawn to the one of floor_heights_m nearest to it when the window
+    /// is built: sigma floor_sigma_m, Cauchy beyond floor_robust_k sigmas (0: Gaussian). Stair
+    /// halls and lift shafts are traversable at every height between their floors: without it a
+    /// walk whose barometer misreads a climb walks on, level, between floors there.
+    /// floor_sigma_m = 0 or no floor heights: no such term. floor_heights_m comes from the
+    /// scenario's floor plans (pose heights: floor plus device height), not from a parameter.
+    std::vector<double> floor_heights_m;  ///< [m]
+    double floor_sigma_m = 0.0;           ///< [m]
+    double floor_robust_k = 3.0;          ///< [-]
+    double floor_level_window_s = 20.0;   ///< [s]
+    double floor_level_height_m = 1.0;    ///< [m]
     // Map distance to the nearest traversable centre: Gaussian with sigma, gives up beyond ~giveup.
     double map_sigma_m = 2.0;         ///< [m]
     double map_giveup_m = 8.0;        ///< [m]
@@ -125,6 +139,14 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "height change sigma = height_sigma_m + height_sigma_rel * |dup| (indoor3d)"},
     {"height_sigma_rel", Field<&ModelConfig::height_sigma_rel>(), kNonNegative,
      "height change sigma, share of the height change"},
+    {"floor_sigma_m", Field<&ModelConfig::floor_sigma_m>(), kNonNegative,
+     "sigma of a level pose's height about the nearest floor (indoor3d plans); 0: no such term"},
+    {"floor_robust_k", Field<&ModelConfig::floor_robust_k>(), kNonNegative,
+     "Cauchy width of that term in sigmas; 0: Gaussian"},
+    {"floor_level_window_s", Field<&ModelConfig::floor_level_window_s>(), kPositive,
+     "a pose is level when the estimate's height stays within floor_level_height_m over this span"},
+    {"floor_level_height_m", Field<&ModelConfig::floor_level_height_m>(), kPositive,
+     "see floor_level_window_s"},
     {"map_sigma_m", Field<&ModelConfig::map_sigma_m>(), kPositive,
      "pull towards the nearest traversable centre"},
     {"map_giveup_m", Field<&ModelConfig::map_giveup_m>(), kPositive,

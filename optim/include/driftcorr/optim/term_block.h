@@ -27,15 +27,16 @@ enum class TermFamily : int {
     kHeightChange,
     kSpeedChange,
     kMapDistance,
-    kScaleWalk,  ///< the random walk between scale segments and the prior on the first
-    kScaleRange,  ///< the plausible range of the step-length scale (a prior, not a bound)
+    kScaleWalk,        ///< the random walk between scale segments and the prior on the first
+    kScaleRange,       ///< the plausible range of the step-length scale (a prior, not a bound)
     kHeadingBiasWalk,  ///< the heading-rate bias's random walk and the prior on the first
     kBoundaryPrior,    ///< the prior on a fixed-lag window's boundary pose (its marginalised past)
+    kFloorHeight,      ///< a level pose's height about its floor (ModelConfig::floor_sigma_m)
     /// The map's offset process of the covariance's model (optim/covariance.h); not a
     /// term of the objective.
     kMapOffset,
 };
-constexpr int kTermFamilies = 12;
+constexpr int kTermFamilies = 13;
 const char* ToString(TermFamily family);
 
 /// The most local variables a block has (the speed change term: three poses).

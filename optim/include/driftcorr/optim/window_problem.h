@@ -140,6 +140,7 @@ private:
     void AddStepBlocks(std::size_t i);
     void AddScaleBlocks();
     void AddBiasBlocks();
+    void AddFloorBlocks();
     bool HasBias() const { return !state_.bias_segment.empty(); }
     /// Binds local variable k of `block` to component c of `pose` (fixed before the window).
     void BindPose(TermBlock& block, int k0, std::size_t pose) const;

@@ -180,10 +180,13 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const std::vector<FieldDisc>* corridor = nullptr,
                               const std::optional<HeightRange>& heights = std::nullopt);
 
-/// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector).
-const CorrectorConfig& CorrectorFor(const io::Scenario& sc, const PipelineConfig& config);
-/// config.verdict, with the floors' heights (`VerdictConfig::floor_heights_m`) of an indoor3d
-/// scenario whose map is GeoJSON floors: each layer's floor_z_m + indoor_field.device_height_m.
+/// The floors' pose heights of an indoor3d scenario whose map is GeoJSON floors: each layer's
+/// floor_z_m + indoor_field.device_height_m, once each; empty otherwise.
+std::vector<double> FloorHeights(const io::Scenario& sc, const PipelineConfig& config);
+/// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector),
+/// with the scenario's FloorHeights (`ModelConfig::floor_heights_m`).
+CorrectorConfig CorrectorFor(const io::Scenario& sc, const PipelineConfig& config);
+/// config.verdict, with the scenario's FloorHeights (`VerdictConfig::floor_heights_m`).
 VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config);
 
 /// Runs config.solver on a prepared scenario. Solver outcomes are in the result, never thrown.
