@@ -83,6 +83,25 @@ TEST(VerdictIndoor, ACorrectedFloorChangeTheEstimateDeniesIsNotOk) {
     EXPECT_FALSE(HasReason(gain, "height changes disagree")) << gain.reasons.front();
 }
 
+// A barometer over-reads a floor change by 12 % at most, so a correction whose change falls
+// short of the reading by more than 1.5 m + 20 % of it changed floor less than the walk did: an
+// estimate that climbs 8 m does not support a correction that climbs 4 m (the floor below the
+// one it reached), though 4 m is within 1.5 m + 35 % of 8 m. One that reads the 4 m 1.1x does.
+TEST(VerdictIndoor, ACorrectedFloorChangeShortOfTheReadingIsNotOk) {
+    const TraversableField field = TwoFloors();
+    const PlanarTrajectory climbs = Walk([](int k) { return k < 150 ? 0.0 : 4.0; });
+    const ModelConfig model;
+    const VerdictConfig config;
+    const PlanarTrajectory twice = Walk([](int k) { return k < 150 ? 0.0 : 8.0; });
+    const Verdict short_of =
+        JudgeCorrection(twice, &field, model, Result(climbs), nullptr, false, false, config);
+    EXPECT_TRUE(HasReason(short_of, "height changes disagree"));
+    const PlanarTrajectory over = Walk([](int k) { return k < 150 ? 0.0 : 4.4; });
+    const Verdict gain =
+        JudgeCorrection(over, &field, model, Result(climbs), nullptr, false, false, config);
+    EXPECT_FALSE(HasReason(gain, "height changes disagree")) << gain.reasons.front();
+}
+
 TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
     const TraversableField field = TwoFloors();
     // The estimate: level, with a barometer's 0.3 m of wobble.

@@ -161,8 +161,10 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
         j = std::max(j, i + 1);
         while (j + 1 < est.size() && est.t_s[j] < est.t_s[i] + c.height_window_s) ++j;
         const double d_est = est.up_m[j] - est.up_m[i], d_cor = cor.up_m[j] - cor.up_m[i];
-        const double excess = std::abs(d_cor - d_est) -
-                              (c.height_disagree_m + c.height_disagree_rel * std::abs(d_est));
+        const double rel =
+            std::abs(d_cor) < std::abs(d_est) ? c.height_short_rel : c.height_disagree_rel;
+        const double excess =
+            std::abs(d_cor - d_est) - (c.height_disagree_m + rel * std::abs(d_est));
         if (excess <= 0.0) {
             in_episode = false;
             continue;

@@ -59,15 +59,18 @@ struct VerdictConfig {
     /// walker stops faster, while frame-to-frame odometry that drops motion does so in one frame.
     double jump_window_s = 0.3;    ///< [s]
     double max_accel_mps2 = 10.0;  ///< [m/s^2]
-    /// 3D modes: over every height_window_s of the walk, the corrected height change may differ
-    /// from the estimate's (barometric) one by height_disagree_m + height_disagree_rel times the
-    /// estimate's; beyond, the correction climbed or descended where the estimate did not (or the
-    /// other way round): a floor change the walk does not support, likely a wrong floor. A
-    /// barometer reads a floor change 0.75-1.1x and drifts by centimetres a minute.
-    /// Degraded, failed beyond off_map_failed_share of the poses.
+    /// 3D modes: over every height_window_s of the walk, the corrected height change may exceed
+    /// the estimate's (barometric) one by height_disagree_m + height_disagree_rel times the
+    /// estimate's, and fall short of it by height_disagree_m + height_short_rel times it; beyond,
+    /// the correction climbed or descended where the estimate did not (or the other way round):
+    /// a floor change the walk does not support, likely a wrong floor. A barometer reads a floor
+    /// change 0.75-1.12x (the two real HCU walks: 0.78-0.81x on stairs, 1.09-1.12x in the lift)
+    /// and drifts by centimetres a minute: a right correction changes height by 0.89-1.33x the
+    /// reading. Degraded, failed beyond off_map_failed_share of the poses.
     double height_window_s = 60.0;      ///< [s]
     double height_disagree_m = 1.5;     ///< [m]
     double height_disagree_rel = 0.35;  ///< [-]
+    double height_short_rel = 0.2;      ///< [-]
     /// Walkers walk level only on floors (stairs change height). With the floors' heights known
     /// (a map of discrete floors, in the trajectory's height datum; set by the pipeline; empty:
     /// not known, no check), corrected poses farther than off_floor_m from every floor while
@@ -116,7 +119,9 @@ inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
     {"height_disagree_m", Field<&VerdictConfig::height_disagree_m>(), kNonNegative,
      "3D: they may differ by this..."},
     {"height_disagree_rel", Field<&VerdictConfig::height_disagree_rel>(), kNonNegative,
-     "...plus this share of the estimate's height change"},
+     "...plus this share of the estimate's height change where the correction's is larger"},
+    {"height_short_rel", Field<&VerdictConfig::height_short_rel>(), kNonNegative,
+     "...or this share where the correction's is smaller"},
     {"off_floor_m", Field<&VerdictConfig::off_floor_m>(), kPositive,
      "3D, floors known: a pose this far from every floor..."},
     {"level_window_s", Field<&VerdictConfig::level_window_s>(), kPositive,
