@@ -216,6 +216,20 @@ TEST(HcuWalkGenerator, DeterministicAndEveryWalkChangesFloor) {
     EXPECT_EQ(estimates.size(), 4u);
 }
 
+// The walk of `seed` from the HCU walk generator (datasets/ipin21/make_hcu_walks.py) in a fresh
+// temporary folder; "" when the HCU plans are not present.
+std::string GeneratedHcuWalk(int seed) {
+    const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
+    if (!fs::exists(src + "/scenario.yaml")) return "";
+    const std::string n = std::to_string(seed);
+    const std::string out = TmpDir("hcu_walk_" + n);
+    const std::string cmd = "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) +
+                            "/datasets/ipin21/make_hcu_walks.py " + src + " " + out + " --seeds " +
+                            n + "-" + n + " > /dev/null";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return out + "/walk_" + n;
+}
+
 // A generated walk in the real HCU building (datasets/ipin21/make_hcu_walks.py, seed 13, one of
 // the seeds the pedestrian defaults were chosen on): a lift ride from the 4th floor to the ground
 // floor that the barometer reads 0.77x, so the floor nearest to the reading is the 1st. Only the
@@ -223,18 +237,13 @@ TEST(HcuWalkGenerator, DeterministicAndEveryWalkChangesFloor) {
 // the right floor and ATE 1.04 m with them, 59.2 % and 2.06 m without (the ATE is mostly along
 // the track: the PDR's slowly varying step-length error).
 TEST(EndToEndIndoor, LiftRideMisreadByTheBarometerEndsOnTheRightFloor) {
-    const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
-    if (!fs::exists(src + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << src;
-    const std::string out = TmpDir("hcu_walks");
-    const std::string cmd = "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) +
-                            "/datasets/ipin21/make_hcu_walks.py " + src + " " + out +
-                            " --seeds 13-13 > /dev/null";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const std::string walk = GeneratedHcuWalk(13);
+    if (walk.empty()) GTEST_SKIP() << "real data not present: hcu_eight";
     pipeline::PipelineConfig with;
-    const pipeline::CorrectionRun a = pipeline::RunCorrection(out + "/walk_13", with);
+    const pipeline::CorrectionRun a = pipeline::RunCorrection(walk, with);
     pipeline::PipelineConfig without;
     without.indoor_corrector.restart_height_gains.clear();
-    const pipeline::CorrectionRun b = pipeline::RunCorrection(out + "/walk_13", without);
+    const pipeline::CorrectionRun b = pipeline::RunCorrection(walk, without);
     ASSERT_TRUE(a.after && b.after);
     std::printf("with the floor hypotheses: right floor %.1f %%, ATE %.2f m; without: %.1f %%, "
                 "%.2f m\n", 100.0 * a.after->floor_accuracy, a.after->ate_m,
@@ -250,17 +259,12 @@ TEST(EndToEndIndoor, LiftRideMisreadByTheBarometerEndsOnTheRightFloor) {
 // where only stair halls and lift shafts are traversable: measured 82.7 % of the poses on the
 // right floor without it, 99.6 % with it.
 TEST(EndToEndIndoor, LevelWalkingIsDrawnToAFloor) {
-    const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
-    if (!fs::exists(src + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << src;
-    const std::string out = TmpDir("hcu_walks_floor");
-    const std::string cmd = "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) +
-                            "/datasets/ipin21/make_hcu_walks.py " + src + " " + out +
-                            " --seeds 12-12 > /dev/null";
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    const pipeline::CorrectionRun a = pipeline::RunCorrection(out + "/walk_12", {});
+    const std::string walk = GeneratedHcuWalk(12);
+    if (walk.empty()) GTEST_SKIP() << "real data not present: hcu_eight";
+    const pipeline::CorrectionRun a = pipeline::RunCorrection(walk, {});
     pipeline::PipelineConfig without;
     without.indoor_corrector.model.floor_sigma_m = 0.0;
-    const pipeline::CorrectionRun b = pipeline::RunCorrection(out + "/walk_12", without);
+    const pipeline::CorrectionRun b = pipeline::RunCorrection(walk, without);
     ASSERT_TRUE(a.after && b.after);
     std::printf("with the floor term: right floor %.1f %%; without: %.1f %%\n",
                 100.0 * a.after->floor_accuracy, 100.0 * b.after->floor_accuracy);
