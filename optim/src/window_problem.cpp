@@ -286,9 +286,11 @@ void WindowProblem::AddFloorBlocks() {
     const std::vector<double>& floors = cfg_.floor_heights_m;
     const double half_s = 0.5 * cfg_.floor_level_window_s;
     std::size_t lo = first_, hi = last_;
-    for (double span_s = 0.0; lo > 0 && span_s <= half_s; --lo) span_s += state_.obs[lo].dt_s;
+    for (double span_s = 0.0; lo > 0 && span_s <= half_s; --lo) {
+        span_s += std::max(state_.obs[lo].dt_s, 0.0);
+    }
     for (double span_s = 0.0; hi + 1 < state_.obs.size() && span_s <= half_s;) {
-        span_s += state_.obs[++hi].dt_s;
+        span_s += std::max(state_.obs[++hi].dt_s, 0.0);
     }
     std::vector<double> t_s(hi - lo + 1, 0.0), up_m(hi - lo + 1, 0.0);
     for (std::size_t i = lo + 1; i <= hi; ++i) {
