@@ -151,4 +151,11 @@ std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
     return level;
 }
 
+double NearestFloor(const std::vector<double>& floor_heights_m, double up_m) {
+    DRIFTCORR_CHECK(!floor_heights_m.empty(), "no floor");
+    return *std::min_element(
+        floor_heights_m.begin(), floor_heights_m.end(),
+        [up_m](double a, double b) { return std::abs(a - up_m) < std::abs(b - up_m); });
+}
+
 }  // namespace driftcorr

@@ -164,14 +164,16 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
     std::vector<double> step(n, 0.0), rhs(m), diagonal(m);
     report.status = SolveStatus::kMaxIterations;
     report.message = "Maximum_Iterations_Exceeded";
-    // Where the method can go no further: acceptable if the gradient is small enough for that.
-    auto stop_short = [&](double error) {
+    // Where the method can go no further: acceptable if the gradient is small enough for that,
+    // else `status` with `message`.
+    auto stop_short = [&](double error, SolveStatus status = SolveStatus::kFailed,
+                          const char* message = "Search_Direction_Becomes_Too_Small") {
         if (error <= options.acceptable_tolerance) {
             report.status = SolveStatus::kAcceptable;
             report.message = "Solved_To_Acceptable_Level";
         } else {
-            report.status = SolveStatus::kFailed;
-            report.message = "Search_Direction_Becomes_Too_Small";
+            report.status = status;
+            report.message = message;
         }
     };
     // Steps in a row taken within the objective's rounding but without lowering it.
@@ -191,10 +193,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             break;
         }
         if (it >= options.max_iterations) {
-            if (error <= options.acceptable_tolerance) {
-                report.status = SolveStatus::kAcceptable;
-                report.message = "Solved_To_Acceptable_Level";
-            }
+            stop_short(error, SolveStatus::kMaxIterations, "Maximum_Iterations_Exceeded");
             break;
         }
         report.iterations = it + 1;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <optional>
 
 #include "driftcorr/core/angles.h"
@@ -192,15 +191,13 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
     f.ByShare(share, c.off_map_failed_share, what);
 }
 
-// Level walking between floors (VerdictConfig::floor_heights_m): runs of poses off every floor
-// while the estimate is level; only runs of level_window_s / 2 or more count and are flagged.
+// Level walking between floors (VerdictConfig::floor_heights_m, not empty): runs of poses off every
+// floor while the estimate is level; only runs of level_window_s / 2 or more count and are flagged.
 void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor,
                         const VerdictConfig& c, Verdict& v, Findings& f) {
     const double half_s = 0.5 * c.level_window_s;
     auto floor_distance = [&c](double up_m) {
-        double d = std::numeric_limits<double>::infinity();
-        for (double z : c.floor_heights_m) d = std::min(d, std::abs(up_m - z));
-        return d;
+        return std::abs(up_m - NearestFloor(c.floor_heights_m, up_m));
     };
     const std::vector<std::uint8_t> level =
         LevelSpans(est.t_s, est.up_m, c.level_window_s, c.level_height_m);

@@ -283,7 +283,6 @@ void WindowProblem::AddBiasBlocks() {
 // level window on each side that the state holds: online, a pose near the newest one is judged
 // on what came so far.
 void WindowProblem::AddFloorBlocks() {
-    const std::vector<double>& floors = cfg_.floor_heights_m;
     const double half_s = 0.5 * cfg_.floor_level_window_s;
     std::size_t lo = first_, hi = last_;
     for (double span_s = 0.0; lo > 0 && span_s <= half_s; --lo) {
@@ -301,10 +300,7 @@ void WindowProblem::AddFloorBlocks() {
         LevelSpans(t_s, up_m, cfg_.floor_level_window_s, cfg_.floor_level_height_m);
     for (std::size_t i = first_; i <= last_; ++i) {
         if (!level[i - lo]) continue;
-        const double z = state_.poses[i].p.z();
-        const double floor = *std::min_element(
-            floors.begin(), floors.end(),
-            [z](double a, double b) { return std::abs(a - z) < std::abs(b - z); });
+        const double floor = NearestFloor(cfg_.floor_heights_m, state_.poses[i].p.z());
         blocks_.push_back(
             Core<RandomWalkTerm, 2>(TermFamily::kFloorHeight,
                                     RandomWalkTerm{cfg_.floor_sigma_m, 1.0, cfg_.floor_robust_k}));

@@ -55,4 +55,7 @@ std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
                                      const std::vector<double>& up_m, double window_s,
                                      double height_m);
 
+/// The one of floor_heights_m nearest to up_m. Precondition: floor_heights_m not empty.
+double NearestFloor(const std::vector<double>& floor_heights_m, double up_m);
+
 }  // namespace driftcorr
