@@ -249,6 +249,19 @@ TEST_P(CovarianceVsDense, MarginalsEqualBlocksOfTheDenseInverse) {
     ExpectMarginalsOfTheInverse(d, Eigen::MatrixXd(system.information), system.pose_unknowns,
                                 c.fix_height);
     EXPECT_LE(d.factor_nonzeros, 12 * d.unknowns);
+
+    // With the step length's error process as well (a correlation length of a few steps).
+    CovarianceConfig stepped;
+    stepped.step_error_sd = 0.1;
+    stepped.step_error_correlation_m = 6.0;
+    const CovarianceResult e = ComputeCovariance(s, f, model, stepped, &system);
+    ASSERT_EQ(e.status, CovarianceStatus::kOk) << e.message;
+    EXPECT_GT(e.unknowns, d.unknowns) << "step error unknowns";
+    EXPECT_GT(e.families[int(TermFamily::kStepError)].terms, 0u);
+    ExpectMarginalsOfTheInverse(e, Eigen::MatrixXd(system.information), system.pose_unknowns,
+                                c.fix_height);
+    // One more open unknown (the step error's stretch) beside each pose's elimination.
+    EXPECT_LE(e.factor_nonzeros, 14 * e.unknowns);
 }
 
 INSTANTIATE_TEST_SUITE_P(SmallProblems, CovarianceVsDense,
@@ -489,6 +502,34 @@ TEST(Covariance, TheMapOffsetDoesNotAverageAwayWithThePoseRate) {
     // Over a 600 m straight the offset (share 0.5 of (2 m)^2, correlated over 100 m) averages
     // over ~3 independent stretches at most: the variance stays above 2 m^2 / 6.
     EXPECT_GT(middle_cross(coarse, 0.5), 2.0 / 6.0);
+}
+
+// The step length's slowly varying error (step_error_sd, correlation length c) adds, at a pose a
+// path D from the known start along a straight road (which observes nothing along it), the
+// variance of its integral: 2 sd^2 c D (1 - c / D (1 - exp(-D / c))) for a Gauss-Markov process,
+// 28.0 m^2 for sd 0.1, c 10 m, D 150 m. Independent step errors would add their own variance
+// only, which averages away.
+TEST(Covariance, TheStepErrorAddsTheVarianceOfItsIntegralAlongTheTrack) {
+    ModelConfig model;
+    const PlanarTrajectory truth = Curve(151, 0.0, false, 2.0);  // 300 m straight, 2 m steps
+    const TraversableField field = RoadAlong(truth);
+    const TrajectoryState s = StateFrom(truth, model, true);
+    CovarianceConfig cfg;
+    cfg.map_offset_share = 0.0;
+    cfg.family_variance_components = false;
+    const CovarianceResult without = ComputeCovariance(s, &field, model, cfg);
+    cfg.step_error_sd = 0.1;
+    cfg.step_error_correlation_m = 10.0;
+    const CovarianceResult with = ComputeCovariance(s, &field, model, cfg);
+    ASSERT_EQ(without.status, CovarianceStatus::kOk) << without.message;
+    ASSERT_EQ(with.status, CovarianceStatus::kOk) << with.message;
+    const std::size_t middle = 75;  // 150 m from the start
+    const auto [along0, cross0] = AlongCross(without.poses[middle], truth.yaw_rad[middle]);
+    const auto [along1, cross1] = AlongCross(with.poses[middle], truth.yaw_rad[middle]);
+    const double c = 10.0, d = 150.0;
+    const double expected = 2.0 * 0.01 * c * d * (1.0 - c / d * (1.0 - std::exp(-d / c)));
+    EXPECT_NEAR(along1 - along0, expected, 0.1 * expected);
+    EXPECT_NEAR(cross1, cross0, 0.01 * cross0);  // the road holds the cross-track as before
 }
 
 TEST(Covariance, RedundancyNumbersAddUpAndTheVarianceFactorScales) {

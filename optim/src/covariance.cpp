@@ -14,27 +14,62 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-// The map's position error as a Gauss-Markov process along the path (method step 2): one unknown
-// offset b_k = (East, North) per stretch of 1 / kStretchesPerCorrelation of the correlation
-// length that holds map terms, numbered after the window's variables (b_k's East at first_var +
-// 2 k, North after it).
+// The covariance model's processes along the path (method steps 2 and 2b): the map's position
+// error and the step length's error, each a Gauss-Markov process with one unknown (East and
+// North for the map's) per stretch of 1 / kStretchesPerCorrelation of its correlation length that
+// holds terms, numbered after the window's variables.
 constexpr double kStretchesPerCorrelation = 4.0;
 
 // A family's variance component is estimated only from at least one redundant observation.
 constexpr double kMinRedundancy = 1.0;
 
-struct MapOffset {
-    int first_var = 0;                   // variable of b_0's East component
-    std::vector<std::size_t> last_pose;  // per stretch: its last pose with a map term
+struct PathProcess {
+    int first_var = 0;                   // variable of stretch 0's first component
+    int dims = 1;                        // components per stretch
+    std::vector<std::size_t> last_pose;  // per stretch: the last pose of its terms
+    std::vector<double> centre_m;        // per stretch: the mean path position of its terms
+    int NumVars() const { return dims * static_cast<int>(last_pose.size()); }
 };
 
-LinearisedTerm OffsetPrior(int var_a, double rho, int var_b, double information) {
-    LinearisedTerm t;
-    t.family = TermFamily::kMapOffset;
-    if (var_a >= 0) t.var[t.size] = var_a, t.jacobian[t.size++] = -rho;
-    t.var[t.size] = var_b, t.jacobian[t.size++] = 1.0;
-    t.information = information;
-    return t;
+// Assigns the term of `pose` at path position `path_m` to its stretch (terms come in pose
+// order) and returns the stretch's first variable.
+int StretchVar(PathProcess& process, double stretch_m, std::size_t pose, double path_m,
+               std::vector<int>& count, long& last_stretch) {
+    const auto stretch = static_cast<long>(path_m / stretch_m);
+    if (stretch != last_stretch) {
+        last_stretch = stretch;
+        process.last_pose.push_back(0), process.centre_m.push_back(0.0), count.push_back(0);
+    }
+    process.last_pose.back() = pose;
+    process.centre_m.back() += path_m, ++count.back();
+    return process.first_var + process.dims * (static_cast<int>(process.last_pose.size()) - 1);
+}
+
+// The process's own terms, per component: x_0 ~ N(0, 1 / information), x_k+1 - rho x_k ~
+// N(0, (1 - rho^2) / information) with rho = exp(-path between the stretches / correlation_m).
+void AddProcessPriors(PathProcess& process, const std::vector<int>& count, double correlation_m,
+                      double information, TermFamily family, std::vector<LinearisedTerm>& terms) {
+    for (std::size_t k = 0; k < process.last_pose.size(); ++k) {
+        process.centre_m[k] /= count[k];
+        const double rho =
+            k == 0 ? 0.0
+                   : std::exp(-(process.centre_m[k] - process.centre_m[k - 1]) / correlation_m);
+        for (int c = 0; c < process.dims; ++c) {
+            const int var = process.first_var + process.dims * static_cast<int>(k) + c;
+            LinearisedTerm t;
+            t.family = family;
+            if (k > 0) t.var[t.size] = var - process.dims, t.jacobian[t.size++] = -rho;
+            t.var[t.size] = var, t.jacobian[t.size++] = 1.0;
+            t.information = information / std::max(1.0 - rho * rho, 1e-9);
+            terms.push_back(t);
+        }
+    }
+}
+
+std::vector<double> PathPositions(const TrajectoryState& s) {
+    std::vector<double> path_m(s.poses.size(), 0.0);
+    for (std::size_t i = 1; i < s.poses.size(); ++i) path_m[i] = path_m[i - 1] + s.obs[i].length_m;
+    return path_m;
 }
 
 // Makes each map term's residual d(p - b_k) ~ d - grad d . b_k (variance (1 - share)
@@ -44,54 +79,69 @@ LinearisedTerm OffsetPrior(int var_a, double rho, int var_b, double information)
 // map drawn off the true positions moves its streets along as well as across, so along a
 // straight street the map term sees only the offset's cross component, and the along-track
 // position that a turn fixed keeps the along component's uncertainty.
-MapOffset AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const ModelConfig& model,
-                       const CovarianceConfig& config, std::vector<LinearisedTerm>& terms) {
-    MapOffset offset;
+PathProcess AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const ModelConfig& model,
+                         const CovarianceConfig& config, std::vector<LinearisedTerm>& terms) {
+    PathProcess offset;
     offset.first_var = p.NumVariables();
+    offset.dims = 2;
     if (!(config.map_offset_share > 0.0)) return offset;
-    std::vector<double> path_m(s.poses.size(), 0.0);
-    for (std::size_t i = 1; i < s.poses.size(); ++i) path_m[i] = path_m[i - 1] + s.obs[i].length_m;
+    const std::vector<double> path_m = PathPositions(s);
     const double stretch_m = config.map_offset_correlation_m / kStretchesPerCorrelation;
-    std::vector<double> centre_m;  // mean path position of each stretch's map terms
     std::vector<int> count;
     long last_stretch = -1;
-    for (LinearisedTerm& t : terms) {
+    const std::size_t own_terms = terms.size();
+    for (std::size_t k = 0; k < own_terms; ++k) {
+        LinearisedTerm& t = terms[k];
         if (t.family != TermFamily::kMapDistance || !(t.information > 0.0)) continue;
-        const auto stretch = static_cast<long>(path_m[t.pose] / stretch_m);
-        if (stretch != last_stretch) {  // map terms come in pose order
-            last_stretch = stretch;
-            offset.last_pose.push_back(0), centre_m.push_back(0.0), count.push_back(0);
-        }
-        offset.last_pose.back() = static_cast<std::size_t>(t.pose);
-        centre_m.back() += path_m[t.pose], ++count.back();
+        const auto pose = static_cast<std::size_t>(t.pose);
+        const int b = StretchVar(offset, stretch_m, pose, path_m[pose], count, last_stretch);
         t.information /= 1.0 - config.map_offset_share;
         t.chi2 /= 1.0 - config.map_offset_share;
-        const int x_var = p.PoseVar(static_cast<std::size_t>(t.pose), 0);
+        const int x_var = p.PoseVar(pose, 0);
         double j[2] = {0.0, 0.0};
         for (int a = 0; a < t.size; ++a) {
             if (t.var[a] == x_var) j[0] = t.jacobian[a];
             if (t.var[a] == x_var + 1) j[1] = t.jacobian[a];
         }
-        const int b = offset.first_var + 2 * (static_cast<int>(offset.last_pose.size()) - 1);
         for (int c = 0; c < 2; ++c) t.var[t.size] = b + c, t.jacobian[t.size++] = -j[c];
     }
     const double info =
         model.map_weight / (config.map_offset_share * model.map_sigma_m * model.map_sigma_m);
-    for (std::size_t k = 0; k < offset.last_pose.size(); ++k) {
-        centre_m[k] /= count[k];
-        const int var = offset.first_var + 2 * static_cast<int>(k);
-        for (int c = 0; c < 2; ++c) {
-            if (k == 0) {
-                terms.push_back(OffsetPrior(-1, 0.0, var + c, info));
-                continue;
-            }
-            const double rho =
-                std::exp(-(centre_m[k] - centre_m[k - 1]) / config.map_offset_correlation_m);
-            terms.push_back(
-                OffsetPrior(var - 2 + c, rho, var + c, info / std::max(1.0 - rho * rho, 1e-9)));
-        }
-    }
+    AddProcessPriors(offset, count, config.map_offset_correlation_m, info, TermFamily::kMapOffset,
+                     terms);
     return offset;
+}
+
+// Makes each scaled step length residual r = along - s L into r - s L e_k (method step 2b) and
+// adds the process e_0 ~ N(0, sd^2), e_k+1 - rho e_k ~ N(0, (1 - rho^2) sd^2). Steps without a
+// scale unknown (discontinuities of the estimate) and stops keep their residual.
+PathProcess AddStepError(const TrajectoryState& s, const WindowProblem& p,
+                         const CovarianceConfig& config, int first_var,
+                         std::vector<LinearisedTerm>& terms) {
+    PathProcess error;
+    error.first_var = first_var;
+    if (!(config.step_error_sd > 0.0)) return error;
+    const std::vector<double> path_m = PathPositions(s);
+    const double stretch_m = config.step_error_correlation_m / kStretchesPerCorrelation;
+    std::vector<int> count;
+    long last_stretch = -1;
+    const std::size_t own_terms = terms.size();
+    for (std::size_t k = 0; k < own_terms; ++k) {
+        LinearisedTerm& t = terms[k];
+        if (t.family != TermFamily::kStepLength || !(t.information > 0.0) || t.pose < 1) continue;
+        const auto i = static_cast<std::size_t>(t.pose);
+        const int scale_var = p.ScaleVar(s.scale_segment[i]);
+        const bool scaled =
+            std::find(t.var.begin(), t.var.begin() + t.size, scale_var) != t.var.begin() + t.size;
+        const double length = s.scales[s.scale_segment[i]] * s.obs[i].length_m;
+        if (!scaled || !(length > 0.0)) continue;
+        const int e = StretchVar(error, stretch_m, i, path_m[i - 1], count, last_stretch);
+        t.var[t.size] = e, t.jacobian[t.size++] = -length;
+    }
+    AddProcessPriors(error, count, config.step_error_correlation_m,
+                     1.0 / (config.step_error_sd * config.step_error_sd), TermFamily::kStepError,
+                     terms);
+    return error;
 }
 
 // The unknowns of the covariance: every variable that is not held fixed, in the chain's order
@@ -101,27 +151,36 @@ struct Ordering {
     int size = 0;
 };
 
-Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s, const MapOffset& offset) {
+Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s,
+                       const std::array<const PathProcess*, 2>& processes) {
     Ordering o;
-    o.of_var.assign(p.NumVariables() + 2 * offset.last_pose.size(), -1);
+    int vars = p.NumVariables();
+    for (const PathProcess* process : processes) vars += process->NumVars();
+    o.of_var.assign(vars, -1);
     const std::size_t n = s.poses.size();
     int next_segment = s.scale_segment[1];
     int next_bias = s.bias_segment.empty() ? 0 : s.bias_segment[1];
-    std::size_t next_stretch = 0;
+    std::array<std::size_t, 2> next_stretch{0, 0};
     for (std::size_t i = 1; i < n; ++i) {
         for (int c = 0; c < 4; ++c) {
             if (c != 2 || !s.fix_height) o.of_var[p.PoseVar(i, c)] = o.size++;
         }
-        // The scale segments no later step uses and the map stretches ending here follow pose i.
+        // The scale segments no later step uses and the process stretches ending here follow
+        // pose i.
         const int open = i + 1 < n ? s.scale_segment[i + 1] : s.scale_segment[n - 1] + 1;
         for (; next_segment < open; ++next_segment) o.of_var[p.ScaleVar(next_segment)] = o.size++;
         if (!s.bias_segment.empty()) {  // likewise the heading-rate bias segments
             const int open_bias = i + 1 < n ? s.bias_segment[i + 1] : s.bias_segment[n - 1] + 1;
             for (; next_bias < open_bias; ++next_bias) o.of_var[p.BiasVar(next_bias)] = o.size++;
         }
-        for (; next_stretch < offset.last_pose.size() && offset.last_pose[next_stretch] == i;
-             ++next_stretch) {
-            for (int c = 0; c < 2; ++c) o.of_var[offset.first_var + 2 * next_stretch + c] = o.size++;
+        for (std::size_t q = 0; q < processes.size(); ++q) {
+            const PathProcess& process = *processes[q];
+            std::size_t& k = next_stretch[q];
+            for (; k < process.last_pose.size() && process.last_pose[k] == i; ++k) {
+                for (int c = 0; c < process.dims; ++c) {
+                    o.of_var[process.first_var + process.dims * static_cast<int>(k) + c] = o.size++;
+                }
+            }
         }
     }
     return o;
@@ -274,10 +333,11 @@ bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
     bool changed = false;
     for (int f = 0; f < kTermFamilies; ++f) {
         const auto family = static_cast<TermFamily>(f);
-        const bool prior =
-            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset ||
-            family == TermFamily::kScaleRange || family == TermFamily::kHeadingBiasWalk ||
-            family == TermFamily::kBoundaryPrior || family == TermFamily::kFloorHeight;
+        const bool prior = family == TermFamily::kHeadingPreservation ||
+                           family == TermFamily::kMapOffset || family == TermFamily::kScaleRange ||
+                           family == TermFamily::kHeadingBiasWalk ||
+                           family == TermFamily::kBoundaryPrior ||
+                           family == TermFamily::kFloorHeight || family == TermFamily::kStepError;
         const bool estimable = r.families[f].redundancy >= kMinRedundancy;
         factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
         changed = changed || factor[f] > 1.01;
@@ -366,8 +426,10 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
     std::vector<LinearisedTerm> terms;
     terms.reserve(6 * n);
     problem.LineariseTerms(x.data(), terms);
-    const MapOffset offset = AddMapOffset(state, problem, model, config, terms);
-    const Ordering order = ChainOrdering(problem, state, offset);
+    const PathProcess offset = AddMapOffset(state, problem, model, config, terms);
+    const PathProcess step_error =
+        AddStepError(state, problem, config, offset.first_var + offset.NumVars(), terms);
+    const Ordering order = ChainOrdering(problem, state, {&offset, &step_error});
     r.unknowns = order.size;
 
     SparseMatrix h;

@@ -45,6 +45,8 @@ const char* ToString(TermFamily family) {
             return "floor height";
         case TermFamily::kMapOffset:
             return "map offset";
+        case TermFamily::kStepError:
+            return "step error";
     }
     return "?";
 }

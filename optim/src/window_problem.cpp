@@ -203,6 +203,7 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
     blocks_.push_back(Core<StepLengthTerm, 9>(
         TermFamily::kStepLength,
         StepLengthTerm{o.length_m, o.direction_rad, len_sigma, cfg_.step_weight, robust_k}));
+    blocks_.back()->set_pose(static_cast<int>(i));  // the covariance's step error (covariance.h)
     blocks_.push_back(Core<StepDirectionTerm, 9>(
         TermFamily::kStepDirection,
         StepDirectionTerm{o.direction_rad, lat_sigma, cfg_.step_weight}));

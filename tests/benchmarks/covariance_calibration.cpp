@@ -140,27 +140,41 @@ void PrintVariants(const TrajectoryState& state, const TraversableField& field,
                    const CorrectorConfig& cfg, const PlanarTrajectory& corrected,
                    const PlanarTrajectory& truth) {
     struct Variant {
-        const char* label;
+        std::string label;
         double share, correlation_m;
         bool components;
+        double step_sd, step_correlation_m;
     };
     const CovarianceConfig& d = cfg.covariance;
     const double share = d.map_offset_share, corr_m = d.map_offset_correlation_m;
     const bool comp = d.family_variance_components;
-    for (const Variant& v : std::vector<Variant>{{"solver model", 0.0, corr_m, false},
-                                                 {"offset only", share, corr_m, false},
-                                                 {"components", 0.0, corr_m, true},
-                                                 {"share 0.25", 0.25, corr_m, comp},
-                                                 {"share 0.75", 0.75, corr_m, comp},
-                                                 {"corr 0.5x", share, 0.5 * corr_m, comp},
-                                                 {"corr 2x", share, 2.0 * corr_m, comp}}) {
+    const double step_sd = d.step_error_sd, step_m = d.step_error_correlation_m;
+    std::vector<Variant> variants{{"solver model", 0.0, corr_m, false, 0.0, step_m},
+                                  {"offset only", share, corr_m, false, 0.0, step_m},
+                                  {"components", 0.0, corr_m, true, 0.0, step_m},
+                                  {"share 0.25", 0.25, corr_m, comp, step_sd, step_m},
+                                  {"share 0.75", 0.75, corr_m, comp, step_sd, step_m},
+                                  {"corr 0.5x", share, 0.5 * corr_m, comp, step_sd, step_m},
+                                  {"corr 2x", share, 2.0 * corr_m, comp, step_sd, step_m}};
+    // The step length's slowly varying error (CovarianceConfig::step_error_sd): off, and a grid.
+    variants.push_back({"no step error", share, corr_m, comp, 0.0, step_m});
+    for (double sd : {0.05, 0.1, 0.15}) {
+        for (double c_m : {5.0, 10.0, 20.0}) {
+            char label[32];
+            std::snprintf(label, sizeof label, "step %.2f/%.0fm", sd, c_m);
+            variants.push_back({label, share, corr_m, comp, sd, c_m});
+        }
+    }
+    for (const Variant& v : variants) {
         CovarianceConfig c = d;
         c.apply_variance_factor = false;
         c.map_offset_share = v.share;
         c.map_offset_correlation_m = v.correlation_m;
         c.family_variance_components = v.components;
+        c.step_error_sd = v.step_sd;
+        c.step_error_correlation_m = v.step_correlation_m;
         const CovarianceResult r = ComputeCovariance(state, &field, cfg.model, c);
-        Print(v.label, Compare(corrected, truth, r.poses, 1.0));
+        Print(v.label.c_str(), Compare(corrected, truth, r.poses, 1.0));
     }
 }
 

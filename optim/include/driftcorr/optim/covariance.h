@@ -14,10 +14,17 @@
 //     (independent terms would make the covariance shrink with the pose rate). A share of the map
 //     variance becomes an offset b(path) of the map (East, North), a Gauss-Markov process along
 //     the path with correlation length map_offset_correlation_m, sampled by one unknown pair per
-//     quarter of it; each map term's residual becomes d(p - b) ~ d - grad d . b with the local b (CovarianceConfig).
-//     Two-dimensional because a misplaced junction moves its streets along as well as across: the
-//     along-track position a turn fixes keeps that uncertainty down the next straight.
-//  3. Unknowns in the chain's order, each scale segment's and offset stretch's unknown right after
+//     quarter of it; each map term's residual becomes d(p - b) ~ d - grad d . b with the local b
+//     (CovarianceConfig). Two-dimensional because a misplaced junction moves its streets along as
+//     well as across: the along-track position a turn fixes keeps that uncertainty down the next
+//     straight.
+//  2b. Likewise the step length's error, when CovarianceConfig::step_error_sd > 0: a share e(path)
+//     of the step, a Gauss-Markov process along the estimated path with standard deviation
+//     step_error_sd and correlation length step_error_correlation_m, one unknown per quarter of
+//     it; each step length residual becomes r - s L e_k. Independent step errors average away
+//     along a corridor, so without it the position between two turns is too certain where the
+//     step length errs with the gait for tens of steps (a pedestrian's dead reckoning).
+//  3. Unknowns in the chain's order, each scale segment's and process stretch's unknown right after
 //     the last pose that uses it: eliminating a pose fills only towards the next pose and the open
 //     segments, so the factor H = L D L^T (Eigen::SimplicialLDLT, natural order) has O(n) entries.
 //  4. Selected inversion (Takahashi, Fagan & Chin 1973; Erisman & Tinney 1975): the entries of
@@ -70,6 +77,13 @@ struct CovarianceConfig {
     double map_offset_share = 0.5;
     /// Correlation length of that offset along the path [m]: a street between junctions.
     double map_offset_correlation_m = 100.0;
+    /// Standard deviation of the step length's slowly varying error, as a share of the step
+    /// (method step 2b), >= 0; 0: the step lengths' errors are independent, the solver's own
+    /// model. Pedestrian dead reckoning's step length errs with the gait for tens of steps at a
+    /// time; the solver's model has only the scale walk for that.
+    double step_error_sd = 0.0;
+    /// Correlation length of that error along the estimated path [m].
+    double step_error_correlation_m = 10.0;
     /// Variance components of the observation families (method step 6); false: the model's
     /// sigmas as they are.
     bool family_variance_components = true;
@@ -93,6 +107,10 @@ inline constexpr Param<CovarianceConfig> kCovarianceParamRows[] = {
      "share of the map variance that is an offset common along a street"},
     {"map_offset_correlation_m", Field<&CovarianceConfig::map_offset_correlation_m>(), kPositive,
      "correlation length of that offset along the path"},
+    {"step_error_sd", Field<&CovarianceConfig::step_error_sd>(), kNonNegative,
+     "slowly varying step length error, share of the step; 0: independent"},
+    {"step_error_correlation_m", Field<&CovarianceConfig::step_error_correlation_m>(), kPositive,
+     "correlation length of that error along the path"},
     {"family_variance_components", Field<&CovarianceConfig::family_variance_components>(), kNoRange,
      "variance components of the observation families"},
     {"apply_variance_factor", Field<&CovarianceConfig::apply_variance_factor>(), kNoRange,

@@ -35,8 +35,11 @@ enum class TermFamily : int {
     /// The map's offset process of the covariance's model (optim/covariance.h); not a
     /// term of the objective.
     kMapOffset,
+    /// The step length's slowly varying error of the covariance's model (optim/covariance.h);
+    /// not a term of the objective.
+    kStepError,
 };
-constexpr int kTermFamilies = 13;
+constexpr int kTermFamilies = 14;
 const char* ToString(TermFamily family);
 
 /// The most local variables a block has (the speed change term: three poses).
@@ -51,7 +54,8 @@ using BlockMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen:
 /// outside the window are left out, as are entries whose derivative is zero.
 struct LinearisedTerm {
     TermFamily family = TermFamily::kStepLength;
-    int pose = -1;  ///< the pose of a map distance or boundary prior term; -1 for the others
+    int pose = -1;  ///< the pose of a map distance or boundary prior term, the step into pose of a
+                    ///< step length term; -1 for the others
     int size = 0;
     std::array<int, kMaxBlockVars> var{};
     std::array<double, kMaxBlockVars> jacobian{};
