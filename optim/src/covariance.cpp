@@ -31,40 +31,53 @@ struct PathProcess {
     int NumVars() const { return dims * static_cast<int>(last_pose.size()); }
 };
 
-// Assigns the term of `pose` at path position `path_m` to its stretch (terms come in pose
-// order) and returns the stretch's first variable.
-int StretchVar(PathProcess& process, double stretch_m, std::size_t pose, double path_m,
-               std::vector<int>& count, long& last_stretch) {
-    const auto stretch = static_cast<long>(path_m / stretch_m);
-    if (stretch != last_stretch) {
-        last_stretch = stretch;
-        process.last_pose.push_back(0), process.centre_m.push_back(0.0), count.push_back(0);
-    }
-    process.last_pose.back() = pose;
-    process.centre_m.back() += path_m, ++count.back();
-    return process.first_var + process.dims * (static_cast<int>(process.last_pose.size()) - 1);
-}
+// Builds a process: assigns terms, which come in pose order, to its stretches, then adds its own
+// terms, per component: x_0 ~ N(0, 1 / information), x_k+1 - rho x_k ~ N(0, (1 - rho^2) /
+// information) with rho = exp(-path between the stretches / correlation length).
+class StretchBuilder {
+public:
+    StretchBuilder(PathProcess& process, double correlation_m)
+        : process_(process),
+          correlation_m_(correlation_m),
+          stretch_m_(correlation_m / kStretchesPerCorrelation) {}
 
-// The process's own terms, per component: x_0 ~ N(0, 1 / information), x_k+1 - rho x_k ~
-// N(0, (1 - rho^2) / information) with rho = exp(-path between the stretches / correlation_m).
-void AddProcessPriors(PathProcess& process, const std::vector<int>& count, double correlation_m,
-                      double information, TermFamily family, std::vector<LinearisedTerm>& terms) {
-    for (std::size_t k = 0; k < process.last_pose.size(); ++k) {
-        process.centre_m[k] /= count[k];
-        const double rho =
-            k == 0 ? 0.0
-                   : std::exp(-(process.centre_m[k] - process.centre_m[k - 1]) / correlation_m);
-        for (int c = 0; c < process.dims; ++c) {
-            const int var = process.first_var + process.dims * static_cast<int>(k) + c;
-            LinearisedTerm t;
-            t.family = family;
-            if (k > 0) t.var[t.size] = var - process.dims, t.jacobian[t.size++] = -rho;
-            t.var[t.size] = var, t.jacobian[t.size++] = 1.0;
-            t.information = information / std::max(1.0 - rho * rho, 1e-9);
-            terms.push_back(t);
+    /// The first variable of the stretch of a term of `pose` at path position `path_m`.
+    int Var(std::size_t pose, double path_m) {
+        const auto stretch = static_cast<long>(path_m / stretch_m_);
+        if (stretch != last_stretch_) {
+            last_stretch_ = stretch;
+            process_.last_pose.push_back(0), process_.centre_m.push_back(0.0), count_.push_back(0);
+        }
+        process_.last_pose.back() = pose;
+        process_.centre_m.back() += path_m, ++count_.back();
+        return process_.first_var + process_.dims * (static_cast<int>(count_.size()) - 1);
+    }
+
+    void AddPriors(double information, TermFamily family, std::vector<LinearisedTerm>& terms) {
+        for (std::size_t k = 0; k < process_.last_pose.size(); ++k) {
+            process_.centre_m[k] /= count_[k];
+            const double rho =
+                k == 0
+                    ? 0.0
+                    : std::exp(-(process_.centre_m[k] - process_.centre_m[k - 1]) / correlation_m_);
+            for (int c = 0; c < process_.dims; ++c) {
+                const int var = process_.first_var + process_.dims * static_cast<int>(k) + c;
+                LinearisedTerm t;
+                t.family = family;
+                if (k > 0) t.var[t.size] = var - process_.dims, t.jacobian[t.size++] = -rho;
+                t.var[t.size] = var, t.jacobian[t.size++] = 1.0;
+                t.information = information / std::max(1.0 - rho * rho, 1e-9);
+                terms.push_back(t);
+            }
         }
     }
-}
+
+private:
+    PathProcess& process_;
+    double correlation_m_, stretch_m_;
+    std::vector<int> count_;  // per stretch: its terms
+    long last_stretch_ = -1;
+};
 
 std::vector<double> PathPositions(const TrajectoryState& s) {
     std::vector<double> path_m(s.poses.size(), 0.0);
@@ -86,15 +99,11 @@ PathProcess AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const
     offset.dims = 2;
     if (!(config.map_offset_share > 0.0)) return offset;
     const std::vector<double> path_m = PathPositions(s);
-    const double stretch_m = config.map_offset_correlation_m / kStretchesPerCorrelation;
-    std::vector<int> count;
-    long last_stretch = -1;
-    const std::size_t own_terms = terms.size();
-    for (std::size_t k = 0; k < own_terms; ++k) {
-        LinearisedTerm& t = terms[k];
+    StretchBuilder stretches(offset, config.map_offset_correlation_m);
+    for (LinearisedTerm& t : terms) {
         if (t.family != TermFamily::kMapDistance || !(t.information > 0.0)) continue;
         const auto pose = static_cast<std::size_t>(t.pose);
-        const int b = StretchVar(offset, stretch_m, pose, path_m[pose], count, last_stretch);
+        const int b = stretches.Var(pose, path_m[pose]);
         t.information /= 1.0 - config.map_offset_share;
         t.chi2 /= 1.0 - config.map_offset_share;
         const int x_var = p.PoseVar(pose, 0);
@@ -107,8 +116,7 @@ PathProcess AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const
     }
     const double info =
         model.map_weight / (config.map_offset_share * model.map_sigma_m * model.map_sigma_m);
-    AddProcessPriors(offset, count, config.map_offset_correlation_m, info, TermFamily::kMapOffset,
-                     terms);
+    stretches.AddPriors(info, TermFamily::kMapOffset, terms);
     return offset;
 }
 
@@ -122,12 +130,8 @@ PathProcess AddStepError(const TrajectoryState& s, const WindowProblem& p,
     error.first_var = first_var;
     if (!(config.step_error_sd > 0.0)) return error;
     const std::vector<double> path_m = PathPositions(s);
-    const double stretch_m = config.step_error_correlation_m / kStretchesPerCorrelation;
-    std::vector<int> count;
-    long last_stretch = -1;
-    const std::size_t own_terms = terms.size();
-    for (std::size_t k = 0; k < own_terms; ++k) {
-        LinearisedTerm& t = terms[k];
+    StretchBuilder stretches(error, config.step_error_correlation_m);
+    for (LinearisedTerm& t : terms) {
         if (t.family != TermFamily::kStepLength || !(t.information > 0.0) || t.pose < 1) continue;
         const auto i = static_cast<std::size_t>(t.pose);
         const int scale_var = p.ScaleVar(s.scale_segment[i]);
@@ -135,12 +139,11 @@ PathProcess AddStepError(const TrajectoryState& s, const WindowProblem& p,
             std::find(t.var.begin(), t.var.begin() + t.size, scale_var) != t.var.begin() + t.size;
         const double length = s.scales[s.scale_segment[i]] * s.obs[i].length_m;
         if (!scaled || !(length > 0.0)) continue;
-        const int e = StretchVar(error, stretch_m, i, path_m[i - 1], count, last_stretch);
+        const int e = stretches.Var(i, path_m[i - 1]);
         t.var[t.size] = e, t.jacobian[t.size++] = -length;
     }
-    AddProcessPriors(error, count, config.step_error_correlation_m,
-                     1.0 / (config.step_error_sd * config.step_error_sd), TermFamily::kStepError,
-                     terms);
+    stretches.AddPriors(1.0 / (config.step_error_sd * config.step_error_sd), TermFamily::kStepError,
+                        terms);
     return error;
 }
 
