@@ -27,7 +27,6 @@ struct PathProcess {
     int first_var = 0;                   // variable of stretch 0's first component
     int dims = 1;                        // components per stretch
     std::vector<std::size_t> last_pose;  // per stretch: the last pose of its terms
-    std::vector<double> centre_m;        // per stretch: the mean path position of its terms
     int NumVars() const { return dims * static_cast<int>(last_pose.size()); }
 };
 
@@ -46,20 +45,18 @@ public:
         const auto stretch = static_cast<long>(path_m / stretch_m_);
         if (stretch != last_stretch_) {
             last_stretch_ = stretch;
-            process_.last_pose.push_back(0), process_.centre_m.push_back(0.0), count_.push_back(0);
+            process_.last_pose.push_back(0), centre_m_.push_back(0.0), count_.push_back(0);
         }
         process_.last_pose.back() = pose;
-        process_.centre_m.back() += path_m, ++count_.back();
+        centre_m_.back() += path_m, ++count_.back();
         return process_.first_var + process_.dims * (static_cast<int>(count_.size()) - 1);
     }
 
     void AddPriors(double information, TermFamily family, std::vector<LinearisedTerm>& terms) {
         for (std::size_t k = 0; k < process_.last_pose.size(); ++k) {
-            process_.centre_m[k] /= count_[k];
+            centre_m_[k] /= count_[k];
             const double rho =
-                k == 0
-                    ? 0.0
-                    : std::exp(-(process_.centre_m[k] - process_.centre_m[k - 1]) / correlation_m_);
+                k == 0 ? 0.0 : std::exp(-(centre_m_[k] - centre_m_[k - 1]) / correlation_m_);
             for (int c = 0; c < process_.dims; ++c) {
                 const int var = process_.first_var + process_.dims * static_cast<int>(k) + c;
                 LinearisedTerm t;
@@ -75,10 +72,12 @@ public:
 private:
     PathProcess& process_;
     double correlation_m_, stretch_m_;
-    std::vector<int> count_;  // per stretch: its terms
+    std::vector<int> count_;        // per stretch: its terms
+    std::vector<double> centre_m_;  // per stretch: the mean path position of its terms
     long last_stretch_ = -1;
 };
 
+// The estimated path before each pose [m] (the processes run along it).
 std::vector<double> PathPositions(const TrajectoryState& s) {
     std::vector<double> path_m(s.poses.size(), 0.0);
     for (std::size_t i = 1; i < s.poses.size(); ++i) path_m[i] = path_m[i - 1] + s.obs[i].length_m;
@@ -92,13 +91,13 @@ std::vector<double> PathPositions(const TrajectoryState& s) {
 // map drawn off the true positions moves its streets along as well as across, so along a
 // straight street the map term sees only the offset's cross component, and the along-track
 // position that a turn fixed keeps the along component's uncertainty.
-PathProcess AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const ModelConfig& model,
-                         const CovarianceConfig& config, std::vector<LinearisedTerm>& terms) {
+PathProcess AddMapOffset(const std::vector<double>& path_m, const WindowProblem& p,
+                         const ModelConfig& model, const CovarianceConfig& config,
+                         std::vector<LinearisedTerm>& terms) {
     PathProcess offset;
     offset.first_var = p.NumVariables();
     offset.dims = 2;
     if (!(config.map_offset_share > 0.0)) return offset;
-    const std::vector<double> path_m = PathPositions(s);
     StretchBuilder stretches(offset, config.map_offset_correlation_m);
     for (LinearisedTerm& t : terms) {
         if (t.family != TermFamily::kMapDistance || !(t.information > 0.0)) continue;
@@ -123,13 +122,12 @@ PathProcess AddMapOffset(const TrajectoryState& s, const WindowProblem& p, const
 // Makes each scaled step length residual r = along - s L into r - s L e_k (method step 2b) and
 // adds the process e_0 ~ N(0, sd^2), e_k+1 - rho e_k ~ N(0, (1 - rho^2) sd^2). Steps without a
 // scale unknown (discontinuities of the estimate) and stops keep their residual.
-PathProcess AddStepError(const TrajectoryState& s, const WindowProblem& p,
-                         const CovarianceConfig& config, int first_var,
+PathProcess AddStepError(const TrajectoryState& s, const std::vector<double>& path_m,
+                         const WindowProblem& p, const CovarianceConfig& config, int first_var,
                          std::vector<LinearisedTerm>& terms) {
     PathProcess error;
     error.first_var = first_var;
     if (!(config.step_error_sd > 0.0)) return error;
-    const std::vector<double> path_m = PathPositions(s);
     StretchBuilder stretches(error, config.step_error_correlation_m);
     for (LinearisedTerm& t : terms) {
         if (t.family != TermFamily::kStepLength || !(t.information > 0.0) || t.pose < 1) continue;
@@ -429,9 +427,10 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
     std::vector<LinearisedTerm> terms;
     terms.reserve(6 * n);
     problem.LineariseTerms(x.data(), terms);
-    const PathProcess offset = AddMapOffset(state, problem, model, config, terms);
+    const std::vector<double> path_m = PathPositions(state);
+    const PathProcess offset = AddMapOffset(path_m, problem, model, config, terms);
     const PathProcess step_error =
-        AddStepError(state, problem, config, offset.first_var + offset.NumVars(), terms);
+        AddStepError(state, path_m, problem, config, offset.first_var + offset.NumVars(), terms);
     const Ordering order = ChainOrdering(problem, state, {&offset, &step_error});
     r.unknowns = order.size;
 
