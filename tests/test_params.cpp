@@ -235,5 +235,18 @@ TEST(ParameterReference, ReadmeExampleIsAValidParameterFile) {
     EXPECT_NO_THROW(pipeline::LoadPipelineConfig(path.string()));
 }
 
+// The start scales of the batch correction (no params.yaml key: a list) are checked by
+// Validate like the keys: at least one, each inside the scale variables' bounds.
+TEST(CorrectorConfig, StartScalesMustBeListedAndInsideTheScaleBounds) {
+    CorrectorConfig c;
+    EXPECT_EQ(c.Validate(), "");
+    c.start_scales.clear();
+    EXPECT_NE(c.Validate().find("start_scales"), std::string::npos) << c.Validate();
+    c.start_scales = {1.0, kScaleMax + 1.0};
+    EXPECT_NE(c.Validate().find("start_scales"), std::string::npos) << c.Validate();
+    c.start_scales = {1.0, kScaleMin, kScaleMax};
+    EXPECT_EQ(c.Validate(), "");
+}
+
 }  // namespace
 }  // namespace driftcorr

@@ -188,6 +188,24 @@ void PrintAnchorFit(const pipeline::CorrectionRun& run) {
     std::printf("\n");
 }
 
+// The start scales of the correction and the NLL each reached, when there were several.
+void PrintStarts(const CorrectionResult& r) {
+    if (r.start_scales.size() < 2) return;
+    std::printf("starts     scale");
+    for (std::size_t k = 0; k < r.start_scales.size(); ++k) {
+        std::printf("%s %.2f", k ? " /" : "", r.start_scales[k]);
+    }
+    std::printf(": NLL");
+    for (std::size_t k = 0; k < r.start_nll.size(); ++k) {
+        if (std::isnan(r.start_nll[k])) {
+            std::printf("%s failed", k ? " /" : "");
+        } else {
+            std::printf("%s %.1f", k ? " /" : "", r.start_nll[k]);
+        }
+    }
+    std::printf(", kept %.2f\n", r.start_scales[r.start_chosen]);
+}
+
 void PrintVerdict(const Verdict& v) {
     std::printf("verdict    %s", ToString(v.level).c_str());
     std::printf(" (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
@@ -229,6 +247,7 @@ void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
         std::printf("solver     %s (%s); %zu windows, %d solver iterations, %zu poses on hard corridor,"
                     " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
+        PrintStarts(r);
     }
     std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
                 " incremental %.3f, refine %.3f); peak memory %.0f MB\n", total, run.timings.load_s,

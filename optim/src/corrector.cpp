@@ -1,6 +1,10 @@
 #include "driftcorr/optim/corrector.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <string>
 
 #include "driftcorr/core/check.h"
@@ -18,6 +22,17 @@ std::optional<ParamProblem> CorrectorConfig::FindProblem() const {
     if (max_window_poses < max_chunk_poses) {
         return RelationProblem("max_window_poses", double(max_window_poses),
                                ">=", "max_chunk_poses", double(max_chunk_poses));
+    }
+    if (start_scales.empty())
+        return ParamProblem{"start_scales", "must list a scale (got none)", ""};
+    for (double v : start_scales) {
+        if (!(v >= kScaleMin && v <= kScaleMax)) {
+            return ParamProblem{"start_scales",
+                                "must lie in [" + FormatParamNumber(kScaleMin) + ", " +
+                                    FormatParamNumber(kScaleMax) + "] (got " +
+                                    FormatParamNumber(v) + ")",
+                                ""};
+        }
     }
     return std::nullopt;
 }
@@ -87,14 +102,47 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 }
 
 // The incremental pass and the refinement live in IncrementalCorrector (shared with the online
-// corrector); the batch case hands it the whole estimate at once.
+// corrector); the batch case hands it the whole estimate at once, once per start scale
+// (CorrectorConfig::start_scales), and keeps the usable correction of lowest NLL. The covariance
+// is computed for that one only; the times and iterations add up over the starts.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
     DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectTrajectory needs at least 3 poses");
+    DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectTrajectory needs a start scale");
     const bool planar = !field || field->planar();
-    IncrementalCorrector inc(InitialState(estimate, cfg, planar), field, cfg);
-    inc.SolveRemaining(progress);
-    CorrectionResult result = inc.Finish(estimate.t_s, progress);
+    const TrajectoryState initial = InitialState(estimate, cfg, planar);
+    CorrectorConfig each = cfg;
+    each.compute_covariance = false;
+    std::optional<IncrementalCorrector> best;
+    CorrectionResult result;
+    std::vector<double> nll;
+    double incremental_s = 0.0, refine_s = 0.0;
+    int iterations = 0;
+    for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
+        TrajectoryState state = initial;
+        std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
+        IncrementalCorrector inc(std::move(state), field, each);
+        inc.SolveRemaining(progress);
+        CorrectionResult r = inc.Finish(estimate.t_s, progress);
+        incremental_s += r.incremental_s, refine_s += r.refine_s, iterations += r.iterations;
+        nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
+        const bool better =
+            !best || (Usable(r.status) && (!Usable(result.status) || r.nll < result.nll));
+        if (!better) continue;
+        best.emplace(std::move(inc));
+        result = std::move(r);
+        result.start_chosen = k;
+    }
+    result.start_scales = cfg.start_scales;
+    result.start_nll = std::move(nll);
+    result.incremental_s = incremental_s, result.refine_s = refine_s;
+    result.iterations = iterations;
+    if (Usable(result.status) && cfg.compute_covariance) {
+        const auto t0 = std::chrono::steady_clock::now();
+        result.covariance = ComputeCovariance(best->state(), field, cfg.model, cfg.covariance);
+        result.covariance_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
     DiagnoseCorrection(estimate, field, cfg, result);
     return result;
 }

@@ -370,6 +370,16 @@ void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {
     }
 }
 
+double IncrementalCorrector::Nll() {
+    DRIFTCORR_CHECK(size() >= 2, "Nll needs a step");
+    const std::size_t last = size() - 1;
+    WindowProblem problem(state_, field_, cfg_.model, 1, last, std::vector<std::uint8_t>(last, 0),
+                          WindowUse::kLinearise);
+    std::vector<double> x(problem.NumVariables());
+    problem.InitialPoint(x.data());
+    return problem.Objective(x.data());
+}
+
 CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
                                               const ProgressCallback& progress) {
     DRIFTCORR_CHECK(size() >= 3 && done_ + 1 == size() && t_s.size() == size(),
@@ -395,6 +405,7 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
         result.step_length_m[i] = i > 0 ? state_.obs[i].length_m : 0.0;
         result.repaired_steps += state_.obs[i].repaired ? 1 : 0;
     }
+    result.nll = Nll();
     if (Usable(result.status)) result.corrected = ToTrajectory(t_s, state_);
     if (Usable(result.status) && cfg_.compute_covariance) {
         const auto t1 = std::chrono::steady_clock::now();

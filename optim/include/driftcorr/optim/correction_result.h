@@ -30,6 +30,12 @@ struct CorrectionResult {
     int iterations = 0;                       ///< solver iterations, all solves
     std::size_t constrained_poses = 0;        ///< poses with the hard corridor constraint (refine)
     double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range
+    /// The corrected trajectory's NLL (the objective of the soft terms at the output).
+    double nll = 0.0;
+    /// The starts of the batch correction (CorrectorConfig::start_scales), the NLL each one's
+    /// correction reached (NaN: not usable) and the one that was kept.
+    std::vector<double> start_scales, start_nll;
+    std::size_t start_chosen = 0;
     /// The odometry's step lengths as the model observed them [m], one per pose (step into pose
     /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
     std::vector<double> step_length_m;

@@ -25,6 +25,13 @@ struct CorrectorConfig {
     /// re-solved from these step-length scale hypotheses
     /// (multiplying the current scale); the lowest NLL wins. Empty: no restarts.
     std::vector<double> restart_scale_factors = {1.3, 0.8, 1.7};
+    /// The step-length scales the batch correction starts from (CorrectTrajectory). With more
+    /// than one, the whole correction runs from each and the lowest NLL of the corrected
+    /// trajectory wins: the scale is what a walk's first windows settle, and a map that lets a
+    /// squeezed or stretched path fit as well as the true one (a building's dense corridors)
+    /// keeps the basin it starts in. The scale prior (scale_prior_sigma about 1) is the same
+    /// for every start, so their NLLs compare. Time: one correction per start.
+    std::vector<double> start_scales = {1.0};
     /// A window whose observed height changes add up to restart_height_change_m or more (it
     /// changes floor; 3D modes only) is also solved from starts whose height changes are read
     /// with these gains: a barometer reads a floor change 0.75-1.1x (the two real HCU walks), so

@@ -67,6 +67,10 @@ public:
     CorrectionResult Finish(const std::vector<double>& t_s, const ProgressCallback& progress = {});
 
     const TrajectoryState& state() const { return state_; }
+    /// The NLL of the current state: the objective of the soft terms over poses [1, size()-1]
+    /// (what the final solve minimises; its hard corridor adds no cost). Leaves the state as it
+    /// is. Precondition: size() >= 2.
+    double Nll();
     /// Window statistics so far (windows, restarts, iterations, ...).
     const CorrectionResult& stats() const { return stats_; }
 
@@ -123,7 +127,7 @@ SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
 
 /// The state of a whole drive for the batch correction: its observations with the dropped-step
 /// episodes repaired (core RepairSpeedEpisodes, model.outlier_accel_mps2), scale and heading-rate
-/// bias segments, the given poses (pose 0: the start).
+/// bias segments, the given poses (pose 0: the start), every scale at 1.
 TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseState> poses,
                            const CorrectorConfig& config, bool fix_height);
 /// The dropped-step repair of BatchState over the steps of the last 2 * the longest episode
