@@ -134,7 +134,7 @@ TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
     EXPECT_FALSE(HasReason(stairs, "walk level"));
 }
 
-TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsPlausible) {
+TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsTheVerdicts) {
     const TraversableField field = TwoFloors();
     const PlanarTrajectory estimate = Walk([](int) { return 0.0; }, 0.1);
     const PlanarTrajectory corrected = Walk([](int) { return 0.0; }, 0.14);  // 1.4x the path
@@ -151,6 +151,22 @@ TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsPlausible) {
                                       false, true, config);
     EXPECT_FALSE(HasReason(b, "plausible scale"));
     EXPECT_EQ(b.level, VerdictLevel::kOk);
+    // 0.85x the path: plausible for the road model (0.8..1.25), below the pedestrian one's 0.9
+    // (a walk squeezed into a corridor beside its own).
+    const PlanarTrajectory squeezed = Walk([](int) { return 0.0; }, 0.085);
+    const Verdict c =
+        JudgeCorrection(estimate, &field, road, Result(squeezed), nullptr, false, true, config);
+    EXPECT_FALSE(HasReason(c, "plausible scale"));
+    const Verdict d = JudgeCorrection(estimate, &field, pedestrian, Result(squeezed), nullptr,
+                                      false, true, config);
+    EXPECT_TRUE(HasReason(d, "beyond the plausible scale"));
+    EXPECT_EQ(d.level, VerdictLevel::kDegraded);
+    // Without a range prior the verdict's own range holds.
+    ModelConfig no_prior = pedestrian;
+    no_prior.scale_range_sigma = 0.0;
+    const Verdict e =
+        JudgeCorrection(estimate, &field, no_prior, Result(squeezed), nullptr, false, true, config);
+    EXPECT_FALSE(HasReason(e, "plausible scale"));
 }
 
 }  // namespace

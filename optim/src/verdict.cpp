@@ -311,11 +311,15 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     JudgeInputJumps(estimate, config, v, f);
     if (!Usable(result.status) || result.corrected.size() != estimate.size()) return v;
     if (scale_estimated) {
-        // What the model itself calls a plausible scale (a pedestrian step model is tens of
-        // percent off) is not judged implausible here.
+        // A model with a plausible scale range (its range prior) says itself which scales an
+        // odometry of its kind has (a pedestrian step model is tens of percent off): beyond them
+        // the map pushed the scale against that prior, as when a walk is squeezed into a
+        // corridor beside its own. Without one, the verdict's range.
         VerdictConfig c = config;
-        c.scale_plausible_min = std::min(c.scale_plausible_min, model.scale_range_min);
-        c.scale_plausible_max = std::max(c.scale_plausible_max, model.scale_range_max);
+        if (model.scale_range_sigma > 0.0) {
+            c.scale_plausible_min = model.scale_range_min;
+            c.scale_plausible_max = model.scale_range_max;
+        }
         c.scale_failed_min = std::min(c.scale_failed_min, c.scale_plausible_min);
         c.scale_failed_max = std::max(c.scale_failed_max, c.scale_plausible_max);
         JudgeScale(estimate, result.step_length_m, result.corrected, model.scale_segment_m, c, v,

@@ -12,6 +12,8 @@
 //  - the step-length scale: the correction explains the drive with a scale no odometry of this
 //    kind has (visual / lidar odometry is a few percent off, not 25 %; pedestrian step models tens
 //    of percent): outside the plausible range the drive was squeezed or stretched onto the map.
+//    The plausible range is the model's own (ModelConfig::scale_range_min/max) when it has a
+//    range prior, else VerdictConfig::scale_plausible_min/max.
 //    Measured against the odometry as the model observed it (CorrectionResult::step_length_m:
 //    dropped-step episodes repaired), so a repaired episode is not counted as a stretch;
 //  - the start: the given anchor puts the leading path far from the map while another heading or
@@ -48,7 +50,8 @@ enum PoseFlag : std::uint8_t {
 };
 
 struct VerdictConfig {
-    /// Plausible step-length scale: outside it the result is degraded...
+    /// Plausible step-length scale: outside it the result is degraded (a model with a scale
+    /// range prior, scale_range_sigma > 0, brings its own range instead)...
     double scale_plausible_min = 0.8;   ///< [-]
     double scale_plausible_max = 1.25;  ///< [-]
     /// ...and outside this wider range it is failed.
