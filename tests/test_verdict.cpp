@@ -137,36 +137,29 @@ TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
 TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsTheVerdicts) {
     const TraversableField field = TwoFloors();
     const PlanarTrajectory estimate = Walk([](int) { return 0.0; }, 0.1);
-    const PlanarTrajectory corrected = Walk([](int) { return 0.0; }, 0.14);  // 1.4x the path
-    ModelConfig road;                                                        // plausible 0.8..1.25
+    const PlanarTrajectory stretched = Walk([](int) { return 0.0; }, 0.14);  // 1.4x the path
+    // 0.85x the path: a walk squeezed into a corridor beside its own.
+    const PlanarTrajectory squeezed = Walk([](int) { return 0.0; }, 0.085);
+    ModelConfig road;  // plausible 0.8..1.25
     road.scale_segment_m = 10.0;
     ModelConfig pedestrian = road;
     pedestrian.scale_range_min = 0.9;
     pedestrian.scale_range_max = 1.5;
-    const VerdictConfig config;
-    const Verdict a =
-        JudgeCorrection(estimate, &field, road, Result(corrected), nullptr, false, true, config);
-    EXPECT_TRUE(HasReason(a, "beyond the plausible scale"));
-    const Verdict b = JudgeCorrection(estimate, &field, pedestrian, Result(corrected), nullptr,
-                                      false, true, config);
+    ModelConfig no_prior = pedestrian;  // without a range prior the verdict's own range holds
+    no_prior.scale_range_sigma = 0.0;
+    auto judge = [&](const ModelConfig& model, const PlanarTrajectory& corrected) {
+        return JudgeCorrection(estimate, &field, model, Result(corrected), nullptr, false, true,
+                               VerdictConfig{});
+    };
+    EXPECT_TRUE(HasReason(judge(road, stretched), "beyond the plausible scale"));
+    const Verdict b = judge(pedestrian, stretched);
     EXPECT_FALSE(HasReason(b, "plausible scale"));
     EXPECT_EQ(b.level, VerdictLevel::kOk);
-    // 0.85x the path: plausible for the road model (0.8..1.25), below the pedestrian one's 0.9
-    // (a walk squeezed into a corridor beside its own).
-    const PlanarTrajectory squeezed = Walk([](int) { return 0.0; }, 0.085);
-    const Verdict c =
-        JudgeCorrection(estimate, &field, road, Result(squeezed), nullptr, false, true, config);
-    EXPECT_FALSE(HasReason(c, "plausible scale"));
-    const Verdict d = JudgeCorrection(estimate, &field, pedestrian, Result(squeezed), nullptr,
-                                      false, true, config);
+    EXPECT_FALSE(HasReason(judge(road, squeezed), "plausible scale"));
+    const Verdict d = judge(pedestrian, squeezed);
     EXPECT_TRUE(HasReason(d, "beyond the plausible scale"));
     EXPECT_EQ(d.level, VerdictLevel::kDegraded);
-    // Without a range prior the verdict's own range holds.
-    ModelConfig no_prior = pedestrian;
-    no_prior.scale_range_sigma = 0.0;
-    const Verdict e =
-        JudgeCorrection(estimate, &field, no_prior, Result(squeezed), nullptr, false, true, config);
-    EXPECT_FALSE(HasReason(e, "plausible scale"));
+    EXPECT_FALSE(HasReason(judge(no_prior, squeezed), "plausible scale"));
 }
 
 }  // namespace
