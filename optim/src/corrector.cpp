@@ -1,7 +1,6 @@
 #include "driftcorr/optim/corrector.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -102,11 +101,10 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 }
 
 // The incremental pass and the refinement live in IncrementalCorrector (shared with the online
-// corrector); the batch case hands it the whole estimate at once, once per start scale
-// (CorrectorConfig::start_scales), and keeps the usable correction of lowest NLL. The covariance
-// is computed for that one only; the times and iterations add up over the starts.
-CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
-                                   const CorrectorConfig& cfg, const ProgressCallback& progress) {
+// corrector); the batch case hands it the whole estimate at once, once per start scale.
+IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
+                                       const TraversableField* field, const CorrectorConfig& cfg,
+                                       CorrectionResult& result, const ProgressCallback& progress) {
     DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectTrajectory needs at least 3 poses");
     DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectTrajectory needs a start scale");
     const bool planar = !field || field->planar();
@@ -114,17 +112,17 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
     CorrectorConfig each = cfg;
     each.compute_covariance = false;
     std::optional<IncrementalCorrector> best;
-    CorrectionResult result;
     std::vector<double> nll;
-    double incremental_s = 0.0, refine_s = 0.0;
-    int iterations = 0;
+    CorrectionResult work;  // the counters and times over every start
     for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
         TrajectoryState state = initial;
         std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
         IncrementalCorrector inc(std::move(state), field, each);
         inc.SolveRemaining(progress);
         CorrectionResult r = inc.Finish(estimate.t_s, progress);
-        incremental_s += r.incremental_s, refine_s += r.refine_s, iterations += r.iterations;
+        work.windows += r.windows, work.window_retries += r.window_retries;
+        work.window_restarts += r.window_restarts, work.iterations += r.iterations;
+        work.incremental_s += r.incremental_s, work.refine_s += r.refine_s;
         nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
         const bool better =
             !best || (Usable(r.status) && (!Usable(result.status) || r.nll < result.nll));
@@ -135,14 +133,17 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
     }
     result.start_scales = cfg.start_scales;
     result.start_nll = std::move(nll);
-    result.incremental_s = incremental_s, result.refine_s = refine_s;
-    result.iterations = iterations;
-    if (Usable(result.status) && cfg.compute_covariance) {
-        const auto t0 = std::chrono::steady_clock::now();
-        result.covariance = ComputeCovariance(best->state(), field, cfg.model, cfg.covariance);
-        result.covariance_s =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
+    result.windows = work.windows, result.window_retries = work.window_retries;
+    result.window_restarts = work.window_restarts, result.iterations = work.iterations;
+    result.incremental_s = work.incremental_s, result.refine_s = work.refine_s;
+    if (Usable(result.status) && cfg.compute_covariance) best->AddCovariance(result);
+    return std::move(*best);
+}
+
+CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
+                                   const CorrectorConfig& cfg, const ProgressCallback& progress) {
+    CorrectionResult result;
+    CorrectFromStarts(estimate, field, cfg, result, progress);
     DiagnoseCorrection(estimate, field, cfg, result);
     return result;
 }

@@ -407,12 +407,14 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
     }
     result.nll = Nll();
     if (Usable(result.status)) result.corrected = ToTrajectory(t_s, state_);
-    if (Usable(result.status) && cfg_.compute_covariance) {
-        const auto t1 = std::chrono::steady_clock::now();
-        result.covariance = ComputeCovariance(state_, field_, cfg_.model, cfg_.covariance);
-        result.covariance_s = SecondsSince(t1);
-    }
+    if (Usable(result.status) && cfg_.compute_covariance) AddCovariance(result);
     return result;
+}
+
+void IncrementalCorrector::AddCovariance(CorrectionResult& result) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    result.covariance = ComputeCovariance(state_, field_, cfg_.model, cfg_.covariance);
+    result.covariance_s = SecondsSince(t0);
 }
 
 }  // namespace driftcorr

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/pipeline/pipeline.h"
@@ -186,9 +187,8 @@ void Evaluate(const std::string& dir) {
         return;
     }
     const CorrectorConfig& cfg = pipeline::CorrectorFor(ps.scenario, config);
-    IncrementalCorrector inc(InitialState(ps.estimate, cfg, ps.field.planar()), &ps.field, cfg);
-    inc.SolveRemaining();
-    const CorrectionResult result = inc.Finish(ps.estimate.t_s);
+    CorrectionResult result;
+    const IncrementalCorrector inc = CorrectFromStarts(ps.estimate, &ps.field, cfg, result);
     const CovarianceResult& cov = result.covariance;
     if (!Usable(result.status) || cov.status != CovarianceStatus::kOk) {
         std::printf("%s: correction %s, covariance %s: %s\n", ps.scenario.name.c_str(),

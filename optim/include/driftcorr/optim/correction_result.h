@@ -23,6 +23,8 @@ struct CorrectionResult {
     SolveStatus status = SolveStatus::kFailed;
     std::string message;         ///< human-readable outcome, names the failing stage
     PlanarTrajectory corrected;  ///< valid only when Usable(status)
+    /// windows, window_retries, window_restarts, iterations, incremental_s and refine_s add up
+    /// over every start scale of the batch correction (start_scales); the rest is the kept one's.
     std::size_t windows = 0;
     std::size_t window_retries = 0;           ///< windows re-solved without hard constraints
     std::size_t window_failures = 0;          ///< windows that failed even then

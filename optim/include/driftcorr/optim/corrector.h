@@ -10,14 +10,25 @@
 
 namespace driftcorr {
 
+class IncrementalCorrector;  // optim/incremental_corrector.h
+
 /// Fills result.warnings from the estimate, the field and the outcome (see CorrectionResult).
 void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
                         const CorrectorConfig& config, CorrectionResult& result);
 
 /// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry
-/// only). Pose 0 is the known initial position and heading and stays fixed.
+/// only). Pose 0 is the known initial position and heading and stays fixed. The whole correction
+/// runs from each of config.start_scales, and the usable one of lowest NLL is kept
+/// (CorrectionResult::start_scales, start_nll, start_chosen); the covariance is the kept one's.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& config,
                                    const ProgressCallback& progress = {});
+
+/// CorrectTrajectory without the warnings (DiagnoseCorrection), for callers that need the kept
+/// start's state as well (its incremental corrector, returned; the outcome into `result`).
+IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
+                                       const TraversableField* field, const CorrectorConfig& config,
+                                       CorrectionResult& result,
+                                       const ProgressCallback& progress = {});
 
 }  // namespace driftcorr

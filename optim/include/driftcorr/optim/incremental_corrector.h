@@ -71,6 +71,9 @@ public:
     /// (what the final solve minimises; its hard corridor adds no cost). Leaves the state as it
     /// is. Precondition: size() >= 2.
     double Nll();
+    /// The covariance of the current state (ComputeCovariance with config.covariance) and its
+    /// time, into `result`.
+    void AddCovariance(CorrectionResult& result) const;
     /// Window statistics so far (windows, restarts, iterations, ...).
     const CorrectionResult& stats() const { return stats_; }
 
