@@ -29,7 +29,7 @@ struct CorrectorConfig {
     /// than one, the whole correction runs from each and the lowest NLL of the corrected
     /// trajectory wins: the scale is what a walk's first windows settle, and a map that lets a
     /// squeezed or stretched path fit as well as the true one (a building's dense corridors)
-    /// keeps the basin it starts in. The scale prior (scale_prior_sigma about 1) is the same
+    /// keeps the basin it starts in. The scale prior (about 1, scale_prior_sigma) is the same
     /// for every start, so their NLLs compare. Time: one correction per start.
     std::vector<double> start_scales = {1.0};
     /// A window whose observed height changes add up to restart_height_change_m or more (it
