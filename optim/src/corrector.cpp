@@ -105,17 +105,18 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
                                        const TraversableField* field, const CorrectorConfig& cfg,
                                        CorrectionResult& result, const ProgressCallback& progress) {
-    DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectTrajectory needs at least 3 poses");
-    DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectTrajectory needs a start scale");
+    DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectFromStarts needs at least 3 poses");
+    DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectFromStarts needs a start scale");
     const bool planar = !field || field->planar();
-    const TrajectoryState initial = InitialState(estimate, cfg, planar);
+    TrajectoryState initial = InitialState(estimate, cfg, planar);
     CorrectorConfig each = cfg;
     each.compute_covariance = false;
     std::optional<IncrementalCorrector> best;
     std::vector<double> nll;
     CorrectionResult work;  // the counters and times over every start
     for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
-        TrajectoryState state = initial;
+        // The last start takes the initial state itself, not a copy.
+        TrajectoryState state = k + 1 < cfg.start_scales.size() ? initial : std::move(initial);
         std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
         IncrementalCorrector inc(std::move(state), field, each);
         inc.SolveRemaining(progress);

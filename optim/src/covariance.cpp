@@ -77,13 +77,6 @@ private:
     long last_stretch_ = -1;
 };
 
-// The estimated path before each pose [m] (the processes run along it).
-std::vector<double> PathPositions(const TrajectoryState& s) {
-    std::vector<double> path_m(s.poses.size(), 0.0);
-    for (std::size_t i = 1; i < s.poses.size(); ++i) path_m[i] = path_m[i - 1] + s.obs[i].length_m;
-    return path_m;
-}
-
 // Makes each map term's residual d(p - b_k) ~ d - grad d . b_k (variance (1 - share)
 // map_sigma^2) and adds, per component, the process b_0 ~ N(0, share map_sigma^2),
 // b_k+1 - rho b_k ~ N(0, (1 - rho^2) share map_sigma^2) with rho = exp(-path between the
@@ -427,7 +420,7 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
     std::vector<LinearisedTerm> terms;
     terms.reserve(6 * n);
     problem.LineariseTerms(x.data(), terms);
-    const std::vector<double> path_m = PathPositions(state);
+    const std::vector<double> path_m = PathPositions(state.obs);  // the processes run along it
     const PathProcess offset = AddMapOffset(path_m, problem, model, config, terms);
     const PathProcess step_error =
         AddStepError(state, path_m, problem, config, offset.first_var + offset.NumVars(), terms);

@@ -283,8 +283,7 @@ IncrementalCorrector::IncrementalCorrector(TrajectoryState state, const Traversa
     DRIFTCORR_CHECK(!state_.poses.empty() && state_.obs.size() == state_.poses.size() &&
                         state_.scale_segment.size() == state_.poses.size(),
                     "inconsistent state");
-    dist_.assign(size(), 0.0);
-    for (std::size_t i = 1; i < size(); ++i) dist_[i] = dist_[i - 1] + state_.obs[i].length_m;
+    dist_ = PathPositions(state_.obs);
 }
 
 TrajectoryState StartState(const PoseState& pose0, bool fix_height, const ModelConfig& model) {

@@ -97,6 +97,12 @@ std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double s
     return seg;
 }
 
+std::vector<double> PathPositions(const std::vector<StepObservation>& obs) {
+    std::vector<double> path_m(obs.size(), 0.0);
+    for (std::size_t i = 1; i < obs.size(); ++i) path_m[i] = path_m[i - 1] + obs[i].length_m;
+    return path_m;
+}
+
 std::vector<int> BiasSegments(const std::vector<StepObservation>& obs, double segment_s) {
     if (!(segment_s > 0.0)) return {};
     std::vector<int> seg(obs.size(), 0);

@@ -50,6 +50,8 @@ constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
 
 /// Assigns scale segments from the estimated path length (one per `segment_m`).
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
+/// The estimated path from pose 0 to each pose [m]: the sum of the step lengths obs[1..i].
+std::vector<double> PathPositions(const std::vector<StepObservation>& obs);
 /// The standard deviations of one step's odometry terms under `model`: its length (looser for a
 /// repaired step), its lateral offset, its heading change and its height change.
 struct StepNoise {
