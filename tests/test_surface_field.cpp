@@ -213,6 +213,28 @@ TEST(SurfaceReaders, PcdCompressedSizesMustMatchTheHeader) {
     ExpectInputError([&] { ReadSurfacePointsPcd(past_end); }, past_end, "binary_compressed sizes");
 }
 
+// PCL's header reader goes on past DATA while lines start with a header key, so a binary body
+// that begins with one would redefine the checked header ("FIELDS x" then a huge SIZE made it
+// allocate 8 GB, found by fuzzing); such a file is refused. Bytes PCL skips (an empty line, a
+// '#') leave the data as declared.
+TEST(SurfaceReaders, PcdDataThatPclWouldReadAsHeaderIsRefused) {
+    const fs::path dir = TestDir("pcd_after_data");
+    auto pcd = [&](const std::string& name, const std::string& first_bytes) {
+        std::string body = first_bytes;
+        body.resize(24, '\0');  // 2 points of 3 floats
+        return WriteText(dir / name,
+                         "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                         "COUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary\n" +
+                             body);
+    };
+    const std::string fields = pcd("fields.pcd", "FIELDS x\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(fields); }, fields, "starts with 'FIELDS'");
+    const std::string points = pcd("points.pcd", "\n#\n POINTS 9\n");
+    ExpectInputError([&] { ReadSurfacePointsPcd(points); }, points, "starts with 'POINTS'");
+    EXPECT_EQ(ReadSurfacePointsPcd(pcd("zeros.pcd", "")).size(), 2u);
+    EXPECT_EQ(ReadSurfacePointsPcd(pcd("hash.pcd", "#\n")).size(), 2u);
+}
+
 // A .bt file in OctoMap's legacy layout (int32 type 3, double resolution, uint32 size, tree):
 // a resolution that is not a sane length is refused (an infinite one made OctoMap convert
 // infinite coordinates to keys, found by fuzzing).

@@ -160,13 +160,47 @@ void PrecheckPcdCompressedBody(const std::string& path, std::istream& in,
     }
 }
 
+// PCL 1.13's PCDReader::readHeader does not stop at the DATA line: it goes on reading lines as
+// header until one does not start with a header key, so data that begins with, say, "SIZE" or
+// "POINTS" redefines the header after it was checked (an 8 GB allocation from a binary body that
+// began "FIELDS x", found by fuzzing). The lines PCL would read after DATA are read here the way
+// it reads them: empty lines, comments and VERSION lines are skipped, a line whose first word
+// starts with another header key is rejected, anything else ends the header. `in` is left where
+// it was.
+void PrecheckPcdAfterData(const std::string& path, std::istream& in, long data_line) {
+    static const char* kStateKeys[] = {"FIELDS", "COLUMNS", "SIZE",      "TYPE",   "COUNT",
+                                       "WIDTH",  "HEIGHT",  "VIEWPOINT", "POINTS", "DATA"};
+    const std::streampos start = in.tellg();
+    long n = data_line;
+    for (std::string line; std::getline(in, line);) {
+        ++n;
+        if (line.empty()) continue;
+        const char* kBlanks = " \t\n\v\f\r";
+        const std::size_t begin = line.find_first_not_of(kBlanks);
+        if (begin == std::string::npos) break;
+        const std::string word = line.substr(begin, line.find_first_of(kBlanks, begin) - begin);
+        if (word[0] == '#' || word.rfind("VERSION", 0) == 0) continue;
+        for (const char* key : kStateKeys) {
+            if (word.rfind(key, 0) == 0) {
+                throw InputError(path, n, "",
+                                 std::string("PCD data: the line after DATA starts with '") + key +
+                                     "', which PCL reads as another header line");
+            }
+        }
+        break;
+    }
+    in.clear();
+    in.seekg(start);
+}
+
 // PCL's PCDReader::readHeader misbehaves on malformed headers: it allocates what the header
 // declares (8 GB for "SIZE 4 5555555555") and corrupts the heap on some garbled lines (found by
 // fuzzing, ASan allocator check in readHeader). So PCL only sees headers validated here first:
 // the keys of the PCD v0.7 header, each at most once, in a sane form (FIELDS, SIZE, TYPE and
 // COUNT of one length; SIZE 1, 2, 4 or 8; TYPE F, I or U; COUNT 1..4096; WIDTH, HEIGHT, POINTS
-// whole numbers with POINTS = WIDTH * HEIGHT; DATA ascii, binary or binary_compressed), and the
-// declared data must fit the file (RequireDeclaredDataFits).
+// whole numbers with POINTS = WIDTH * HEIGHT; DATA ascii, binary or binary_compressed), the
+// declared data must fit the file (RequireDeclaredDataFits) and PCL must stop reading the header
+// at DATA (PrecheckPcdAfterData).
 void PrecheckPcdHeader(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     auto bad = [&](long line, const std::string& what) {
@@ -259,6 +293,7 @@ void PrecheckPcdHeader(const std::string& path) {
         bad(0, "DATA must be ascii, binary or binary_compressed");
     }
     RequireDeclaredDataFits(path, std::size_t(points), std::size_t(step));
+    PrecheckPcdAfterData(path, in, n);
     if (data[0] == "ascii") PrecheckPcdAsciiBody(path, in, n, points, elems);
     if (data[0] == "binary_compressed") PrecheckPcdCompressedBody(path, in, points * step);
 }
