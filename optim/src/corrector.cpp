@@ -106,9 +106,17 @@ IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
                                        const TraversableField* field, const CorrectorConfig& cfg,
                                        CorrectionResult& result, const ProgressCallback& progress) {
     DRIFTCORR_CHECK(estimate.size() >= 3, "CorrectFromStarts needs at least 3 poses");
-    DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectFromStarts needs a start scale");
     const bool planar = !field || field->planar();
-    TrajectoryState initial = InitialState(estimate, cfg, planar);
+    return CorrectFromStarts(InitialState(estimate, cfg, planar), estimate.t_s, field, cfg, result,
+                             progress);
+}
+
+IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vector<double>& t_s,
+                                       const TraversableField* field, const CorrectorConfig& cfg,
+                                       CorrectionResult& result, const ProgressCallback& progress) {
+    DRIFTCORR_CHECK(initial.poses.size() >= 3 && t_s.size() == initial.poses.size(),
+                    "CorrectFromStarts needs at least 3 poses and a time stamp for each");
+    DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectFromStarts needs a start scale");
     CorrectorConfig each = cfg;
     each.compute_covariance = false;
     std::optional<IncrementalCorrector> best;
@@ -120,7 +128,7 @@ IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
         std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
         IncrementalCorrector inc(std::move(state), field, each);
         inc.SolveRemaining(progress);
-        CorrectionResult r = inc.Finish(estimate.t_s, progress);
+        CorrectionResult r = inc.Finish(t_s, progress);
         work.windows += r.windows, work.window_retries += r.window_retries;
         work.window_restarts += r.window_restarts, work.iterations += r.iterations;
         work.incremental_s += r.incremental_s, work.refine_s += r.refine_s;

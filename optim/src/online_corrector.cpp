@@ -437,11 +437,9 @@ CorrectionResult OnlineCorrector::Finish() {
         obs.push_back(entries_[i].step);
         poses.push_back(entries_[i].initial);
     }
-    IncrementalCorrector batch(BatchState(std::move(obs), std::move(poses), cfg_.corrector,
-                                          fix_height_),
-                               field_, cfg_.corrector);
-    batch.SolveRemaining();
-    return batch.Finish(t_s_);
+    CorrectFromStarts(BatchState(std::move(obs), std::move(poses), cfg_.corrector, fix_height_),
+                      t_s_, field_, cfg_.corrector, result);
+    return result;
 }
 
 }  // namespace driftcorr

@@ -3,6 +3,8 @@
 // new poses by composing odometry onto the corrected end, re-solve a trailing window), then
 // refines the whole trajectory in one solve. No I/O: progress goes through a callback, the outcome
 // into CorrectionResult.
+#include <vector>
+
 #include "driftcorr/core/types.h"
 #include "driftcorr/mapping/traversable_field.h"
 #include "driftcorr/optim/correction_result.h"
@@ -11,6 +13,7 @@
 namespace driftcorr {
 
 class IncrementalCorrector;  // optim/incremental_corrector.h
+struct TrajectoryState;      // optim/window_problem.h
 
 /// Fills result.warnings from the estimate, the field and the outcome (see CorrectionResult).
 void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
@@ -27,6 +30,13 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
 /// CorrectTrajectory without the warnings (DiagnoseCorrection), for callers that need the kept
 /// start's state as well (its incremental corrector, returned; the outcome into `result`).
 IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
+                                       const TraversableField* field, const CorrectorConfig& config,
+                                       CorrectionResult& result,
+                                       const ProgressCallback& progress = {});
+/// The same from an initial state (BatchState: observations and poses, pose 0 the start) with
+/// one time stamp per pose, for callers that built the observations themselves (the online
+/// corrector's Finish).
+IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vector<double>& t_s,
                                        const TraversableField* field, const CorrectorConfig& config,
                                        CorrectionResult& result,
                                        const ProgressCallback& progress = {});

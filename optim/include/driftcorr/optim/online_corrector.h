@@ -31,9 +31,10 @@
 //    at its own pace is never held back: when the solver does not keep up with it, outputs chain
 //    from older solves and say so (correction_age, fresh). The wait comes before the pose is
 //    taken, so it delays reading the next input, not the output of a pose already taken.
-//  - Finish() solves the whole trajectory as the batch mode does (CorrectTrajectory's chunks,
-//    windows and hard-corridor refinement over the same observations): the batch result when the
-//    input carries headings (up to Ipopt's own run-to-run variation).
+//  - Finish() solves the whole trajectory as the batch mode does (CorrectFromStarts: from each
+//    start scale, CorrectTrajectory's chunks, windows and hard-corridor refinement over the same
+//    observations, the lowest NLL kept): the batch result when the input carries headings (up to
+//    Ipopt's own run-to-run variation).
 //
 // Headings: with an orientation (PlanarPose::yaw_rad) the observation of a step is causal as in
 // the batch mode. Without one, the batch mode takes a pose's heading from the *next* step
@@ -210,7 +211,8 @@ public:
     PushResult Push(const PlanarPose& pose);
 
     /// Stops the worker (a running solve is finished first) and solves the whole trajectory as
-    /// the batch mode does (chunks, then the hard-corridor refinement if config.corrector.refine).
+    /// the batch mode does (from each start scale, chunks, then the hard-corridor refinement if
+    /// config.corrector.refine; the lowest NLL kept).
     /// Needs >= 3 accepted poses, else status kFailed with a message. Call once.
     CorrectionResult Finish();
 
