@@ -45,6 +45,9 @@ const char* kStreamUsage =
     "default 1; online.max_lag_epochs in --config; 0: never wait, outputs then chain from older\n"
     "solves). Input at its own real-time pace is never held back (online.hold_live_input: true\n"
     "holds it too).\n"
+    "With several start scales (the pedestrian model: 1, 1.25, 1.5) one hypothesis per start runs\n"
+    "the online correction, and each output comes from the one of lowest NLL so far; a switch is\n"
+    "noted on stderr (the output may jump there).\n"
     "Invalid lines (bad numbers, NaN, timestamps not increasing, a last line without newline) are\n"
     "skipped with a warning on stderr naming the line; the stream goes on. A pause of the input\n"
     "longer than online.gap_warn_s is reported once, when it resumes.\n"
@@ -270,6 +273,11 @@ private:
             if (r.gap) msg += r.message;
             Warn(number, msg + "; the stream goes on");
         }
+        if (start_scale_ && r.start_scale != *start_scale_) {
+            Warn(number, "note: outputs now from start scale " + FormatFixed(r.start_scale, 2) +
+                             " (the hypothesis of lowest NLL so far); the output may jump");
+        }
+        start_scale_ = r.start_scale;
         if (r.outside_map != outside_) {
             Warn(number, r.outside_map ? "warning: pose is outside the map; odometry only until "
                                          "it is back on the map"
@@ -288,6 +296,7 @@ private:
     PlanarTrajectory causal_;  ///< every output, in the world plane
     std::size_t skipped_ = 0;
     bool outside_ = false;
+    std::optional<double> start_scale_;  ///< of the last output (OnlineConfig start scales)
     std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]
 };
 

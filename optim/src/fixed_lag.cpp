@@ -164,13 +164,19 @@ std::optional<PosePriorTerm> MarginalPrior(TrajectoryState& s, const Traversable
 
 FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
                                    const TraversableField* field, const CorrectorConfig& config,
-                                   bool marginalise, bool boundary_scale)
+                                   bool marginalise, bool boundary_scale, double start_scale)
     : state_(StartState(pose0, fix_height, config.model)),
       field_(field),
       cfg_(config),
       marginalise_(marginalise),
       boundary_scale_(boundary_scale) {
     dist_.assign(1, 0.0);
+    state_.scales[0] = start_scale;
+}
+
+double FixedLagSmoother::Nll(std::size_t end) {
+    DRIFTCORR_CHECK(end >= 1 && end <= solved_end_, "Nll of poses not solved");
+    return SoftNll(state_, field_, cfg_.model, end);
 }
 
 void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& step) {

@@ -371,12 +371,7 @@ void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {
 
 double IncrementalCorrector::Nll() {
     DRIFTCORR_CHECK(size() >= 2, "Nll needs a step");
-    const std::size_t last = size() - 1;
-    WindowProblem problem(state_, field_, cfg_.model, 1, last, std::vector<std::uint8_t>(last, 0),
-                          WindowUse::kLinearise);
-    std::vector<double> x(problem.NumVariables());
-    problem.InitialPoint(x.data());
-    return problem.Objective(x.data());
+    return SoftNll(state_, field_, cfg_.model, size() - 1);
 }
 
 CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,

@@ -71,19 +71,47 @@ std::string OnlineConfig::Validate() const {
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config)
     : field_(field), cfg_(config), fix_height_(!field || field->planar()) {
     DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");
+    const std::vector<double>& starts = cfg_.corrector.start_scales;
+    if (starts.size() > 1) {
+        for (const double scale : starts) {
+            OnlineConfig one = cfg_;
+            one.corrector.start_scales = {scale};
+            hypotheses_.emplace_back(new OnlineCorrector(field, one, scale, true));
+            hypotheses_.back()->first_at_chunk_ = hypotheses_.size() > 1;
+        }
+        return;
+    }
+    start_scale_ = starts.front();
+    front_scales_ = {start_scale_};
     if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
 }
 
-OnlineCorrector::~OnlineCorrector() {
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stop_ = true;
-    }
-    wake_.notify_all();
-    if (worker_.joinable()) worker_.join();
+OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config,
+                                 double start_scale, bool record_nll)
+    : field_(field),
+      cfg_(config),
+      fix_height_(!field || field->planar()),
+      start_scale_(start_scale),
+      record_nll_(record_nll) {
+    front_scales_ = {start_scale_};
+    if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
 }
 
-std::size_t OnlineCorrector::size() const { return t_s_.size(); }
+OnlineCorrector::~OnlineCorrector() { StopWorker(); }
+
+void OnlineCorrector::StopWorker() {
+    if (!worker_.joinable()) return;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;  // a running solve is finished; no further ones
+    }
+    wake_.notify_all();
+    worker_.join();
+}
+
+std::size_t OnlineCorrector::size() const {
+    return hypotheses_.empty() ? t_s_.size() : hypotheses_.front()->size();
+}
 
 PushResult OnlineCorrector::Reject(PushStatus status, std::string message) const {
     PushResult r;
@@ -139,8 +167,10 @@ double OnlineCorrector::FrontBias(int segment) const {
 }
 
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
+    if (!hypotheses_.empty()) return PushHypotheses(pose);
     if (auto rejected = Validate(pose)) return *rejected;
     PushResult r;
+    r.start_scale = start_scale_;
     if (!t_s_.empty()) outside_s_ += SecondsSince(push_returned_);
     r.ahead_of_real_time = AheadOfRealTime(pose.t_s);
     WaitForSolver(r);
@@ -219,6 +249,56 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
     return r;
 }
 
+PushResult OnlineCorrector::PushHypotheses(const PlanarPose& pose) {
+    std::vector<PushResult> results;
+    results.reserve(hypotheses_.size());
+    double waited_s = 0.0;
+    for (const auto& h : hypotheses_) {
+        results.push_back(h->Push(pose));
+        waited_s += results.back().waited_s;
+    }
+    if (!results.front().Accepted()) return results.front();  // each validates alike
+    ChooseHypothesis();
+    PushResult r = std::move(results[chosen_]);
+    r.waited_s = waited_s;
+    std::lock_guard<std::mutex> lock(mutex_);  // the outputs' ages (the solves': Statistics)
+    ++stats_.poses;
+    if (!r.fresh) ++stats_.stale_poses;
+    if (r.ahead_of_real_time) ++stats_.ahead_poses;
+    stats_.max_age_epochs = std::max(stats_.max_age_epochs, r.correction_age_epochs);
+    stats_.max_age_s = std::max(stats_.max_age_s, r.correction_age_s);
+    return r;
+}
+
+// The latest solve end with an NLL from every hypothesis (ends newer than the last choice only);
+// the hypothesis of lowest NLL there is chosen. Locks every hypothesis's mutex, in order (their
+// workers only ever lock their own).
+void OnlineCorrector::ChooseHypothesis() {
+    std::vector<std::unique_lock<std::mutex>> locks;
+    for (const auto& h : hypotheses_) locks.emplace_back(h->mutex_);
+    const auto& newest = hypotheses_.front()->nll_at_;
+    for (auto it = newest.rbegin(); it != newest.rend() && it->first > chosen_at_; ++it) {
+        std::vector<double> nll;
+        for (const auto& h : hypotheses_) {
+            const auto& at_end = h->nll_at_;
+            const auto found = std::lower_bound(at_end.begin(), at_end.end(), it->first,
+                                                [](const std::pair<std::size_t, double>& a,
+                                                   std::size_t end) { return a.first < end; });
+            if (found == at_end.end() || found->first != it->first) break;
+            nll.push_back(found->second);
+        }
+        if (nll.size() < hypotheses_.size()) continue;
+        // The chosen hypothesis stays unless another's NLL is lower by more than kNllTie
+        // (relative): hypotheses that met in one basin differ only by the solver's rounding,
+        // and switching between them would only add jumps.
+        const std::size_t best =
+            static_cast<std::size_t>(std::min_element(nll.begin(), nll.end()) - nll.begin());
+        if (nll[best] < nll[chosen_] - kNllTie * std::abs(nll[chosen_])) chosen_ = best;
+        chosen_at_ = it->first;
+        return;
+    }
+}
+
 // The input's pace over the last kPaceWindow poses (stream time against wall time outside Push).
 bool OnlineCorrector::AheadOfRealTime(double t_s) {
     pace_.emplace_back(t_s, outside_s_);
@@ -287,7 +367,7 @@ void OnlineCorrector::UpdateSchedule(std::size_t index) {
         chunk_start_path_m_ = path_m_;
         update_path_m_ = path_m_;
         Request(index, true);
-    } else if (cfg_.update_fraction > 0.0 &&
+    } else if (cfg_.update_fraction > 0.0 && !(first_at_chunk_ && last_request_end_ == 0) &&
                path_m_ - update_path_m_ >= cfg_.update_fraction * cfg_.corrector.chunk_m) {
         update_path_m_ = path_m_;
         Request(index, false);
@@ -358,7 +438,7 @@ void OnlineCorrector::RunSolve(std::size_t end, bool restarts) {
     if (!solver_) {
         solver_ = std::make_unique<FixedLagSmoother>(entries.front().initial, fix_height_, field_,
                                                      cfg_.corrector, cfg_.boundary_prior,
-                                                     cfg_.boundary_scale);
+                                                     cfg_.boundary_scale, start_scale_);
         k = 1;
     }
     for (; k < entries.size(); ++k) solver_->Append(entries[k].initial, entries[k].step);
@@ -370,9 +450,12 @@ void OnlineCorrector::RunSolve(std::size_t end, bool restarts) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     const FixedLagSolution solution = solver_->Solve(end, restarts);
+    const bool record = record_nll_ && solution.usable;
+    const double nll = record ? solver_->Nll(solution.end) : 0.0;
     const double solve_s = SecondsSince(t0);
     std::lock_guard<std::mutex> lock(mutex_);
     Merge(solution, solve_s);
+    if (record) nll_at_.emplace_back(solution.end, nll);
     busy_ = false;
     solved_.notify_all();
 }
@@ -411,20 +494,43 @@ void OnlineCorrector::ChainPose(std::size_t i) {
 }
 
 OnlineStatistics OnlineCorrector::Statistics() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return stats_;
+    if (hypotheses_.empty()) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return stats_;
+    }
+    // The ages of the outputs returned (each from its chosen hypothesis), the solves and waits
+    // of every hypothesis.
+    OnlineStatistics all;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        all = stats_;
+    }
+    for (const auto& h : hypotheses_) {
+        const OnlineStatistics s = h->Statistics();
+        all.requests += s.requests;
+        all.solves += s.solves;
+        all.failed_solves += s.failed_solves;
+        all.prior_solves += s.prior_solves;
+        all.solve_s.insert(all.solve_s.end(), s.solve_s.begin(), s.solve_s.end());
+        all.waits += s.waits;
+        all.wait_s += s.wait_s;
+        if (all.worker_error.empty()) all.worker_error = s.worker_error;
+    }
+    return all;
 }
 
 CorrectionResult OnlineCorrector::Finish() {
-    if (worker_.joinable()) {
-        {
-            std::lock_guard<std::mutex> lock(mutex_);
-            stop_ = true;  // a running solve is finished; no further ones
-        }
-        wake_.notify_all();
-        worker_.join();
+    for (const auto& h : hypotheses_) {
+        h->StopWorker();
+        h->finished_ = true;
     }
+    StopWorker();
     finished_ = true;
+    if (hypotheses_.empty()) return SolveWhole(cfg_.corrector);
+    return hypotheses_.front()->SolveWhole(cfg_.corrector);  // every hypothesis has the poses
+}
+
+CorrectionResult OnlineCorrector::SolveWhole(const CorrectorConfig& config) const {
     CorrectionResult result;
     if (t_s_.size() < 3) {
         result.message = "need at least 3 accepted poses, have " + std::to_string(t_s_.size());
@@ -437,8 +543,8 @@ CorrectionResult OnlineCorrector::Finish() {
         obs.push_back(entries_[i].step);
         poses.push_back(entries_[i].initial);
     }
-    CorrectFromStarts(BatchState(std::move(obs), std::move(poses), cfg_.corrector, fix_height_),
-                      t_s_, field_, cfg_.corrector, result);
+    CorrectFromStarts(BatchState(std::move(obs), std::move(poses), config, fix_height_), t_s_,
+                      field_, config, result);
     return result;
 }
 

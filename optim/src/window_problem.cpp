@@ -556,4 +556,13 @@ void WindowProblem::Store(const double* x) const {
     for (int sgm = bias_first_; sgm <= bias_last_; ++sgm) state_.biases[sgm] = x[BiasVar(sgm)];
 }
 
+double SoftNll(TrajectoryState& s, const TraversableField* field, const ModelConfig& model,
+               std::size_t last) {
+    WindowProblem problem(s, field, model, 1, last, std::vector<std::uint8_t>(last, 0),
+                          WindowUse::kLinearise);
+    std::vector<double> x(problem.NumVariables());
+    problem.InitialPoint(x.data());
+    return problem.Objective(x.data());
+}
+
 }  // namespace driftcorr

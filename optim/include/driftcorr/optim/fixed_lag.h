@@ -88,9 +88,11 @@ public:
     /// `marginalise`: the boundary pose carries the marginalised prior; false: it is held fixed
     /// at its last solution (the batch windows' rule). `boundary_scale`: the prior is joint with
     /// the boundary segment's scale (MarginalPrior with_scale).
+    /// `start_scale`: the step-length scale the first segment starts from (later segments start
+    /// from the latest estimate).
     FixedLagSmoother(const PoseState& pose0, bool fix_height, const TraversableField* field,
                      const CorrectorConfig& config, bool marginalise = true,
-                     bool boundary_scale = true);
+                     bool boundary_scale = true, double start_scale = 1.0);
 
     /// Appends pose i = size() with its observation (the step from pose i-1); `initial` gives
     /// its height in planar mode (positions and heading are dead-reckoned when solved).
@@ -103,6 +105,10 @@ public:
     /// first). `restarts`: also try the other step-length scale hypotheses when the solution
     /// looks like a wrong basin. Precondition: solved_end() < end < size().
     FixedLagSolution Solve(std::size_t end, bool restarts);
+
+    /// SoftNll of poses [1, end] as they stand (each at its last solution). Time linear in `end`.
+    /// Precondition: 1 <= end <= solved_end().
+    double Nll(std::size_t end);
 
     /// Window statistics so far (windows, restarts, iterations, failures).
     const CorrectionResult& stats() const { return stats_; }

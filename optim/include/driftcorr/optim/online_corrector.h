@@ -20,6 +20,20 @@
 //  - The worker always works on the newest data: when it is free it solves the window that ends
 //    at the newest accepted pose, whatever was requested before (under a burst the requests in
 //    between are skipped, not queued).
+//  - Start scales (CorrectorConfig::start_scales, more than one: the pedestrian model's): one
+//    hypothesis per start scale runs the whole online correction from that scale (its own solver
+//    and, threaded, its own worker), fed every pose. The hypotheses of the other starts solve
+//    first at the end of the first chunk (the chunk rule above): a window of a few metres holds
+//    no basin but the scale prior's, and every start would meet there (measured on a generated
+//    HCU walk solved from the first pose on: the three starts' NLLs equal at every solve). After
+//    each solve a hypothesis records the NLL of its poses up to that solve's end
+//    (FixedLagSmoother::Nll, time linear in the walk: the batch's score over the part solved so
+//    far). A Push returns the output of the hypothesis of lowest NLL at the
+//    latest solve end that every hypothesis has reached (the first start until there is one),
+//    so the output may switch to another hypothesis, as the batch keeps another start.
+//    PushResult::start_scale says which; another hypothesis replaces the chosen one only when its
+//    NLL is lower by more than kNllTie. Statistics() give the ages of the outputs returned and
+//    add up the hypotheses' solves and waits.
 //  - Freshness: every PushResult says which solve its pose chains from (the age in epochs and in
 //    stream seconds) and whether that is the newest solve the schedule had asked for before the
 //    pose (fresh).
@@ -161,8 +175,11 @@ struct PushResult {
     /// The output chains from the newest solve the schedule had requested before this pose
     /// (false: the solver was behind; the pose was composed onto an older solve).
     bool fresh = true;
-    /// Time Push waited for the solver before taking the pose (back-pressure) [s]
+    /// Time Push waited for the solver before taking the pose (back-pressure) [s]; with start
+    /// scales, over every hypothesis
     double waited_s = 0.0;
+    /// The start scale of the hypothesis this output comes from (see "Start scales" above).
+    double start_scale = 1.0;
     /// The input arrived faster than real time when this pose was pushed (see above).
     bool ahead_of_real_time = false;
     /// Covariance of the output pose: the solved pose's it chains from (FixedLagSolution::
@@ -198,6 +215,9 @@ public:
     /// kPaceWindow poses advanced more than kAheadFactor times the wall time (outside Push).
     static constexpr std::size_t kPaceWindow = 10;
     static constexpr double kAheadFactor = 2.0;
+    /// With start scales: another hypothesis replaces the chosen one only when its NLL is lower
+    /// by more than this share of the chosen one's (see "Start scales" above).
+    static constexpr double kNllTie = 1e-3;
 
     /// `field` may be null (odometry only) and must outlive this object. Precondition:
     /// config.Validate() is empty.
@@ -220,6 +240,10 @@ public:
     OnlineStatistics Statistics() const;
 
 private:
+    /// One hypothesis of a corrector with several start scales: starts from `start_scale` and
+    /// records the NLL after each solve.
+    OnlineCorrector(const TraversableField* field, const OnlineConfig& config, double start_scale,
+                    bool record_nll);
     struct Entry {  ///< one accepted pose, as handed to the solver
         PoseState initial;
         StepObservation step;
@@ -237,6 +261,12 @@ private:
     void WaitForSolver(PushResult& r);
     void WorkerLoop();
     void RunSolve(std::size_t end, bool restarts);
+    void StopWorker();  ///< a running solve is finished first
+    /// With hypotheses: Push to each, return the output of the chosen one (ChooseHypothesis).
+    PushResult PushHypotheses(const PlanarPose& pose);
+    void ChooseHypothesis();
+    /// The batch correction (CorrectFromStarts under `config`) of every accepted pose.
+    CorrectionResult SolveWhole(const CorrectorConfig& config) const;
     void Merge(const FixedLagSolution& solution, double solve_s);
     void Recompose(std::size_t end);
     void ChainPose(std::size_t i);
@@ -245,6 +275,14 @@ private:
     OnlineConfig cfg_;
     bool fix_height_ = true;
     bool finished_ = false;
+    double start_scale_ = 1.0;
+    bool record_nll_ = false;
+    bool first_at_chunk_ = false;  ///< the first solve at the chunk rule, none before it
+
+    // With more than one start scale: the hypotheses (this object then only forwards to them).
+    std::vector<std::unique_ptr<OnlineCorrector>> hypotheses_;
+    std::size_t chosen_ = 0;     ///< the hypothesis whose outputs Push returns
+    std::size_t chosen_at_ = 0;  ///< the solve end it was chosen at (0: not yet)
 
     // Push-thread-only state (never touched by the worker).
     std::optional<bool> has_yaw_;
@@ -283,6 +321,8 @@ private:
     bool chain_sigma_ok_ = true;
     bool stop_ = false;
     OnlineStatistics stats_;              ///< worker's part (solves); Push's part below
+    /// record_nll_: (end, NLL of poses [1, end]) after each usable solve, ends increasing.
+    std::vector<std::pair<std::size_t, double>> nll_at_;
 
     // Worker-only.
     std::unique_ptr<FixedLagSmoother> solver_;

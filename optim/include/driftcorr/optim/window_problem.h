@@ -189,4 +189,10 @@ private:
     mutable std::vector<std::optional<TraversableSample>> cache_samples_;
 };
 
+/// The soft objective (the NLL without the hard corridor constraint) of poses [1, last] of `s` at
+/// its values, pose 0 fixed: the score that compares corrections of one trajectory from different
+/// start scales. Precondition: 1 <= last < s.poses.size().
+double SoftNll(TrajectoryState& s, const TraversableField* field, const ModelConfig& model,
+               std::size_t last);
+
 }  // namespace driftcorr
