@@ -281,39 +281,8 @@ TEST(EndToEndIndoor, TheStartScaleOfLowestNllIsKept) {
     EXPECT_LT(all.after->ate_m, 0.5 * from_one.after->ate_m);
 }
 
-// The online corrector's Finish() is the batch correction, its start scales included: on the walk
-// above, where the start decides the basin, it keeps the start the batch keeps and ends as close
-// to the truth.
-TEST(EndToEndIndoor, OnlineFinishKeepsTheBatchStartScale) {
-    const std::string walk = GeneratedHcuWalk(26);
-    if (walk.empty()) GTEST_SKIP() << "real data not present: hcu_eight";
-    const pipeline::PipelineConfig config;
-    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(walk, config);
-    ASSERT_TRUE(ps.ground_truth);
-    const CorrectionResult batch = pipeline::Correct(ps, config);
-    OnlineConfig oc = config.online;
-    oc.corrector = pipeline::CorrectorFor(ps.scenario, config);
-    oc.synchronous = true;
-    OnlineCorrector online(&ps.field, oc);
-    const PlanarTrajectory& est = ps.estimate;
-    for (std::size_t i = 0; i < est.size(); ++i) {
-        PlanarPose pose{est.t_s[i], est.p_en[i], est.up_m[i], std::nullopt};
-        if (est.HasYaw()) pose.yaw_rad = est.yaw_rad[i];
-        ASSERT_TRUE(online.Push(pose).Accepted()) << "pose " << i;
-    }
-    const CorrectionResult smoothed = online.Finish();
-    ASSERT_TRUE(Usable(batch.status) && Usable(smoothed.status)) << smoothed.message;
-    EXPECT_EQ(smoothed.start_scales, batch.start_scales);
-    EXPECT_EQ(smoothed.start_chosen, batch.start_chosen);
-    EXPECT_NE(smoothed.start_chosen, 0u);
-    const double batch_ate = ComputeMetrics(batch.corrected, *ps.ground_truth).ate_m;
-    const double smoothed_ate = ComputeMetrics(smoothed.corrected, *ps.ground_truth).ate_m;
-    std::printf("batch ATE %.2f m, online Finish() %.2f m\n", batch_ate, smoothed_ate);
-    EXPECT_LE(smoothed_ate, batch_ate + 0.1);
-}
-
-// The causal output of the online corrector fed `est` pose by pose, the start scale of each output
-// and the corrector's statistics.
+// The causal output of the online corrector fed the estimate pose by pose, the start scale of each
+// output, the corrector's statistics and its Finish().
 struct OnlineRun {
     PlanarTrajectory causal;
     std::vector<double> start_scale;
@@ -338,6 +307,30 @@ OnlineRun RunOnlineOn(const pipeline::PreparedScenario& ps, const OnlineConfig& 
     run.stats = online.Statistics();
     run.smoothed = online.Finish();
     return run;
+}
+
+// The online corrector's Finish() is the batch correction, its start scales included: on the walk
+// above, where the start decides the basin, it keeps the start the batch keeps and ends as close
+// to the truth.
+TEST(EndToEndIndoor, OnlineFinishKeepsTheBatchStartScale) {
+    const std::string walk = GeneratedHcuWalk(26);
+    if (walk.empty()) GTEST_SKIP() << "real data not present: hcu_eight";
+    const pipeline::PipelineConfig config;
+    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(walk, config);
+    ASSERT_TRUE(ps.ground_truth);
+    const CorrectionResult batch = pipeline::Correct(ps, config);
+    OnlineConfig oc = config.online;
+    oc.corrector = pipeline::CorrectorFor(ps.scenario, config);
+    oc.synchronous = true;
+    const CorrectionResult smoothed = RunOnlineOn(ps, oc).smoothed;
+    ASSERT_TRUE(Usable(batch.status) && Usable(smoothed.status)) << smoothed.message;
+    EXPECT_EQ(smoothed.start_scales, batch.start_scales);
+    EXPECT_EQ(smoothed.start_chosen, batch.start_chosen);
+    EXPECT_NE(smoothed.start_chosen, 0u);
+    const double batch_ate = ComputeMetrics(batch.corrected, *ps.ground_truth).ate_m;
+    const double smoothed_ate = ComputeMetrics(smoothed.corrected, *ps.ground_truth).ate_m;
+    std::printf("batch ATE %.2f m, online Finish() %.2f m\n", batch_ate, smoothed_ate);
+    EXPECT_LE(smoothed_ate, batch_ate + 0.1);
 }
 
 // The online corrector from the pedestrian start scales, one hypothesis each, on the walk above
