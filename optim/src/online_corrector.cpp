@@ -76,23 +76,27 @@ OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConf
         for (const double scale : starts) {
             OnlineConfig one = cfg_;
             one.corrector.start_scales = {scale};
-            hypotheses_.emplace_back(new OnlineCorrector(field, one, scale, true));
-            hypotheses_.back()->first_at_chunk_ = hypotheses_.size() > 1;
+            const bool first_at_chunk = !hypotheses_.empty();
+            hypotheses_.emplace_back(new OnlineCorrector(field, one, scale, first_at_chunk));
         }
         return;
     }
     start_scale_ = starts.front();
-    front_scales_ = {start_scale_};
-    if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
+    StartSolving();
 }
 
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config,
-                                 double start_scale, bool record_nll)
+                                 double start_scale, bool first_at_chunk)
     : field_(field),
       cfg_(config),
       fix_height_(!field || field->planar()),
       start_scale_(start_scale),
-      record_nll_(record_nll) {
+      record_nll_(true),
+      first_at_chunk_(first_at_chunk) {
+    StartSolving();
+}
+
+void OnlineCorrector::StartSolving() {
     front_scales_ = {start_scale_};
     if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
 }
@@ -166,13 +170,21 @@ double OnlineCorrector::FrontBias(int segment) const {
                                                             : front_biases_.back();
 }
 
+// The input's pace is measured here once, for the hypotheses too (each one's own Push time would
+// count the others' as time outside Push).
 PushResult OnlineCorrector::Push(const PlanarPose& pose) {
-    if (!hypotheses_.empty()) return PushHypotheses(pose);
-    if (auto rejected = Validate(pose)) return *rejected;
+    const OnlineCorrector& first = hypotheses_.empty() ? *this : *hypotheses_.front();
+    if (auto rejected = first.Validate(pose)) return *rejected;  // the hypotheses' alike
+    const bool ahead = AheadOfRealTime(pose.t_s);
+    PushResult r = hypotheses_.empty() ? Take(pose, ahead) : TakeHypotheses(pose, ahead);
+    push_returned_ = std::chrono::steady_clock::now();
+    return r;
+}
+
+PushResult OnlineCorrector::Take(const PlanarPose& pose, bool ahead_of_real_time) {
     PushResult r;
     r.start_scale = start_scale_;
-    if (!t_s_.empty()) outside_s_ += SecondsSince(push_returned_);
-    r.ahead_of_real_time = AheadOfRealTime(pose.t_s);
+    r.ahead_of_real_time = ahead_of_real_time;
     WaitForSolver(r);
     if (!has_yaw_) has_yaw_ = pose.yaw_rad.has_value();
     double yaw_u = last_yaw_u_;
@@ -245,19 +257,17 @@ PushResult OnlineCorrector::Push(const PlanarPose& pose) {
             "gap of " + FormatFixed(entry.step.dt_s, 3) + " s since the previous pose";
         r.message = r.message.empty() ? msg : msg + "; " + r.message;
     }
-    push_returned_ = std::chrono::steady_clock::now();
     return r;
 }
 
-PushResult OnlineCorrector::PushHypotheses(const PlanarPose& pose) {
+PushResult OnlineCorrector::TakeHypotheses(const PlanarPose& pose, bool ahead_of_real_time) {
     std::vector<PushResult> results;
     results.reserve(hypotheses_.size());
     double waited_s = 0.0;
     for (const auto& h : hypotheses_) {
-        results.push_back(h->Push(pose));
+        results.push_back(h->Take(pose, ahead_of_real_time));
         waited_s += results.back().waited_s;
     }
-    if (!results.front().Accepted()) return results.front();  // each validates alike
     ChooseHypothesis();
     PushResult r = std::move(results[chosen_]);
     r.waited_s = waited_s;
@@ -299,8 +309,10 @@ void OnlineCorrector::ChooseHypothesis() {
     }
 }
 
-// The input's pace over the last kPaceWindow poses (stream time against wall time outside Push).
+// The input's pace over the last kPaceWindow poses (stream time against wall time outside Push),
+// the wall time since the last accepted Push returned added first.
 bool OnlineCorrector::AheadOfRealTime(double t_s) {
+    if (!pace_.empty()) outside_s_ += SecondsSince(push_returned_);
     pace_.emplace_back(t_s, outside_s_);
     if (pace_.size() > kPaceWindow + 1) pace_.pop_front();
     if (pace_.size() < 3) return false;  // two intervals at least

@@ -240,10 +240,11 @@ public:
     OnlineStatistics Statistics() const;
 
 private:
-    /// One hypothesis of a corrector with several start scales: starts from `start_scale` and
-    /// records the NLL after each solve.
+    /// One hypothesis of a corrector with several start scales: starts from `start_scale`,
+    /// records the NLL after each solve and, with `first_at_chunk`, first solves at the chunk rule.
     OnlineCorrector(const TraversableField* field, const OnlineConfig& config, double start_scale,
-                    bool record_nll);
+                    bool first_at_chunk);
+    void StartSolving();  ///< the solver's first scale and, threaded, the worker
     struct Entry {  ///< one accepted pose, as handed to the solver
         PoseState initial;
         StepObservation step;
@@ -262,8 +263,10 @@ private:
     void WorkerLoop();
     void RunSolve(std::size_t end, bool restarts);
     void StopWorker();  ///< a running solve is finished first
-    /// With hypotheses: Push to each, return the output of the chosen one (ChooseHypothesis).
-    PushResult PushHypotheses(const PlanarPose& pose);
+    /// Takes a validated pose (Push: validation, the input's pace, then this).
+    PushResult Take(const PlanarPose& pose, bool ahead_of_real_time);
+    /// With hypotheses: Take in each, return the output of the chosen one (ChooseHypothesis).
+    PushResult TakeHypotheses(const PlanarPose& pose, bool ahead_of_real_time);
     void ChooseHypothesis();
     /// The batch correction (CorrectFromStarts under `config`) of every accepted pose.
     CorrectionResult SolveWhole(const CorrectorConfig& config) const;
