@@ -3,6 +3,7 @@
 // scale the model declares.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -132,6 +133,58 @@ TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
     const Verdict stairs =
         JudgeCorrection(climb, &field, model, Result(climb), nullptr, false, false, config);
     EXPECT_FALSE(HasReason(stairs, "walk level"));
+}
+
+// Three floors 4 m apart, joined by a lift at x 2..4; the middle floor spans x 0..middle_x_m.
+TraversableField ThreeFloors(double middle_x_m) {
+    std::vector<IndoorFloor> floors(3);
+    for (int f = 0; f < 3; ++f) {
+        floors[f].floor_z_m = 4.0 * f;
+        floors[f].walkable.push_back(Rect(0, 0, f == 1 ? middle_x_m : 40, 10));
+        floors[f].lifts.push_back(Rect(2, 4, 4, 6));
+    }
+    IndoorFieldConfig c;
+    c.resolution_z_m = 0.25;
+    c.vertical_tolerance_m = 0.25;
+    return BuildIndoorField(floors, c);
+}
+
+// A lift ride from the ground floor to the top one (8 m over 60-80 s), then 120 s on the top
+// floor. A barometer that reads the ride 0.8x (6.4 m) reads the middle floor (4 m) as well: the
+// verdict says the floor is not determined, unless the map tells the floors apart.
+TEST(VerdictIndoor, AFloorThatAnotherFloorExplainsAsWellIsNotOk) {
+    auto ride = [](double gain) {
+        return Walk([gain](int k) { return gain * std::clamp(0.4 * (k - 60), 0.0, 8.0); });
+    };
+    const PlanarTrajectory corrected = ride(1.0);
+    ModelConfig model;
+    model.map_giveup_m = 3.0;  // the pedestrian model's reach
+    VerdictConfig config;
+    config.floor_heights_m = {0.0, 4.0, 8.0};
+    auto judge = [&](const TraversableField& field, const PlanarTrajectory& estimate) {
+        return JudgeCorrection(estimate, &field, model, Result(corrected), nullptr, false, false,
+                               config);
+    };
+    const TraversableField same_floors = ThreeFloors(40.0);
+    const Verdict short_reading = judge(same_floors, ride(0.8));
+    EXPECT_EQ(short_reading.level, VerdictLevel::kDegraded);
+    EXPECT_TRUE(HasReason(short_reading, "the floor is not determined over 61 % of the walk"))
+        << short_reading.reasons.front();
+    EXPECT_TRUE(HasReason(short_reading, "read the floor at 4.0 m as well"));
+    EXPECT_TRUE(short_reading.pose_flags[150] & kPoseFloorAmbiguous);
+    EXPECT_FALSE(short_reading.pose_flags[30] & kPoseFloorAmbiguous);
+    // Read 1.0x, the ride is too long for the middle floor (4 m short of 8 m is beyond
+    // 1.5 m + 20 %).
+    const Verdict exact = judge(same_floors, ride(1.0));
+    EXPECT_EQ(exact.level, VerdictLevel::kOk) << exact.reasons.front();
+    EXPECT_FALSE(exact.pose_flags[150] & kPoseFloorAmbiguous);
+    // The middle floor ends at x 10, and the walk stays at x 17-35 there: the map tells them
+    // apart.
+    const Verdict apart = judge(ThreeFloors(10.0), ride(0.8));
+    EXPECT_EQ(apart.level, VerdictLevel::kOk) << apart.reasons.front();
+    // Without the floors' heights there is no check.
+    config.floor_heights_m.clear();
+    EXPECT_EQ(judge(same_floors, ride(0.8)).level, VerdictLevel::kOk);
 }
 
 TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsTheVerdicts) {

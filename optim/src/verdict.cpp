@@ -150,6 +150,14 @@ void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, dou
     }
 }
 
+// How far a corrected height change d_cor lies beyond the estimate's d_est over the same span
+// (VerdictConfig::height_disagree_m, height_disagree_rel, height_short_rel); <= 0: they agree.
+double HeightChangeExcess(double d_cor, double d_est, const VerdictConfig& c) {
+    const double rel =
+        std::abs(d_cor) < std::abs(d_est) ? c.height_short_rel : c.height_disagree_rel;
+    return std::abs(d_cor - d_est) - (c.height_disagree_m + rel * std::abs(d_est));
+}
+
 // The corrected height change against the estimate's over every height_window_s (VerdictConfig).
 void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor,
                         const VerdictConfig& c, Verdict& v, Findings& f) {
@@ -160,10 +168,7 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
         j = std::max(j, i + 1);
         while (j + 1 < est.size() && est.t_s[j] < est.t_s[i] + c.height_window_s) ++j;
         const double d_est = est.up_m[j] - est.up_m[i], d_cor = cor.up_m[j] - cor.up_m[i];
-        const double rel =
-            std::abs(d_cor) < std::abs(d_est) ? c.height_short_rel : c.height_disagree_rel;
-        const double excess =
-            std::abs(d_cor - d_est) - (c.height_disagree_m + rel * std::abs(d_est));
+        const double excess = HeightChangeExcess(d_cor, d_est, c);
         if (excess <= 0.0) {
             in_episode = false;
             continue;
@@ -236,6 +241,183 @@ void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor
         " s in a row, while the estimate's height stays level): between floors, where only "
         "stairs or a lift could hold them; their floor is not supported";
     f.ByShare(share, c.off_map_failed_share, what);
+}
+
+bool HeightChangeAgrees(double d_cor, double d_est, const VerdictConfig& c) {
+    return HeightChangeExcess(d_cor, d_est, c) <= 0.0;
+}
+
+// A stay on one floor: the corrected poses [first, last] that lie within off_floor_m of floor
+// `floor` (an index into floor_heights_m) for at least min_s, with no such stay on another floor
+// between them. Shorter visits (a lift or a stair flight passing a floor) are not stays.
+struct FloorStay {
+    int floor = 0;
+    std::size_t first = 0, last = 0;
+};
+
+std::vector<FloorStay> FloorStays(const PlanarTrajectory& cor, const VerdictConfig& c,
+                                  double min_s) {
+    std::vector<FloorStay> visits;
+    for (std::size_t i = 0; i < cor.size(); ++i) {
+        int floor = -1;
+        for (std::size_t k = 0; k < c.floor_heights_m.size(); ++k) {
+            if (std::abs(cor.up_m[i] - c.floor_heights_m[k]) <= c.off_floor_m) floor = int(k);
+        }
+        if (floor < 0) continue;
+        if (!visits.empty() && visits.back().floor == floor) {
+            visits.back().last = i;
+        } else {
+            visits.push_back({floor, i, i});
+        }
+    }
+    std::vector<FloorStay> stays;
+    for (const FloorStay& v : visits) {
+        if (cor.t_s[v.last] - cor.t_s[v.first] < min_s) continue;
+        if (!stays.empty() && stays.back().floor == v.floor) {
+            stays.back().last = v.last;
+        } else {
+            stays.push_back(v);
+        }
+    }
+    return stays;
+}
+
+// Mean estimated height over the poses of [first, last] within span_s of pose `from` (the first
+// or the last of them).
+double MeanHeightNear(const PlanarTrajectory& est, std::size_t first, std::size_t last,
+                      std::size_t from, double span_s) {
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = first; i <= last; ++i) {
+        if (std::abs(est.t_s[i] - est.t_s[from]) > span_s) continue;
+        sum += est.up_m[i];
+        ++n;
+    }
+    return n > 0 ? sum / double(n) : est.up_m[from];
+}
+
+// Share of the corrected poses [first, last], moved up by shift_m and horizontally by `offset`,
+// farther than reach_m from every walkway, and their RMS distance (each capped at reach_m).
+struct ShiftedFit {
+    double off_share = 1.0;
+    double rms_m = 0.0;
+};
+
+ShiftedFit FitShifted(const PlanarTrajectory& cor, const TraversableField& field, std::size_t first,
+                      std::size_t last, double shift_m, const Eigen::Vector2d& offset,
+                      double reach_m) {
+    double sum = 0.0;
+    std::size_t off = 0;
+    for (std::size_t i = first; i <= last; ++i) {
+        const Eigen::Vector2d p = cor.p_en[i] + offset;
+        const auto d = field.CentreValue(Eigen::Vector3d(p.x(), p.y(), cor.up_m[i] + shift_m));
+        const double m = d ? std::min(std::abs(*d), reach_m) : reach_m;
+        off += !d || std::abs(*d) > reach_m;
+        sum += m * m;
+    }
+    const double n = double(last - first + 1);
+    return {double(off) / n, std::sqrt(sum / n)};
+}
+
+// The best fit (fewest poses off the map, then the lowest RMS) of the poses [first, last] moved
+// up by shift_m and horizontally by any offset on a 0.5 m grid within reach_m: on another floor
+// the correction would have moved the path to that floor's walkways, by up to the map term's
+// reach.
+ShiftedFit BestShiftedFit(const PlanarTrajectory& cor, const TraversableField& field,
+                          std::size_t first, std::size_t last, double shift_m, double reach_m) {
+    constexpr double kGridM = 0.5;
+    const int n = int(std::floor(reach_m / kGridM));
+    ShiftedFit best;
+    best.rms_m = reach_m;
+    for (int ox = -n; ox <= n; ++ox) {
+        for (int oy = -n; oy <= n; ++oy) {
+            if (std::hypot(ox, oy) * kGridM > reach_m) continue;
+            const ShiftedFit fit = FitShifted(cor, field, first, last, shift_m,
+                                              kGridM * Eigen::Vector2d(ox, oy), reach_m);
+            if (fit.off_share < best.off_share ||
+                (fit.off_share == best.off_share && fit.rms_m < best.rms_m)) {
+                best = fit;
+            }
+        }
+    }
+    return best;
+}
+
+// A stay on a floor after a floor change that another floor explains as well: the estimate's
+// height changes into and out of the stay agree with that floor (HeightChangeAgrees), and the
+// stay's path, shifted by at most the map's reach, lies on that floor's map as well as the
+// verdict asks of any result (at most off_map_degraded_share of its poses beyond the reach).
+// The barometer cannot tell such floors apart (a lift ride read 0.8x fits the floor below the
+// true one as well), nor can the map: the stay's floor is not supported. Stays (FloorStays)
+// last level_window_s / 2 or more; those whose own floor the height changes deny are not judged;
+// the walk's first stay is the start's floor.
+void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory& cor,
+                            const TraversableField& field, const ModelConfig& model,
+                            const VerdictConfig& c, Verdict& verdict, Findings& f) {
+    const double span_s = 0.5 * c.level_window_s;
+    const std::vector<FloorStay> visits = FloorStays(cor, c, span_s);
+    const std::vector<double>& z = c.floor_heights_m;
+    std::size_t flagged = 0, stays = 0;
+    std::string worst;
+    double worst_s = 0.0;
+    for (std::size_t k = 1; k < visits.size(); ++k) {
+        const FloorStay& v = visits[k];
+        const FloorStay& prev = visits[k - 1];
+        const double stay_s = est.t_s[v.last] - est.t_s[v.first];
+        const double in_est = MeanHeightNear(est, v.first, v.last, v.first, span_s) -
+                              MeanHeightNear(est, prev.first, prev.last, prev.last, span_s);
+        const FloorStay* next = k + 1 < visits.size() ? &visits[k + 1] : nullptr;
+        const double out_est =
+            next ? MeanHeightNear(est, next->first, next->last, next->first, span_s) -
+                       MeanHeightNear(est, v.first, v.last, v.last, span_s)
+                 : 0.0;
+        // A chosen floor the height changes deny is JudgeHeightChanges' finding.
+        if (!HeightChangeAgrees(z[v.floor] - z[prev.floor], in_est, c) ||
+            (next && !HeightChangeAgrees(z[next->floor] - z[v.floor], out_est, c))) {
+            continue;
+        }
+        for (std::size_t a = 0; a < z.size(); ++a) {
+            if (int(a) == v.floor || !HeightChangeAgrees(z[a] - z[prev.floor], in_est, c)) {
+                continue;
+            }
+            if (next && !HeightChangeAgrees(z[next->floor] - z[a], out_est, c)) continue;
+            const ShiftedFit other =
+                BestShiftedFit(cor, field, v.first, v.last, z[a] - z[v.floor], model.map_giveup_m);
+            if (other.off_share > c.off_map_degraded_share) continue;
+            ++stays;
+            for (std::size_t i = v.first; i <= v.last; ++i) {
+                flagged += (verdict.pose_flags[i] & kPoseFloorAmbiguous) == 0;
+                verdict.pose_flags[i] |= kPoseFloorAmbiguous;
+            }
+            if (stay_s > worst_s) {
+                worst_s = stay_s;
+                const ShiftedFit chosen = FitShifted(cor, field, v.first, v.last, 0.0,
+                                                     Eigen::Vector2d::Zero(), model.map_giveup_m);
+                auto signed_m = [](double m) { return (m > 0.0 ? "+" : "") + FormatFixed(m, 1); };
+                const std::string heights = next ? "into and out of it (" + signed_m(in_est) +
+                                                       " m and " + signed_m(out_est) + " m)"
+                                                 : "into it (" + signed_m(in_est) + " m)";
+                worst = "from " + FormatFixed(est.t_s[v.first] - est.t_s[0], 0) + " s to " +
+                        FormatFixed(est.t_s[v.last] - est.t_s[0], 0) +
+                        " s the correction stands on the floor at " + FormatFixed(z[v.floor], 1) +
+                        " m; the estimate's height changes " + heights + " read the floor at " +
+                        FormatFixed(z[a], 1) + " m as well, and the path, shifted by at most " +
+                        FormatFixed(model.map_giveup_m, 1) + " m, lies RMS " +
+                        FormatFixed(other.rms_m, 2) + " m from that floor's walkways, " +
+                        FormatPercent(other.off_share) + " of it beyond their reach (" +
+                        FormatFixed(chosen.rms_m, 2) + " m and " + FormatPercent(chosen.off_share) +
+                        " on the chosen floor)";
+            }
+            break;
+        }
+    }
+    if (stays == 0) return;
+    const double share = double(flagged) / double(cor.size());
+    // Degraded whatever the share: the correction stands on one of two floors that the walk
+    // supports alike, and the flags say where.
+    f.Degraded("the floor is not determined over " + FormatPercent(share) + " of the walk (" +
+               std::to_string(stays) + " stay(s); longest: " + worst +
+               "): neither the barometer nor the map tells the two floors apart");
 }
 
 std::string Placement(const AnchorPlacement& p) {
@@ -330,6 +512,7 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
         if (!field->planar()) JudgeHeightChanges(estimate, result.corrected, config, v, f);
         if (!field->planar() && !config.floor_heights_m.empty()) {
             JudgeLevelOffFloor(estimate, result.corrected, config, v, f);
+            JudgeFloorAlternatives(estimate, result.corrected, *field, model, config, v, f);
         }
     }
     return v;

@@ -22,6 +22,8 @@
 //  - input jumps: the estimate's speed changes faster than any platform can accelerate (frame-to-
 //    frame odometry dropping or doubling motion), which a smooth scale cannot follow;
 //  - off the map: corrected poses farther from every traversable place than the map term reaches.
+//  - 3D: corrected height changes the estimate's deny, level walking between floors, and a floor
+//    that another floor explains as well (neither the barometer nor the map tells them apart).
 // No I/O.
 #include <cstdint>
 #include <optional>
@@ -47,6 +49,9 @@ enum PoseFlag : std::uint8_t {
     /// a corrected height the estimate denies (a floor change it did not make, level walking
     /// between floors)
     kPoseHeightDisagrees = 8,
+    /// on a floor that another floor explains as well (the barometer's floor change reads both,
+    /// and the path lies as near both floors' walkways)
+    kPoseFloorAmbiguous = 16,
 };
 
 struct VerdictConfig {
