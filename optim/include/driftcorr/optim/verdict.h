@@ -85,6 +85,11 @@ struct VerdictConfig {
     /// the estimate's height stays within level_height_m over level_window_s around them walk
     /// level between floors (a stair hall or shaft at a height no floor has): degraded when such
     /// poses span level_window_s / 2 in a row, failed beyond off_map_failed_share of the poses.
+    /// The same floors: a stay of level_window_s / 2 or more on a floor after a floor change is
+    /// not determined (degraded, kPoseFloorAmbiguous) when the estimate's height changes into
+    /// and out of it agree with another floor as well (the tolerances above) and the stay's path,
+    /// shifted by up to the map term's reach, has at most off_map_degraded_share of its poses
+    /// beyond that floor's reach.
     std::vector<double> floor_heights_m;
     double off_floor_m = 1.0;       ///< [m]
     double level_window_s = 20.0;   ///< [s]
