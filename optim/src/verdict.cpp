@@ -355,18 +355,18 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
                             const TraversableField& field, const ModelConfig& model,
                             const VerdictConfig& c, Verdict& verdict, Findings& f) {
     const double span_s = 0.5 * c.level_window_s;
-    const std::vector<FloorStay> visits = FloorStays(cor, c, span_s);
+    const std::vector<FloorStay> stays = FloorStays(cor, c, span_s);
     const std::vector<double>& z = c.floor_heights_m;
-    std::size_t flagged = 0, stays = 0;
+    std::size_t flagged = 0, ambiguous = 0;
     std::string worst;
     double worst_s = 0.0;
-    for (std::size_t k = 1; k < visits.size(); ++k) {
-        const FloorStay& v = visits[k];
-        const FloorStay& prev = visits[k - 1];
+    for (std::size_t k = 1; k < stays.size(); ++k) {
+        const FloorStay& v = stays[k];
+        const FloorStay& prev = stays[k - 1];
         const double stay_s = est.t_s[v.last] - est.t_s[v.first];
         const double in_est = MeanHeightNear(est, v.first, v.last, v.first, span_s) -
                               MeanHeightNear(est, prev.first, prev.last, prev.last, span_s);
-        const FloorStay* next = k + 1 < visits.size() ? &visits[k + 1] : nullptr;
+        const FloorStay* next = k + 1 < stays.size() ? &stays[k + 1] : nullptr;
         const double out_est =
             next ? MeanHeightNear(est, next->first, next->last, next->first, span_s) -
                        MeanHeightNear(est, v.first, v.last, v.last, span_s)
@@ -384,7 +384,7 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
             const ShiftedFit other =
                 BestShiftedFit(cor, field, v.first, v.last, z[a] - z[v.floor], model.map_giveup_m);
             if (other.off_share > c.off_map_degraded_share) continue;
-            ++stays;
+            ++ambiguous;
             for (std::size_t i = v.first; i <= v.last; ++i) {
                 flagged += (verdict.pose_flags[i] & kPoseFloorAmbiguous) == 0;
                 verdict.pose_flags[i] |= kPoseFloorAmbiguous;
@@ -411,12 +411,12 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
             break;
         }
     }
-    if (stays == 0) return;
+    if (ambiguous == 0) return;
     const double share = double(flagged) / double(cor.size());
     // Degraded whatever the share: the correction stands on one of two floors that the walk
     // supports alike, and the flags say where.
     f.Degraded("the floor is not determined over " + FormatPercent(share) + " of the walk (" +
-               std::to_string(stays) + " stay(s); longest: " + worst +
+               std::to_string(ambiguous) + " stay(s); longest: " + worst +
                "): neither the barometer nor the map tells the two floors apart");
 }
 

@@ -21,7 +21,7 @@
 //    well;
 //  - input jumps: the estimate's speed changes faster than any platform can accelerate (frame-to-
 //    frame odometry dropping or doubling motion), which a smooth scale cannot follow;
-//  - off the map: corrected poses farther from every traversable place than the map term reaches.
+//  - off the map: corrected poses farther from every traversable place than the map term reaches;
 //  - 3D: corrected height changes the estimate's deny, level walking between floors, and a floor
 //    that another floor explains as well (neither the barometer nor the map tells them apart).
 // No I/O.
@@ -49,8 +49,8 @@ enum PoseFlag : std::uint8_t {
     /// a corrected height the estimate denies (a floor change it did not make, level walking
     /// between floors)
     kPoseHeightDisagrees = 8,
-    /// on a floor that another floor explains as well (the barometer's floor change reads both,
-    /// and the path lies as near both floors' walkways)
+    /// on a floor that another floor explains as well (the barometer's floor changes read both,
+    /// and the path, shifted by up to the map's reach, lies on both floors' map)
     kPoseFloorAmbiguous = 16,
 };
 
