@@ -1,11 +1,12 @@
-// The verdict's indoor checks on hand-made trajectories in a two-floor building: a corrected
-// floor change that the estimate's heights deny, level walking between floors, and the plausible
-// scale the model declares.
+// The verdict's indoor checks on hand-made trajectories in buildings of two or three floors: a
+// corrected floor change that the estimate's heights deny, level walking between floors, a floor
+// that another floor explains as well, and the plausible scale the model declares.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "driftcorr/mapping/indoor_field.h"
 #include "driftcorr/optim/verdict.h"
@@ -17,18 +18,22 @@ FloorPolygon Rect(double x0, double y0, double x1, double y1) {
     return {{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, {}};
 }
 
-// Two 40 m x 10 m floors 4 m apart, joined by a lift at x 2..4.
-TraversableField TwoFloors() {
-    IndoorFloor ground, upper;
-    ground.walkable.push_back(Rect(0, 0, 40, 10));
-    upper.floor_z_m = 4.0;
-    upper.walkable.push_back(Rect(0, 0, 40, 10));
-    ground.lifts.push_back(Rect(2, 4, 4, 6));
+// Floors 4 m apart, floor f spanning x 0..extent_x_m[f] and y 0..10, joined by a lift at x 2..4.
+TraversableField Floors(const std::vector<double>& extent_x_m) {
+    std::vector<IndoorFloor> floors(extent_x_m.size());
+    for (std::size_t f = 0; f < floors.size(); ++f) {
+        floors[f].floor_z_m = 4.0 * double(f);
+        floors[f].walkable.push_back(Rect(0, 0, extent_x_m[f], 10));
+        floors[f].lifts.push_back(Rect(2, 4, 4, 6));
+    }
     IndoorFieldConfig c;
     c.resolution_z_m = 0.25;
     c.vertical_tolerance_m = 0.25;
-    return BuildIndoorField({ground, upper}, c);
+    return BuildIndoorField(floors, c);
 }
+
+// Two 40 m x 10 m floors.
+TraversableField TwoFloors() { return Floors({40.0, 40.0}); }
 
 // A 200 s walk along y = 5 at 0.15 m/s, one pose a second, at height up_m(t).
 template <class Up>
@@ -135,20 +140,6 @@ TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
     EXPECT_FALSE(HasReason(stairs, "walk level"));
 }
 
-// Three floors 4 m apart, joined by a lift at x 2..4; the middle floor spans x 0..middle_x_m.
-TraversableField ThreeFloors(double middle_x_m) {
-    std::vector<IndoorFloor> floors(3);
-    for (int f = 0; f < 3; ++f) {
-        floors[f].floor_z_m = 4.0 * f;
-        floors[f].walkable.push_back(Rect(0, 0, f == 1 ? middle_x_m : 40, 10));
-        floors[f].lifts.push_back(Rect(2, 4, 4, 6));
-    }
-    IndoorFieldConfig c;
-    c.resolution_z_m = 0.25;
-    c.vertical_tolerance_m = 0.25;
-    return BuildIndoorField(floors, c);
-}
-
 // A lift ride from the ground floor to the top one (8 m over 60-80 s), then 120 s on the top
 // floor. A barometer that reads the ride 0.8x (6.4 m) reads the middle floor (4 m) as well: the
 // verdict says the floor is not determined, unless the map tells the floors apart.
@@ -165,11 +156,11 @@ TEST(VerdictIndoor, AFloorThatAnotherFloorExplainsAsWellIsNotOk) {
         return JudgeCorrection(estimate, &field, model, Result(corrected), nullptr, false, false,
                                config);
     };
-    const TraversableField same_floors = ThreeFloors(40.0);
+    const TraversableField same_floors = Floors({40.0, 40.0, 40.0});
     const Verdict short_reading = judge(same_floors, ride(0.8));
     EXPECT_EQ(short_reading.level, VerdictLevel::kDegraded);
     EXPECT_TRUE(HasReason(short_reading, "the floor is not determined over 61 % of the walk"))
-        << short_reading.reasons.front();
+        << (short_reading.reasons.empty() ? "no reason" : short_reading.reasons.front());
     EXPECT_TRUE(HasReason(short_reading, "read the floor at 4.0 m as well"));
     EXPECT_TRUE(short_reading.pose_flags[150] & kPoseFloorAmbiguous);
     EXPECT_FALSE(short_reading.pose_flags[30] & kPoseFloorAmbiguous);
@@ -180,7 +171,7 @@ TEST(VerdictIndoor, AFloorThatAnotherFloorExplainsAsWellIsNotOk) {
     EXPECT_FALSE(exact.pose_flags[150] & kPoseFloorAmbiguous);
     // The middle floor ends at x 10, and the walk stays at x 17-35 there: the map tells them
     // apart.
-    const Verdict apart = judge(ThreeFloors(10.0), ride(0.8));
+    const Verdict apart = judge(Floors({40.0, 10.0, 40.0}), ride(0.8));
     EXPECT_EQ(apart.level, VerdictLevel::kOk) << apart.reasons.front();
     // Without the floors' heights there is no check.
     config.floor_heights_m.clear();

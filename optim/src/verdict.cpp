@@ -247,11 +247,11 @@ bool HeightChangeAgrees(double d_cor, double d_est, const VerdictConfig& c) {
     return HeightChangeExcess(d_cor, d_est, c) <= 0.0;
 }
 
-// A stay on one floor: the corrected poses [first, last] that lie within off_floor_m of floor
-// `floor` (an index into floor_heights_m) for at least min_s, with no such stay on another floor
-// between them. Shorter visits (a lift or a stair flight passing a floor) are not stays.
+// A stay on one floor: the corrected poses [first, last] that lie within off_floor_m of the floor
+// at floor_m (NearestFloor) for at least min_s, with no such stay on another floor between them.
+// Shorter visits (a lift or a stair flight passing a floor) are not stays.
 struct FloorStay {
-    int floor = 0;
+    double floor_m = 0.0;
     std::size_t first = 0, last = 0;
 };
 
@@ -259,21 +259,18 @@ std::vector<FloorStay> FloorStays(const PlanarTrajectory& cor, const VerdictConf
                                   double min_s) {
     std::vector<FloorStay> visits;
     for (std::size_t i = 0; i < cor.size(); ++i) {
-        int floor = -1;
-        for (std::size_t k = 0; k < c.floor_heights_m.size(); ++k) {
-            if (std::abs(cor.up_m[i] - c.floor_heights_m[k]) <= c.off_floor_m) floor = int(k);
-        }
-        if (floor < 0) continue;
-        if (!visits.empty() && visits.back().floor == floor) {
+        const double floor_m = NearestFloor(c.floor_heights_m, cor.up_m[i]);
+        if (std::abs(cor.up_m[i] - floor_m) > c.off_floor_m) continue;
+        if (!visits.empty() && visits.back().floor_m == floor_m) {
             visits.back().last = i;
         } else {
-            visits.push_back({floor, i, i});
+            visits.push_back({floor_m, i, i});
         }
     }
     std::vector<FloorStay> stays;
     for (const FloorStay& v : visits) {
         if (cor.t_s[v.last] - cor.t_s[v.first] < min_s) continue;
-        if (!stays.empty() && stays.back().floor == v.floor) {
+        if (!stays.empty() && stays.back().floor_m == v.floor_m) {
             stays.back().last = v.last;
         } else {
             stays.push_back(v);
@@ -356,52 +353,52 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
                             const VerdictConfig& c, Verdict& verdict, Findings& f) {
     const double span_s = 0.5 * c.level_window_s;
     const std::vector<FloorStay> stays = FloorStays(cor, c, span_s);
-    const std::vector<double>& z = c.floor_heights_m;
+    // The estimate's height change from stay k - 1 into stay k (k >= 1).
+    std::vector<double> change_m(stays.size(), 0.0);
+    for (std::size_t k = 1; k < stays.size(); ++k) {
+        const FloorStay &from = stays[k - 1], &to = stays[k];
+        change_m[k] = MeanHeightNear(est, to.first, to.last, to.first, span_s) -
+                      MeanHeightNear(est, from.first, from.last, from.last, span_s);
+    }
+    // Whether the walk could stand on floor_m during stay k: the height changes into and out of
+    // it agree with that floor.
+    auto barometer_allows = [&](std::size_t k, double floor_m) {
+        const bool next = k + 1 < stays.size();
+        return HeightChangeAgrees(floor_m - stays[k - 1].floor_m, change_m[k], c) &&
+               (!next || HeightChangeAgrees(stays[k + 1].floor_m - floor_m, change_m[k + 1], c));
+    };
     std::size_t flagged = 0, ambiguous = 0;
     std::string worst;
     double worst_s = 0.0;
     for (std::size_t k = 1; k < stays.size(); ++k) {
         const FloorStay& v = stays[k];
-        const FloorStay& prev = stays[k - 1];
-        const double stay_s = est.t_s[v.last] - est.t_s[v.first];
-        const double in_est = MeanHeightNear(est, v.first, v.last, v.first, span_s) -
-                              MeanHeightNear(est, prev.first, prev.last, prev.last, span_s);
-        const FloorStay* next = k + 1 < stays.size() ? &stays[k + 1] : nullptr;
-        const double out_est =
-            next ? MeanHeightNear(est, next->first, next->last, next->first, span_s) -
-                       MeanHeightNear(est, v.first, v.last, v.last, span_s)
-                 : 0.0;
         // A chosen floor the height changes deny is JudgeHeightChanges' finding.
-        if (!HeightChangeAgrees(z[v.floor] - z[prev.floor], in_est, c) ||
-            (next && !HeightChangeAgrees(z[next->floor] - z[v.floor], out_est, c))) {
-            continue;
-        }
-        for (std::size_t a = 0; a < z.size(); ++a) {
-            if (int(a) == v.floor || !HeightChangeAgrees(z[a] - z[prev.floor], in_est, c)) {
-                continue;
-            }
-            if (next && !HeightChangeAgrees(z[next->floor] - z[a], out_est, c)) continue;
-            const ShiftedFit other =
-                BestShiftedFit(cor, field, v.first, v.last, z[a] - z[v.floor], model.map_giveup_m);
+        if (!barometer_allows(k, v.floor_m)) continue;
+        for (const double other_m : c.floor_heights_m) {
+            if (other_m == v.floor_m || !barometer_allows(k, other_m)) continue;
+            const ShiftedFit other = BestShiftedFit(cor, field, v.first, v.last,
+                                                    other_m - v.floor_m, model.map_giveup_m);
             if (other.off_share > c.off_map_degraded_share) continue;
             ++ambiguous;
             for (std::size_t i = v.first; i <= v.last; ++i) {
                 flagged += (verdict.pose_flags[i] & kPoseFloorAmbiguous) == 0;
                 verdict.pose_flags[i] |= kPoseFloorAmbiguous;
             }
+            const double stay_s = est.t_s[v.last] - est.t_s[v.first];
             if (stay_s > worst_s) {
                 worst_s = stay_s;
                 const ShiftedFit chosen = FitShifted(cor, field, v.first, v.last, 0.0,
                                                      Eigen::Vector2d::Zero(), model.map_giveup_m);
                 auto signed_m = [](double m) { return (m > 0.0 ? "+" : "") + FormatFixed(m, 1); };
-                const std::string heights = next ? "into and out of it (" + signed_m(in_est) +
-                                                       " m and " + signed_m(out_est) + " m)"
-                                                 : "into it (" + signed_m(in_est) + " m)";
+                const std::string heights = k + 1 < stays.size()
+                                                ? "into and out of it (" + signed_m(change_m[k]) +
+                                                      " m and " + signed_m(change_m[k + 1]) + " m)"
+                                                : "into it (" + signed_m(change_m[k]) + " m)";
                 worst = "from " + FormatFixed(est.t_s[v.first] - est.t_s[0], 0) + " s to " +
                         FormatFixed(est.t_s[v.last] - est.t_s[0], 0) +
-                        " s the correction stands on the floor at " + FormatFixed(z[v.floor], 1) +
+                        " s the correction stands on the floor at " + FormatFixed(v.floor_m, 1) +
                         " m; the estimate's height changes " + heights + " read the floor at " +
-                        FormatFixed(z[a], 1) + " m as well, and the path, shifted by at most " +
+                        FormatFixed(other_m, 1) + " m as well, and the path, shifted by at most " +
                         FormatFixed(model.map_giveup_m, 1) + " m, lies RMS " +
                         FormatFixed(other.rms_m, 2) + " m from that floor's walkways, " +
                         FormatPercent(other.off_share) + " of it beyond their reach (" +
