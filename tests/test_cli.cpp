@@ -1142,7 +1142,9 @@ TEST_F(CliOnFailure, WriteWritesTheResultAndPerPoseCovariance) {
         double t, ve, cen, vn, vu, vyaw;
         unsigned flags;
         ASSERT_TRUE(fields >> t >> ve >> cen >> vn >> vu >> vyaw >> flags) << line;
-        if (n > 0) EXPECT_GT(ve, 0.0) << line;
+        if (n > 0) {
+            EXPECT_GT(ve, 0.0) << line;
+        }
         EXPECT_LE(cen * cen, ve * vn * (1 + 1e-9)) << line;
         ++n;
     }
@@ -1308,8 +1310,8 @@ TEST_F(CliFormats, PbfThatIsTruncatedOrNotPbfIsBadInputNamingTheFile) {
     // A PBF's first blob header, cut off: the length prefix and the start of "OSMHeader".
     WriteFile(pbf, std::string("\x00\x00\x00\x0d\x0a\x09OSMHe", 11));
     const std::string traj = (c.scenario / "estimate.tum").string();
-    for (const std::string content : {std::string("\x00\x00\x00\x0d\x0a\x09OSMHe", 11),
-                                      std::string("PK\x03\x04 a zip file")}) {
+    for (const std::string& content :
+         {std::string("\x00\x00\x00\x0d\x0a\x09OSMHe", 11), std::string("PK\x03\x04 a zip file")}) {
         WriteFile(pbf, content);
         const RunResult r = RunProgram(
             kCli, {"correct", traj, "--osm", pbf.string(), "--anchor", "48.98,8.39,0", "--frame",
@@ -1372,6 +1374,27 @@ TEST_F(CliFormats, BatchUsageErrors) {
         root);
     EXPECT_EQ(m.exit_code, kExitBadInput);
     EXPECT_NE(m.err.find("none.txt: --manifest: cannot open file"), std::string::npos) << m.err;
+}
+
+// `eval --methods` runs the methods listed, in that order, and names a bad list.
+TEST_F(CliFormats, EvalRunsTheListedMethodsOnly) {
+    const CaseDirs c = MakeCase("EvalMethods");
+    const std::string s = c.scenario.string();
+    const fs::path root = c.out_dir.parent_path();
+    const RunResult r = RunProgram(kCli, {"eval", s, "--methods", "online,estimate", "-q"}, root);
+    SCOPED_TRACE(r.out + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    const std::size_t online = r.out.find("| online"), estimate = r.out.find("| estimate");
+    ASSERT_NE(online, std::string::npos);
+    ASSERT_NE(estimate, std::string::npos);
+    EXPECT_LT(online, estimate);
+    EXPECT_EQ(r.out.find("paper"), std::string::npos);
+    EXPECT_EQ(r.out.find("driftcorr "), std::string::npos);
+    for (const char* bad : {"online,bogus", "online,online", ""}) {
+        const RunResult u = RunProgram(kCli, {"eval", s, "--methods", bad}, root);
+        EXPECT_EQ(u.exit_code, kExitUsage) << bad;
+        EXPECT_NE(u.err.find("--methods"), std::string::npos) << bad << ": " << u.err;
+    }
 }
 
 // ---- map extract ------------------------------------------------------------------------------

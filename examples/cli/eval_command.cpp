@@ -1,5 +1,6 @@
-// `driftcorr eval <scenario dirs...> [-o report_dir]`: the uncorrected estimate, the paper's
-// method and driftcorr on every scenario, a table on stdout, a report folder on request.
+// `driftcorr eval <scenario dirs...> [-o report_dir] [--methods LIST]`: the uncorrected estimate,
+// the paper's method, driftcorr and the online output (or the methods listed) on every scenario,
+// a table on stdout, a report folder on request.
 //
 // Exit codes: 0 every scenario and method ran, 1 usage error, 2 at least one scenario (or a
 // method on it) failed (the others still ran and are reported), 4 internal error (the report
@@ -26,10 +27,13 @@ constexpr int kExitFailed = kExitBadInput;
 
 const char* kEvalUsage =
     "usage: driftcorr eval <scenario dir | scenario.yaml>... [-o report_dir]\n"
-    "                      [--config params.yaml] [--quiet]\n"
+    "                      [--config params.yaml] [--methods LIST] [--quiet]\n"
     "\n"
-    "Runs the uncorrected estimate, the paper's method (--solver paper) and driftcorr on each\n"
-    "scenario and prints ATE / final error (and solver time, poses/s) per scenario and method.\n"
+    "Runs the uncorrected estimate, the paper's method (--solver paper), driftcorr (batch) and\n"
+    "the online corrector's causal output on each scenario and prints ATE / final error (and\n"
+    "solver time, poses/s) per scenario and method.\n"
+    "--methods runs only the methods listed, comma-separated, in that order: estimate, paper,\n"
+    "driftcorr, online (default: all four).\n"
     "-o also writes report_dir/summary.md, results.json, <scenario>_map.svg and\n"
     "<scenario>_error.svg. A scenario that fails is reported and does not stop the others.\n"
     "Exit codes: 0 all ran, 1 usage, 2 at least one scenario or method failed, 4 internal.\n";
@@ -37,6 +41,7 @@ const char* kEvalUsage =
 struct EvalArgs {
     std::vector<std::string> scenarios;
     std::string report_dir, config;
+    std::string methods = "estimate,paper,driftcorr,online";
     bool quiet = false;
 };
 
@@ -51,8 +56,10 @@ bool IsNonScenarioFile(const std::string& path) {
 
 bool ParseEvalArgs(int argc, char** argv, EvalArgs& a, std::string& err) {
     const OptionTable table{{{"--quiet", &a.quiet}, {"-q", &a.quiet}},
-                            {{"-o", &a.report_dir}, {"--output", &a.report_dir},
-                             {"--config", &a.config}}};
+                            {{"-o", &a.report_dir},
+                             {"--output", &a.report_dir},
+                             {"--config", &a.config},
+                             {"--methods", &a.methods}}};
     auto positional = [&a](const std::string& arg) -> std::string {
         if (IsNonScenarioFile(arg)) {
             // A shell glob over a datasets folder also matches its README.md / FORMAT.md.
@@ -66,6 +73,31 @@ bool ParseEvalArgs(int argc, char** argv, EvalArgs& a, std::string& err) {
     if (!ParseOptions(argc, argv, 1, table, positional, err)) return false;
     if (a.scenarios.empty()) err = "missing scenario folder(s)";
     return err.empty();
+}
+
+// "--methods estimate,online" -> the methods in that order; an unknown, repeated or empty name
+// is a usage error.
+bool ParseMethods(const std::string& list, std::vector<eval::Method>& methods, std::string& err) {
+    methods.clear();
+    std::size_t from = 0;
+    while (true) {
+        const std::size_t comma = list.find(',', from);
+        const std::string name =
+            list.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+        const std::optional<eval::Method> m = eval::MethodFromString(name);
+        if (!m) {
+            err = "--methods: unknown method '" + name +
+                  "' (expected a comma-separated list of estimate, paper, driftcorr, online)";
+            return false;
+        }
+        if (std::find(methods.begin(), methods.end(), *m) != methods.end()) {
+            err = "--methods: '" + name + "' is listed twice";
+            return false;
+        }
+        methods.push_back(*m);
+        if (comma == std::string::npos) return true;
+        from = comma + 1;
+    }
 }
 
 // Progress bar on stderr: rewritten in place on a terminal, one line per stage otherwise.
@@ -96,12 +128,14 @@ eval::EvalProgressCallback MakeEvalProgress(bool quiet) {
 int RunEvalCommand(int argc, char** argv) {
     EvalArgs args;
     std::string err;
-    if (!ParseEvalArgs(argc, argv, args, err)) {
+    eval::EvalConfig config;
+    const bool parsed =
+        ParseEvalArgs(argc, argv, args, err) && ParseMethods(args.methods, config.methods, err);
+    if (!parsed) {
         if (!err.empty()) std::fprintf(stderr, "driftcorr: %s\n\n", err.c_str());
         std::fputs(kEvalUsage, err.empty() ? stdout : stderr);
         return err.empty() ? kExitOk : kExitUsage;
     }
-    eval::EvalConfig config;
     try {
         if (!args.config.empty()) config.pipeline = pipeline::LoadPipelineConfig(args.config);
     } catch (const InputError& e) {

@@ -147,6 +147,13 @@ std::string ToString(Method method) {
     return "unknown";
 }
 
+std::optional<Method> MethodFromString(const std::string& name) {
+    for (const Method m : DefaultMethods()) {
+        if (ToString(m) == name) return m;
+    }
+    return std::nullopt;
+}
+
 std::vector<Method> DefaultMethods() {
     return {Method::kEstimate, Method::kPaper, Method::kDriftcorr, Method::kOnline};
 }

@@ -22,6 +22,8 @@ namespace driftcorr::eval {
 /// keep up with the input).
 enum class Method { kEstimate, kPaper, kDriftcorr, kOnline };
 std::string ToString(Method method);
+/// The method named `name` (ToString's names); nullopt for any other name.
+std::optional<Method> MethodFromString(const std::string& name);
 /// estimate, paper, driftcorr (batch), online.
 std::vector<Method> DefaultMethods();
 
