@@ -188,7 +188,8 @@ void PrintAnchorFit(const pipeline::CorrectionRun& run) {
     std::printf("\n");
 }
 
-// The start scales of the correction and the NLL each reached, when there were several.
+// The start scales of the correction, the NLL each reached and how far each one's correction lies
+// from the kept one, when there were several.
 void PrintStarts(const CorrectionResult& r) {
     if (r.start_scales.size() < 2) return;
     std::printf("starts     scale");
@@ -203,7 +204,15 @@ void PrintStarts(const CorrectionResult& r) {
             std::printf("%s %.1f", k ? " /" : "", r.start_nll[k]);
         }
     }
-    std::printf(", kept %.2f\n", r.start_scales[r.start_chosen]);
+    std::printf(", kept %.2f; RMS to the kept one", r.start_scales[r.start_chosen]);
+    for (std::size_t k = 0; k < r.start_rms_m.size(); ++k) {
+        if (std::isnan(r.start_rms_m[k])) {
+            std::printf("%s -", k ? " /" : "");
+        } else {
+            std::printf("%s %.2f", k ? " /" : "", r.start_rms_m[k]);
+        }
+    }
+    std::printf(" m\n");
 }
 
 void PrintVerdict(const Verdict& v) {

@@ -55,6 +55,13 @@ double MapCoverage(const PlanarTrajectory& t, const TraversableField& field, dou
     return t.size() ? double(covered) / double(t.size()) : 0.0;
 }
 
+// RMS of |a[i] - b[i]|; precondition: same size, not empty.
+double RmsDistance(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]).squaredNorm();
+    return std::sqrt(sum / double(a.size()));
+}
+
 }  // namespace
 
 void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
@@ -121,6 +128,7 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     each.compute_covariance = false;
     std::optional<IncrementalCorrector> best;
     std::vector<double> nll;
+    std::vector<std::vector<Eigen::Vector2d>> paths;  // each start's corrected positions
     CorrectionResult work;  // the counters and times over every start
     for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
         // The last start takes the initial state itself, not a copy.
@@ -133,6 +141,7 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
         work.window_restarts += r.window_restarts, work.iterations += r.iterations;
         work.incremental_s += r.incremental_s, work.refine_s += r.refine_s;
         nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
+        paths.push_back(Usable(r.status) ? r.corrected.p_en : std::vector<Eigen::Vector2d>{});
         const bool better =
             !best || (Usable(r.status) && (!Usable(result.status) || r.nll < result.nll));
         if (!better) continue;
@@ -142,6 +151,12 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     }
     result.start_scales = cfg.start_scales;
     result.start_nll = std::move(nll);
+    const std::vector<Eigen::Vector2d>& kept = paths[result.start_chosen];
+    for (const std::vector<Eigen::Vector2d>& path : paths) {
+        result.start_rms_m.push_back(path.empty() || kept.empty()
+                                         ? std::numeric_limits<double>::quiet_NaN()
+                                         : RmsDistance(path, kept));
+    }
     result.windows = work.windows, result.window_retries = work.window_retries;
     result.window_restarts = work.window_restarts, result.iterations = work.iterations;
     result.incremental_s = work.incremental_s, result.refine_s = work.refine_s;

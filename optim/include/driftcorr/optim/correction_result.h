@@ -35,8 +35,9 @@ struct CorrectionResult {
     /// The corrected trajectory's NLL (the objective of the soft terms at the output).
     double nll = 0.0;
     /// The starts of the batch correction (CorrectorConfig::start_scales), the NLL each one's
-    /// correction reached (NaN: not usable) and the one that was kept.
-    std::vector<double> start_scales, start_nll;
+    /// correction reached (NaN: not usable), the horizontal RMS distance of each one's correction
+    /// to the kept one [m] (NaN: not usable; 0 for the kept one) and the one that was kept.
+    std::vector<double> start_scales, start_nll, start_rms_m;
     std::size_t start_chosen = 0;
     /// The odometry's step lengths as the model observed them [m], one per pose (step into pose
     /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
