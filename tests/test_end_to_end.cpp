@@ -339,13 +339,20 @@ TEST(EndToEndIndoor, OnlineOutputFollowsTheStartScaleOfLowestNll) {
     const CorrectionResult& smoothed = starts.smoothed;
     ASSERT_TRUE(Usable(batch.status) && Usable(smoothed.status)) << smoothed.message;
     EXPECT_EQ(smoothed.start_scales, batch.start_scales);
-    EXPECT_EQ(smoothed.start_chosen, batch.start_chosen);
+    // The same minimum; two starts may reach it (1.25 and 1.5 do here, NLL equal to 0.1), and
+    // rounding picks one.
+    EXPECT_NEAR(smoothed.nll, batch.nll, 1e-6 * std::abs(batch.nll));
     EXPECT_NE(smoothed.start_chosen, 0u);
     const double batch_ate = ComputeMetrics(batch.corrected, *ps.ground_truth).ate_m;
     const double smoothed_ate = ComputeMetrics(smoothed.corrected, *ps.ground_truth).ate_m;
     std::printf("batch ATE %.2f m, online Finish() %.2f m\n", batch_ate, smoothed_ate);
     EXPECT_LE(smoothed_ate, batch_ate + 0.1);
-    EXPECT_EQ(starts.start_scale.back(), batch.start_scales[batch.start_chosen]);
+    // The causal output ends on a start whose batch correction reaches that minimum.
+    const std::size_t last_start =
+        std::find(batch.start_scales.begin(), batch.start_scales.end(), starts.start_scale.back()) -
+        batch.start_scales.begin();
+    ASSERT_LT(last_start, batch.start_nll.size());
+    EXPECT_NEAR(batch.start_nll[last_start], batch.nll, 1e-3 * std::abs(batch.nll));
     EXPECT_EQ(starts.start_scale.front(), 1.0);  // no NLL to compare before the first chunk
     EXPECT_EQ(starts.stats.poses, ps.estimate.size());
 
@@ -360,13 +367,15 @@ TEST(EndToEndIndoor, OnlineOutputFollowsTheStartScaleOfLowestNll) {
 // chosen on): a lift ride from the 4th floor to the ground floor. Without the floor term
 // (ModelConfig::floor_sigma_m) part of the walk after the ride goes on, level, between floors,
 // where only stair halls and lift shafts are traversable: measured 82.7 % of the poses on the
-// right floor without it, 99.6 % with it.
+// right floor without it (nor the lift term), 99.6 % with it.
 TEST(EndToEndIndoor, LevelWalkingIsDrawnToAFloor) {
     const std::string walk = GeneratedHcuWalk(12);
     if (walk.empty()) GTEST_SKIP() << "real data not present: hcu_eight";
     const pipeline::CorrectionRun a = pipeline::RunCorrection(walk, {});
     pipeline::PipelineConfig without;
     without.indoor_corrector.model.floor_sigma_m = 0.0;
+    // The lift term alone keeps this walk on its floors too (its ride in the shaft: 99.6 %).
+    without.indoor_corrector.model.lift_sigma_m = 0.0;
     const pipeline::CorrectionRun b = pipeline::RunCorrection(walk, without);
     ASSERT_TRUE(a.after && b.after);
     std::printf("with the floor term: right floor %.1f %%; without: %.1f %%\n",

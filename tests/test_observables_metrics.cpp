@@ -67,6 +67,43 @@ TEST(Observables, LevelSpansEndAWindowHalfBeforeAClimbAndStartOneAfter) {
     EXPECT_TRUE(LevelSpans({}, {}, 20.0, 1.0).empty());
 }
 
+// Steps of 0.6 m every 0.5 s, and in between: a 10 s wait (one step of 10 s, level), a lift ride
+// (a step into the cabin, 12 s standing, 8 s standing while the barometer reads 10 m, the last
+// 2 m of it 1 s after the ride: its lag), a 2 s stop while the height jumps 3 m (too short for a
+// ride), and a stair climb (walking steps of 0.2 m up each). Only the ride's poses are rides.
+TEST(Observables, RideSpansFindTheLiftRideNotAWaitAStopOrAClimb) {
+    std::vector<StepObservation> obs(1);
+    auto add = [&obs](double dt, double length, double dup) {
+        StepObservation o;
+        o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
+        obs.push_back(o);
+        return obs.size() - 1;  // the pose it leads into
+    };
+    auto walk = [&](int steps, double dup) {
+        for (int k = 0; k < steps; ++k) add(0.5, 0.6, dup);
+    };
+    walk(5, 0.0);
+    add(10.0, 0.4, 0.0);  // the wait
+    walk(5, 0.0);
+    const std::size_t cabin = add(0.5, 0.6, 0.0);  // into the cabin
+    add(12.0, 0.0, 0.0);
+    const std::size_t out = add(8.0, 0.0, 8.0);
+    add(1.0, 0.6, 2.0);  // out of the cabin, the barometer catching up
+    walk(5, 0.0);
+    add(2.0, 0.0, 3.0);  // the short stop
+    walk(5, 0.0);
+    walk(20, 0.2);  // the stairs
+    walk(5, 0.0);
+    const std::vector<std::uint8_t> ride = RideSpans(obs, 5.0, 2.0, 3.0, 5.0);
+    ASSERT_EQ(ride.size(), obs.size());
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+        EXPECT_EQ(ride[i], i >= cabin && i <= out ? 1 : 0) << "pose " << i;
+    }
+    // Read without the lag, the ride changes height by 8 m, still a ride; asked for 9 m it is not.
+    EXPECT_EQ(RideSpans(obs, 5.0, 9.0, 3.0, 0.0)[cabin], 0);
+    EXPECT_EQ(RideSpans(obs, 5.0, 9.0, 3.0, 5.0)[cabin], 1);
+}
+
 TEST(Observables, SquareWithYawHasKnownLengthsTurnsAndUnwrappedHeadings) {
     // A 10 m square driven counter-clockwise, facing along each side; the yaw of pose 3 is given
     // wrapped (-pi/2), the unwrapped headings climb to 2 pi.

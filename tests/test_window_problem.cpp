@@ -486,6 +486,97 @@ INSTANTIATE_TEST_SUITE_P(
                (c.boundary_prior ? "_boundary_prior" : "") + (c.prior_scale ? "_with_scale" : "");
     });
 
+// ---- Lift rides ---------------------------------------------------------------------------------
+
+// A 2 m x 2 m shaft centred at c.
+LiftShaft Square(const Eigen::Vector2d& c) {
+    return {c + Eigen::Vector2d(-1, -1), c + Eigen::Vector2d(1, -1), c + Eigen::Vector2d(1, 1),
+            c + Eigen::Vector2d(-1, 1)};
+}
+
+TEST(LiftShafts, DistanceIsZeroInsideToTheEdgeBesideAndToTheCornerBeyond) {
+    const std::vector<LiftShaft> shafts = {Square({0, 0}), Square({10, 0})};
+    EXPECT_EQ(DistanceToShafts(shafts, {0.5, -0.5}).value, 0.0);
+    EXPECT_EQ(DistanceToShafts(shafts, {10.2, 0.9}).gradient.norm(), 0.0);
+    const PlaneDistance edge = DistanceToShafts(shafts, {3.0, 0.5});  // beside the first's edge
+    EXPECT_NEAR(edge.value, 2.0, 1e-12);
+    EXPECT_NEAR((edge.gradient - Eigen::Vector2d(1, 0)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(edge.hessian.norm(), 0.0, 1e-12);
+    const PlaneDistance corner = DistanceToShafts(shafts, {7.0, 5.0});  // beyond the second's
+    EXPECT_NEAR(corner.value, std::hypot(2.0, 4.0), 1e-12);
+    EXPECT_NEAR((corner.gradient - Eigen::Vector2d(-2, 4).normalized()).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((corner.hessian * corner.gradient).norm(), 0.0, 1e-12);
+}
+
+// The curve with a 20 s stop at pose 15 during which the height rises by 4 m: a lift ride over
+// poses 14-15. A shaft 3 m beside pose 14: the ride's two poses, and only they, get a lift term,
+// whose derivatives match central differences outside the shaft (beside an edge and beyond a
+// corner) and are zero inside it; no lift term without shafts, with lift_sigma_m 0, or planar.
+TEST(WindowProblem, ALiftRideDrawsItsPosesToTheNearestShaft) {
+    PlanarTrajectory walk = Curve();
+    for (int i = 15; i < kPoses; ++i) walk.t_s[i] += 20.0, walk.up_m[i] += 4.0;
+    ModelConfig model = Model();
+    model.lift_sigma_m = 1.0;
+    model.lift_giveup_m = 10.0;
+    TrajectoryState state = StateFrom(walk, model, false);
+    TraversableField field = Field(3.5);
+    const Eigen::Vector2d beside = walk.p_en[14] + Eigen::Vector2d(3.0, 0.0);
+    field.set_lift_shafts({Square(beside)});
+    const std::vector<std::uint8_t> free(kPoses - 1, 0);
+    auto lift_blocks = [&](TrajectoryState s, const TraversableField& f, const ModelConfig& m) {
+        WindowProblem p(s, &f, m, 1, kPoses - 1, free);
+        std::vector<int> poses;
+        for (const TermBlock* block : p.Blocks()) {
+            if (block->family() == TermFamily::kLiftDistance) poses.push_back(block->pose());
+        }
+        return poses;
+    };
+    EXPECT_EQ(lift_blocks(state, field, model), (std::vector<int>{14, 15}));
+    EXPECT_TRUE(lift_blocks(state, Field(3.5), model).empty());
+    ModelConfig off = model;
+    off.lift_sigma_m = 0.0;
+    EXPECT_TRUE(lift_blocks(state, field, off).empty());
+    EXPECT_TRUE(lift_blocks(StateFrom(walk, model, true), field, model).empty());
+
+    WindowProblem p(state, &field, model, 1, kPoses - 1, free);
+    const TermBlock* lift = nullptr;
+    for (const TermBlock* block : p.Blocks()) {
+        if (block->family() == TermFamily::kLiftDistance) lift = block;
+    }
+    ASSERT_NE(lift, nullptr);
+    std::vector<double> x(p.NumVariables());
+    p.InitialPoint(x.data());
+    const int vx = lift->var(0), vy = lift->var(1);
+    for (const Eigen::Vector2d& at : {Eigen::Vector2d(beside + Eigen::Vector2d(-4.0, 0.3)),
+                                      Eigen::Vector2d(beside + Eigen::Vector2d(2.5, 3.0)),
+                                      Eigen::Vector2d(beside + Eigen::Vector2d(0.2, -0.4))}) {
+        x[vx] = at.x(), x[vy] = at.y();
+        BlockVector g;
+        BlockMatrix h;
+        const double cost = lift->Evaluate(p.Context(x.data()), lift->Gather(x.data()), &g, &h);
+        const bool inside = (at - beside).cwiseAbs().maxCoeff() < 1.0;
+        EXPECT_EQ(cost == 0.0, inside) << at.transpose();
+        for (int a : {0, 1}) {
+            const int va = lift->var(a);
+            const double xa = x[va];
+            BlockVector gp, gm;
+            x[va] = xa + kH;
+            const double fp =
+                lift->Evaluate(p.Context(x.data()), lift->Gather(x.data()), &gp, nullptr);
+            x[va] = xa - kH;
+            const double fm =
+                lift->Evaluate(p.Context(x.data()), lift->Gather(x.data()), &gm, nullptr);
+            x[va] = xa;
+            EXPECT_NEAR(g[a], (fp - fm) / (2.0 * kH), 1e-6) << at.transpose() << " gradient " << a;
+            for (int b : {0, 1}) {
+                EXPECT_NEAR(h(b, a), (gp[b] - gm[b]) / (2.0 * kH), 1e-5)
+                    << at.transpose() << " Hessian (" << b << ", " << a << ")";
+            }
+        }
+        EXPECT_EQ(g[2], 0.0);
+    }
+}
+
 TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {
     const ModelConfig model = Model();
     TrajectoryState s = StateFrom(Curve(), model, true);

@@ -151,6 +151,36 @@ std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
     return level;
 }
 
+std::vector<std::uint8_t> RideSpans(const std::vector<StepObservation>& obs, double min_s,
+                                    double min_height_m, double gap_s, double lag_s) {
+    const std::size_t n = obs.size();
+    std::vector<std::uint8_t> ride(n, 0);
+    std::vector<double> t_s(n, 0.0), up_m(n, 0.0);
+    for (std::size_t i = 1; i < n; ++i) {
+        t_s[i] = t_s[i - 1] + std::max(obs[i].dt_s, 0.0);
+        up_m[i] = up_m[i - 1] + obs[i].dup_m;
+    }
+    auto still = [&](std::size_t i) { return obs[i].stationary || obs[i].dt_s > gap_s; };
+    for (std::size_t i = 1; i < n;) {
+        if (!still(i)) {
+            ++i;
+            continue;
+        }
+        const std::size_t a = i - 1;  // the run's poses: a .. b
+        std::size_t b = i;
+        while (b + 1 < n && still(b + 1)) ++b;
+        i = b + 1;
+        if (t_s[b] - t_s[a] < min_s) continue;
+        double change_m = 0.0;
+        for (std::size_t j = a; j < n && t_s[j] <= t_s[b] + lag_s; ++j) {
+            change_m = std::max(change_m, std::abs(up_m[j] - up_m[a]));
+        }
+        if (change_m < min_height_m) continue;
+        std::fill(ride.begin() + a, ride.begin() + b + 1, std::uint8_t(1));
+    }
+    return ride;
+}
+
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m) {
     DRIFTCORR_CHECK(!floor_heights_m.empty(), "no floor");
     return *std::min_element(

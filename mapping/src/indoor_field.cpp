@@ -320,8 +320,16 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
                 s.resolution_m;
         }
     }
-    return TraversableField(InterpolatedField(s, std::move(centre)),
-                            InterpolatedField(s, std::move(corridor)), config.truncation_m);
+    TraversableField field(InterpolatedField(s, std::move(centre)),
+                           InterpolatedField(s, std::move(corridor)), config.truncation_m);
+    std::vector<LiftShaft> shafts;
+    for (const IndoorFloor& f : floors) {
+        for (const FloorPolygon& lift : f.lifts) {
+            if (lift.outer_en.size() >= 3) shafts.push_back(lift.outer_en);
+        }
+    }
+    field.set_lift_shafts(std::move(shafts));
+    return field;
 }
 
 }  // namespace driftcorr

@@ -1,6 +1,8 @@
 #include "driftcorr/mapping/traversable_field.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "driftcorr/core/check.h"
 
@@ -113,6 +115,59 @@ std::optional<FieldSample> TraversableField::QueryCorridorBilinear(
     return QueryOne(p_enu, false, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
         return f.QueryBilinear(p);
     });
+}
+
+void TraversableField::set_lift_shafts(std::vector<LiftShaft> shafts) {
+    for (const LiftShaft& ring : shafts) {
+        DRIFTCORR_CHECK(ring.size() >= 3, "a lift shaft needs 3 corners");
+    }
+    lift_shafts_ = std::move(shafts);
+}
+
+namespace {
+
+// Even-odd rule.
+bool Inside(const LiftShaft& ring, const Eigen::Vector2d& p) {
+    bool in = false;
+    for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+        const Eigen::Vector2d& a = ring[i];
+        const Eigen::Vector2d& b = ring[j];
+        if ((a.y() > p.y()) != (b.y() > p.y()) &&
+            p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+            in = !in;
+        }
+    }
+    return in;
+}
+
+}  // namespace
+
+PlaneDistance DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector2d& p) {
+    DRIFTCORR_CHECK(!shafts.empty(), "no lift shaft");
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::Vector2d nearest = p;
+    bool corner = false;
+    for (const LiftShaft& ring : shafts) {
+        if (Inside(ring, p)) return PlaneDistance{};
+        for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+            const Eigen::Vector2d& a = ring[j];
+            const Eigen::Vector2d ab = ring[i] - a;
+            const double len2 = ab.squaredNorm();
+            const double u = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+            const Eigen::Vector2d q = a + u * ab;
+            const double d = (p - q).norm();
+            if (d < best) best = d, nearest = q, corner = u <= 0.0 || u >= 1.0;
+        }
+    }
+    PlaneDistance out;
+    out.value = best;
+    if (!(best > 0.0)) return out;
+    out.gradient = (p - nearest) / best;
+    if (corner) {
+        out.hessian =
+            (Eigen::Matrix2d::Identity() - out.gradient * out.gradient.transpose()) / best;
+    }
+    return out;
 }
 
 }  // namespace driftcorr

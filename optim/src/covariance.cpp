@@ -327,11 +327,11 @@ bool ScaleFamilies(CovarianceResult& r, std::vector<LinearisedTerm>& terms) {
     bool changed = false;
     for (int f = 0; f < kTermFamilies; ++f) {
         const auto family = static_cast<TermFamily>(f);
-        const bool prior = family == TermFamily::kHeadingPreservation ||
-                           family == TermFamily::kMapOffset || family == TermFamily::kScaleRange ||
-                           family == TermFamily::kHeadingBiasWalk ||
-                           family == TermFamily::kBoundaryPrior ||
-                           family == TermFamily::kFloorHeight || family == TermFamily::kStepError;
+        const bool prior =
+            family == TermFamily::kHeadingPreservation || family == TermFamily::kMapOffset ||
+            family == TermFamily::kScaleRange || family == TermFamily::kHeadingBiasWalk ||
+            family == TermFamily::kBoundaryPrior || family == TermFamily::kFloorHeight ||
+            family == TermFamily::kLiftDistance || family == TermFamily::kStepError;
         const bool estimable = r.families[f].redundancy >= kMinRedundancy;
         factor[f] = prior || !estimable ? 1.0 : std::max(1.0, r.families[f].VarianceFactor());
         changed = changed || factor[f] > 1.01;

@@ -43,6 +43,8 @@ const char* ToString(TermFamily family) {
             return "boundary prior";
         case TermFamily::kFloorHeight:
             return "floor height";
+        case TermFamily::kLiftDistance:
+            return "lift distance";
         case TermFamily::kMapOffset:
             return "map offset";
         case TermFamily::kStepError:
@@ -80,6 +82,46 @@ void MapDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
     if (!s) return;
     const Eigen::Vector3d j = MapJacobian(*ctx.field, x.head<3>(), s->centre);
     out.push_back(FromLinearisation(term_.Linearise(s->centre.value, j)));
+}
+
+namespace {
+
+// LiftDistanceBlock's distance over [x, y, z]: to the nearest shaft's outline (0 inside).
+struct LiftDistance {
+    double value = 0.0;
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+};
+
+LiftDistance DistanceToLift(const BlockContext& ctx, const BlockVector& x) {
+    DRIFTCORR_CHECK(ctx.field && !ctx.field->lift_shafts().empty(), "lift block without shafts");
+    const PlaneDistance d = DistanceToShafts(ctx.field->lift_shafts(), Eigen::Vector2d(x[0], x[1]));
+    LiftDistance out;
+    out.value = d.value;
+    out.gradient.head<2>() = d.gradient;
+    out.hessian.topLeftCorner<2, 2>() = d.hessian;
+    return out;
+}
+
+}  // namespace
+
+double LiftDistanceBlock::Evaluate(const BlockContext& ctx, const BlockVector& x, BlockVector* grad,
+                                   BlockMatrix* hess) const {
+    const LiftDistance d = DistanceToLift(ctx, x);
+    Eigen::Vector3d g;
+    Eigen::Matrix3d h;
+    const double cost =
+        term_.Evaluate(d.value, d.gradient, d.hessian, grad ? &g : nullptr, hess ? &h : nullptr);
+    if (grad) *grad = g;
+    if (hess) *hess = h;
+    return cost;
+}
+
+// Inside a shaft the pose may be anywhere in it: no residual.
+void LiftDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
+                                  std::vector<LinearisedTerm>& out) const {
+    const LiftDistance d = DistanceToLift(ctx, x);
+    if (d.value > 0.0) out.push_back(FromLinearisation(term_.Linearise(d.value, d.gradient)));
 }
 
 Eigen::Vector3d MapJacobian(const TraversableField& field, const Eigen::Vector3d& p,

@@ -316,6 +316,30 @@ void WindowProblem::AddFloorBlocks() {
     }
 }
 
+// ModelConfig::lift_sigma_m: a pose in a lift ride (RideSpans over the steps the state holds
+// within a minute of the window: online, a ride is found once its height change has come) is
+// drawn to the nearest lift shaft.
+void WindowProblem::AddLiftBlocks() {
+    constexpr double kAround_s = 60.0;
+    std::size_t lo = first_, hi = last_;
+    for (double span_s = 0.0; lo > 0 && span_s <= kAround_s; --lo) {
+        span_s += std::max(state_.obs[lo].dt_s, 0.0);
+    }
+    for (double span_s = 0.0; hi + 1 < state_.obs.size() && span_s <= kAround_s;) {
+        span_s += std::max(state_.obs[++hi].dt_s, 0.0);
+    }
+    // obs[lo] is the slice's unused step 0: pose lo starts it.
+    const std::vector<StepObservation> slice(state_.obs.begin() + lo, state_.obs.begin() + hi + 1);
+    const std::vector<std::uint8_t> ride =
+        RideSpans(slice, cfg_.ride_min_s, cfg_.ride_min_height_m, cfg_.ride_gap_s, cfg_.ride_lag_s);
+    for (std::size_t i = first_; i <= last_; ++i) {
+        if (!ride[i - lo]) continue;
+        blocks_.push_back(Make<LiftDistanceBlock>(
+            MapDistanceTerm{cfg_.lift_sigma_m, cfg_.lift_giveup_m, 1.0}, static_cast<int>(i)));
+        for (int c = 0; c < 3; ++c) blocks_.back()->Bind(c, PoseVar(i, c), 0.0);
+    }
+}
+
 void WindowProblem::BuildStructure(WindowUse use) {
     for (std::size_t i = first_; i <= last_; ++i) {
         AddStepBlocks(i);
@@ -330,6 +354,9 @@ void WindowProblem::BuildStructure(WindowUse use) {
     if (HasBias()) AddBiasBlocks();
     if (field_ && !state_.fix_height && cfg_.floor_sigma_m > 0.0 && !cfg_.floor_heights_m.empty()) {
         AddFloorBlocks();
+    }
+    if (field_ && !state_.fix_height && cfg_.lift_sigma_m > 0.0 && !field_->lift_shafts().empty()) {
+        AddLiftBlocks();
     }
     if (prior_) {
         blocks_.push_back(Make<BoundaryPriorBlock>(*prior_, static_cast<int>(first_ - 1)));

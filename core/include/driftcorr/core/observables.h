@@ -55,6 +55,14 @@ std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
                                      const std::vector<double>& up_m, double window_s,
                                      double height_m);
 
+/// Lift rides: result[i] is 1 when pose i lies in a run of steps that do not walk (stationary,
+/// or longer than gap_s: no step detected for that long) lasting min_s or more, over which (and
+/// the lag_s after it: a barometer lags by seconds) the height changes by min_height_m or more
+/// from the run's first pose: the walker stood while changing floors. A stair climb walks, and
+/// waiting keeps the height. obs as ComputeObservations returns it (obs[0] unused).
+std::vector<std::uint8_t> RideSpans(const std::vector<StepObservation>& obs, double min_s,
+                                    double min_height_m, double gap_s, double lag_s);
+
 /// The one of floor_heights_m nearest to up_m. Precondition: floor_heights_m not empty.
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m);
 

@@ -132,6 +132,7 @@ struct HeightRange {
 ///    within exact_band_m; a floor without walkways contributes its walkable area at the surface
 ///    height instead;
 ///    stair and lift columns count as centres of vertical motion. Truncated at truncation_m.
+/// The lifts' outlines (of every floor) are the field's lift_shafts().
 /// Throws std::invalid_argument when the config is invalid, there is no floor, no floor has
 /// anything traversable, or the grid would exceed max_memory_mb (the message names the
 /// horizontal resolution that would fit).

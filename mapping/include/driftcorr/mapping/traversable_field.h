@@ -17,6 +17,21 @@ struct TraversableSample {
     FieldSample corridor;
 };
 
+/// A lift shaft: its outline in the East-North plane [m]; it joins every floor of the map.
+using LiftShaft = std::vector<Eigen::Vector2d>;
+
+/// A distance in the East-North plane [m] with its gradient and Hessian over (east, north).
+struct PlaneDistance {
+    double value = 0.0;
+    Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d hessian = Eigen::Matrix2d::Zero();
+};
+
+/// Distance from p to the nearest of `shafts` (0 inside one, gradient and Hessian zero there):
+/// the nearest outline point's direction as gradient, Hessian zero along an edge and
+/// (I - g g^T) / d at a corner. Precondition: !shafts.empty(), each with 3 or more corners.
+PlaneDistance DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector2d& p);
+
 class TraversableField {
 public:
     /// One square tile of a tiled field: tile (ti, tj) covers the samples
@@ -49,6 +64,12 @@ public:
     std::optional<FieldSample> QueryCentreBilinear(const Eigen::Vector3d& p_enu) const;
     std::optional<FieldSample> QueryCorridorBilinear(const Eigen::Vector3d& p_enu) const;
 
+    /// The lift shafts of the map (an indoor map's lifts; none for roads and surface layers):
+    /// where a walker who rides a lift stands.
+    const std::vector<LiftShaft>& lift_shafts() const { return lift_shafts_; }
+    /// Precondition: each shaft has 3 or more corners.
+    void set_lift_shafts(std::vector<LiftShaft> shafts);
+
     /// The grid the field's samples lie on (for a tiled field: the grid its tiles are cut from).
     const GridSpec& spec() const { return grid_; }
     bool planar() const { return spec().planar(); }
@@ -75,6 +96,7 @@ private:
     std::vector<int> tile_index_;   ///< tiles_x_ * tiles_y_, index into tiles_ or -1
     std::vector<Tile> tiles_;
     double truncation_m_ = 0.0;
+    std::vector<LiftShaft> lift_shafts_;
 };
 
 }  // namespace driftcorr

@@ -70,6 +70,19 @@ struct ModelConfig {
     // Map distance to the nearest traversable centre: Gaussian with sigma, gives up beyond ~giveup.
     double map_sigma_m = 2.0;         ///< [m]
     double map_giveup_m = 8.0;        ///< [m]
+    /// Lift rides (a map with lift shafts, TraversableField::lift_shafts): a pose where the walker
+    /// stands while the height changes (RideSpans: ride_min_s, ride_min_height_m; no step for
+    /// ride_gap_s counts as standing; ride_lag_s of barometer lag) is in a lift: its horizontal
+    /// distance to the nearest shaft has the map term's form with lift_sigma_m and
+    /// lift_giveup_m. The walkway term alone lets such a pose go where the walk around it
+    /// lands (a stairwell, a corridor), since a few poses off the walkways cost little.
+    /// lift_sigma_m = 0: no such term.
+    double lift_sigma_m = 0.0;       ///< [m]
+    double lift_giveup_m = 10.0;     ///< [m]
+    double ride_min_s = 5.0;         ///< [s]
+    double ride_min_height_m = 2.0;  ///< [m]
+    double ride_gap_s = 3.0;         ///< [s]
+    double ride_lag_s = 5.0;         ///< [s]
     // Step-length scale: one variable per scale_segment_m of estimated path, random walk between
     // segments, prior around 1 on the first.
     double scale_segment_m = 150.0;   ///< [m]
@@ -151,6 +164,18 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "pull towards the nearest traversable centre"},
     {"map_giveup_m", Field<&ModelConfig::map_giveup_m>(), kPositive,
      "beyond about this distance from the map the map term lets go"},
+    {"lift_sigma_m", Field<&ModelConfig::lift_sigma_m>(), kNonNegative,
+     "pull of a pose in a lift ride towards the nearest lift shaft; 0: none"},
+    {"lift_giveup_m", Field<&ModelConfig::lift_giveup_m>(), kPositive,
+     "beyond about this distance from every lift shaft the lift term lets go"},
+    {"ride_min_s", Field<&ModelConfig::ride_min_s>(), kPositive,
+     "a lift ride: the walker stands at least this long..."},
+    {"ride_min_height_m", Field<&ModelConfig::ride_min_height_m>(), kPositive,
+     "...while the height changes by at least this"},
+    {"ride_gap_s", Field<&ModelConfig::ride_gap_s>(), kPositive,
+     "no step for this long counts as standing"},
+    {"ride_lag_s", Field<&ModelConfig::ride_lag_s>(), kNonNegative,
+     "the ride's height change is read up to this long after it (barometer lag)"},
     {"scale_segment_m", Field<&ModelConfig::scale_segment_m>(), kPositive,
      "one step-length scale unknown per this much estimated path"},
     {"scale_prior_sigma", Field<&ModelConfig::scale_prior_sigma>(), kPositive,

@@ -32,6 +32,7 @@ enum class TermFamily : int {
     kHeadingBiasWalk,  ///< the heading-rate bias's random walk and the prior on the first
     kBoundaryPrior,    ///< the prior on a fixed-lag window's boundary pose (its marginalised past)
     kFloorHeight,      ///< a level pose's height about its floor (ModelConfig::floor_sigma_m)
+    kLiftDistance,     ///< a pose in a lift ride from the nearest shaft (ModelConfig::lift_sigma_m)
     /// The map's offset process of the covariance's model (optim/covariance.h); not a
     /// term of the objective.
     kMapOffset,
@@ -39,7 +40,7 @@ enum class TermFamily : int {
     /// not a term of the objective.
     kStepError,
 };
-constexpr int kTermFamilies = 14;
+constexpr int kTermFamilies = 15;
 const char* ToString(TermFamily family);
 
 /// The most local variables a block has (the speed change term: three poses).
@@ -251,6 +252,24 @@ public:
 
 private:
     const std::optional<TraversableSample>& Sample(const BlockContext& ctx) const;
+    MapDistanceTerm term_;
+};
+
+/// The lift term of one pose in a lift ride, over its position [x, y, z] (reads x, y): core
+/// MapDistanceTerm on the horizontal distance to the nearest of the context field's lift shafts
+/// (DistanceToShafts: 0 inside, where the pose may stand anywhere).
+class LiftDistanceBlock final : public TermBlock {
+public:
+    LiftDistanceBlock(const MapDistanceTerm& term, int pose)
+        : TermBlock(TermFamily::kLiftDistance, 3, 0b011), term_(term) {
+        set_pose(pose);
+    }
+    double Evaluate(const BlockContext& ctx, const BlockVector& x, BlockVector* grad,
+                    BlockMatrix* hess) const override;
+    void Linearise(const BlockContext& ctx, const BlockVector& x,
+                   std::vector<LinearisedTerm>& out) const override;
+
+private:
     MapDistanceTerm term_;
 };
 

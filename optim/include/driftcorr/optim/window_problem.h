@@ -143,6 +143,7 @@ private:
     void AddScaleBlocks();
     void AddBiasBlocks();
     void AddFloorBlocks();
+    void AddLiftBlocks();
     bool HasBias() const { return !state_.bias_segment.empty(); }
     /// Binds local variable k of `block` to component c of `pose` (fixed before the window).
     void BindPose(TermBlock& block, int k0, std::size_t pose) const;
