@@ -496,16 +496,17 @@ LiftShaft Square(const Eigen::Vector2d& c) {
 
 TEST(LiftShafts, DistanceIsZeroInsideToTheEdgeBesideAndToTheCornerBeyond) {
     const std::vector<LiftShaft> shafts = {Square({0, 0}), Square({10, 0})};
-    EXPECT_EQ(DistanceToShafts(shafts, {0.5, -0.5}).value, 0.0);
-    EXPECT_EQ(DistanceToShafts(shafts, {10.2, 0.9}).gradient.norm(), 0.0);
-    const PlaneDistance edge = DistanceToShafts(shafts, {3.0, 0.5});  // beside the first's edge
+    EXPECT_EQ(DistanceToShafts(shafts, {0.5, -0.5, 3.0}).value, 0.0);
+    EXPECT_EQ(DistanceToShafts(shafts, {10.2, 0.9, 3.0}).gradient.norm(), 0.0);
+    const FieldSample edge = DistanceToShafts(shafts, {3.0, 0.5, 3.0});  // beside the first's edge
     EXPECT_NEAR(edge.value, 2.0, 1e-12);
-    EXPECT_NEAR((edge.gradient - Eigen::Vector2d(1, 0)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((edge.gradient - Eigen::Vector3d(1, 0, 0)).norm(), 0.0, 1e-12);
     EXPECT_NEAR(edge.hessian.norm(), 0.0, 1e-12);
-    const PlaneDistance corner = DistanceToShafts(shafts, {7.0, 5.0});  // beyond the second's
+    const FieldSample corner = DistanceToShafts(shafts, {7.0, 5.0, 3.0});  // beyond the second's
     EXPECT_NEAR(corner.value, std::hypot(2.0, 4.0), 1e-12);
-    EXPECT_NEAR((corner.gradient - Eigen::Vector2d(-2, 4).normalized()).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((corner.gradient - Eigen::Vector3d(-2, 4, 0).normalized()).norm(), 0.0, 1e-12);
     EXPECT_NEAR((corner.hessian * corner.gradient).norm(), 0.0, 1e-12);
+    EXPECT_NEAR(corner.hessian.row(2).norm() + corner.hessian.col(2).norm(), 0.0, 1e-12);
 }
 
 // The curve with a 20 s stop at pose 15 during which the height rises by 4 m: a lift ride over

@@ -142,13 +142,14 @@ bool Inside(const LiftShaft& ring, const Eigen::Vector2d& p) {
 
 }  // namespace
 
-PlaneDistance DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector2d& p) {
+FieldSample DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector3d& p_enu) {
+    const Eigen::Vector2d p = p_enu.head<2>();
     DRIFTCORR_CHECK(!shafts.empty(), "no lift shaft");
     double best = std::numeric_limits<double>::infinity();
     Eigen::Vector2d nearest = p;
     bool corner = false;
     for (const LiftShaft& ring : shafts) {
-        if (Inside(ring, p)) return PlaneDistance{};
+        if (Inside(ring, p)) return FieldSample{};
         for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
             const Eigen::Vector2d& a = ring[j];
             const Eigen::Vector2d ab = ring[i] - a;
@@ -159,13 +160,14 @@ PlaneDistance DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen
             if (d < best) best = d, nearest = q, corner = u <= 0.0 || u >= 1.0;
         }
     }
-    PlaneDistance out;
+    FieldSample out;
     out.value = best;
     if (!(best > 0.0)) return out;
-    out.gradient = (p - nearest) / best;
+    const Eigen::Vector2d g = (p - nearest) / best;
+    out.gradient.head<2>() = g;
     if (corner) {
-        out.hessian =
-            (Eigen::Matrix2d::Identity() - out.gradient * out.gradient.transpose()) / best;
+        out.hessian.topLeftCorner<2, 2>() =
+            (Eigen::Matrix2d::Identity() - g * g.transpose()) / best;
     }
     return out;
 }

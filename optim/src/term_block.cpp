@@ -59,6 +59,28 @@ const std::optional<TraversableSample>& MapDistanceBlock::Sample(const BlockCont
     return (*ctx.samples)[static_cast<std::size_t>(pose()) - ctx.first_pose];
 }
 
+namespace {
+
+// A map-distance term on a distance sample: cost, and on request its gradient and Hessian over
+// the pose's [x, y, z].
+double EvaluateOnSample(const MapDistanceTerm& term, const FieldSample& d, BlockVector* grad,
+                        BlockMatrix* hess) {
+    Eigen::Vector3d g;
+    Eigen::Matrix3d h;
+    const double cost =
+        term.Evaluate(d.value, d.gradient, d.hessian, grad ? &g : nullptr, hess ? &h : nullptr);
+    if (grad) *grad = g;
+    if (hess) *hess = h;
+    return cost;
+}
+
+FieldSample DistanceToLift(const BlockContext& ctx, const BlockVector& x) {
+    DRIFTCORR_CHECK(ctx.field && !ctx.field->lift_shafts().empty(), "lift block without shafts");
+    return DistanceToShafts(ctx.field->lift_shafts(), x.head<3>());
+}
+
+}  // namespace
+
 double MapDistanceBlock::Evaluate(const BlockContext& ctx, const BlockVector&, BlockVector* grad,
                                   BlockMatrix* hess) const {
     const auto& s = Sample(ctx);
@@ -67,13 +89,7 @@ double MapDistanceBlock::Evaluate(const BlockContext& ctx, const BlockVector&, B
         if (hess) hess->setZero(3, 3);
         return 0.0;
     }
-    Eigen::Vector3d g;
-    Eigen::Matrix3d h;
-    const double cost = term_.Evaluate(s->centre.value, s->centre.gradient, s->centre.hessian,
-                                       grad ? &g : nullptr, hess ? &h : nullptr);
-    if (grad) *grad = g;
-    if (hess) *hess = h;
-    return cost;
+    return EvaluateOnSample(term_, s->centre, grad, hess);
 }
 
 void MapDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
@@ -84,43 +100,15 @@ void MapDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
     out.push_back(FromLinearisation(term_.Linearise(s->centre.value, j)));
 }
 
-namespace {
-
-// LiftDistanceBlock's distance over [x, y, z]: to the nearest shaft's outline (0 inside).
-struct LiftDistance {
-    double value = 0.0;
-    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
-};
-
-LiftDistance DistanceToLift(const BlockContext& ctx, const BlockVector& x) {
-    DRIFTCORR_CHECK(ctx.field && !ctx.field->lift_shafts().empty(), "lift block without shafts");
-    const PlaneDistance d = DistanceToShafts(ctx.field->lift_shafts(), Eigen::Vector2d(x[0], x[1]));
-    LiftDistance out;
-    out.value = d.value;
-    out.gradient.head<2>() = d.gradient;
-    out.hessian.topLeftCorner<2, 2>() = d.hessian;
-    return out;
-}
-
-}  // namespace
-
 double LiftDistanceBlock::Evaluate(const BlockContext& ctx, const BlockVector& x, BlockVector* grad,
                                    BlockMatrix* hess) const {
-    const LiftDistance d = DistanceToLift(ctx, x);
-    Eigen::Vector3d g;
-    Eigen::Matrix3d h;
-    const double cost =
-        term_.Evaluate(d.value, d.gradient, d.hessian, grad ? &g : nullptr, hess ? &h : nullptr);
-    if (grad) *grad = g;
-    if (hess) *hess = h;
-    return cost;
+    return EvaluateOnSample(term_, DistanceToLift(ctx, x), grad, hess);
 }
 
 // Inside a shaft the pose may be anywhere in it: no residual.
 void LiftDistanceBlock::Linearise(const BlockContext& ctx, const BlockVector& x,
                                   std::vector<LinearisedTerm>& out) const {
-    const LiftDistance d = DistanceToLift(ctx, x);
+    const FieldSample d = DistanceToLift(ctx, x);
     if (d.value > 0.0) out.push_back(FromLinearisation(term_.Linearise(d.value, d.gradient)));
 }
 

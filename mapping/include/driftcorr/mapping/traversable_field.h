@@ -20,17 +20,11 @@ struct TraversableSample {
 /// A lift shaft: its outline in the East-North plane [m]; it joins every floor of the map.
 using LiftShaft = std::vector<Eigen::Vector2d>;
 
-/// A distance in the East-North plane [m] with its gradient and Hessian over (east, north).
-struct PlaneDistance {
-    double value = 0.0;
-    Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d hessian = Eigen::Matrix2d::Zero();
-};
-
-/// Distance from p to the nearest of `shafts` (0 inside one, gradient and Hessian zero there):
-/// the nearest outline point's direction as gradient, Hessian zero along an edge and
-/// (I - g g^T) / d at a corner. Precondition: !shafts.empty(), each with 3 or more corners.
-PlaneDistance DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector2d& p);
+/// Horizontal distance from p to the nearest of `shafts` (0 inside one, gradient and Hessian zero
+/// there), as a sample over (east, north, up) whose up components are zero: the nearest outline
+/// point's direction as gradient, Hessian zero along an edge and (I - g g^T) / d at a corner.
+/// Precondition: !shafts.empty(), each with 3 or more corners.
+FieldSample DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector3d& p);
 
 class TraversableField {
 public:
