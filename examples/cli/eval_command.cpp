@@ -38,10 +38,19 @@ const char* kEvalUsage =
     "<scenario>_error.svg. A scenario that fails is reported and does not stop the others.\n"
     "Exit codes: 0 all ran, 1 usage, 2 at least one scenario or method failed, 4 internal.\n";
 
+// "estimate,paper,driftcorr,online": eval::DefaultMethods() by name.
+std::string DefaultMethodList() {
+    std::string list;
+    for (const eval::Method m : eval::DefaultMethods()) {
+        list += (list.empty() ? "" : ",") + eval::ToString(m);
+    }
+    return list;
+}
+
 struct EvalArgs {
     std::vector<std::string> scenarios;
     std::string report_dir, config;
-    std::string methods = "estimate,paper,driftcorr,online";
+    std::string methods = DefaultMethodList();
     bool quiet = false;
 };
 
@@ -86,8 +95,8 @@ bool ParseMethods(const std::string& list, std::vector<eval::Method>& methods, s
             list.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
         const std::optional<eval::Method> m = eval::MethodFromString(name);
         if (!m) {
-            err = "--methods: unknown method '" + name +
-                  "' (expected a comma-separated list of estimate, paper, driftcorr, online)";
+            err = "--methods: unknown method '" + name + "' (expected a comma-separated list of " +
+                  DefaultMethodList() + ")";
             return false;
         }
         if (std::find(methods.begin(), methods.end(), *m) != methods.end()) {
