@@ -134,8 +134,11 @@ inline void RunScenarioYaml(std::string_view input, const std::string& tmp_dir) 
             if (src == nullptr) continue;
             Require(!src->rate_hz || (std::isfinite(*src->rate_hz) && *src->rate_hz > 0.0),
                     "rate_hz not positive and finite");
-            Require(src->format == io::TrajectoryFormat::kTum || src->rate_hz || src->times_path,
+            const bool kitti = src->format == io::TrajectoryFormat::kKitti;
+            Require(!kitti || src->rate_hz || src->times_path,
                     "kitti source without rate_hz or times");
+            Require(kitti || (!src->rate_hz && !src->times_path),
+                    "rate_hz or times on a source that is not kitti");
         }
     } catch (const InputError&) {
     }
