@@ -489,13 +489,13 @@ INSTANTIATE_TEST_SUITE_P(
 // ---- Lift rides ---------------------------------------------------------------------------------
 
 // A 2 m x 2 m shaft centred at c.
-LiftShaft Square(const Eigen::Vector2d& c) {
+ShaftOutline Square(const Eigen::Vector2d& c) {
     return {c + Eigen::Vector2d(-1, -1), c + Eigen::Vector2d(1, -1), c + Eigen::Vector2d(1, 1),
             c + Eigen::Vector2d(-1, 1)};
 }
 
 TEST(LiftShafts, DistanceIsZeroInsideToTheEdgeBesideAndToTheCornerBeyond) {
-    const std::vector<LiftShaft> shafts = {Square({0, 0}), Square({10, 0})};
+    const std::vector<ShaftOutline> shafts = {Square({0, 0}), Square({10, 0})};
     EXPECT_EQ(DistanceToShafts(shafts, {0.5, -0.5, 3.0}).value, 0.0);
     EXPECT_EQ(DistanceToShafts(shafts, {10.2, 0.9, 3.0}).gradient.norm(), 0.0);
     const FieldSample edge = DistanceToShafts(shafts, {3.0, 0.5, 3.0});  // beside the first's edge

@@ -322,7 +322,7 @@ TraversableField BuildIndoorField(const std::vector<IndoorFloor>& floors,
     }
     TraversableField field(InterpolatedField(s, std::move(centre)),
                            InterpolatedField(s, std::move(corridor)), config.truncation_m);
-    std::vector<LiftShaft> shafts;
+    std::vector<ShaftOutline> shafts;
     for (const IndoorFloor& f : floors) {
         for (const FloorPolygon& lift : f.lifts) {
             if (lift.outer_en.size() >= 3) shafts.push_back(lift.outer_en);

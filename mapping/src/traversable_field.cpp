@@ -117,8 +117,8 @@ std::optional<FieldSample> TraversableField::QueryCorridorBilinear(
     });
 }
 
-void TraversableField::set_lift_shafts(std::vector<LiftShaft> shafts) {
-    for (const LiftShaft& ring : shafts) {
+void TraversableField::set_lift_shafts(std::vector<ShaftOutline> shafts) {
+    for (const ShaftOutline& ring : shafts) {
         DRIFTCORR_CHECK(ring.size() >= 3, "a lift shaft needs 3 corners");
     }
     lift_shafts_ = std::move(shafts);
@@ -127,7 +127,7 @@ void TraversableField::set_lift_shafts(std::vector<LiftShaft> shafts) {
 namespace {
 
 // Even-odd rule.
-bool Inside(const LiftShaft& ring, const Eigen::Vector2d& p) {
+bool Inside(const ShaftOutline& ring, const Eigen::Vector2d& p) {
     bool in = false;
     for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
         const Eigen::Vector2d& a = ring[i];
@@ -142,13 +142,14 @@ bool Inside(const LiftShaft& ring, const Eigen::Vector2d& p) {
 
 }  // namespace
 
-FieldSample DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector3d& p_enu) {
+FieldSample DistanceToShafts(const std::vector<ShaftOutline>& shafts,
+                             const Eigen::Vector3d& p_enu) {
     const Eigen::Vector2d p = p_enu.head<2>();
     DRIFTCORR_CHECK(!shafts.empty(), "no lift shaft");
     double best = std::numeric_limits<double>::infinity();
     Eigen::Vector2d nearest = p;
     bool corner = false;
-    for (const LiftShaft& ring : shafts) {
+    for (const ShaftOutline& ring : shafts) {
         if (Inside(ring, p)) return FieldSample{};
         for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
             const Eigen::Vector2d& a = ring[j];

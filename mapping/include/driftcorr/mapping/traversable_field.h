@@ -18,13 +18,13 @@ struct TraversableSample {
 };
 
 /// A lift shaft: its outline in the East-North plane [m]; it joins every floor of the map.
-using LiftShaft = std::vector<Eigen::Vector2d>;
+using ShaftOutline = std::vector<Eigen::Vector2d>;
 
 /// Horizontal distance from p to the nearest of `shafts` (0 inside one, gradient and Hessian zero
 /// there), as a sample over (east, north, up) whose up components are zero: the nearest outline
 /// point's direction as gradient, Hessian zero along an edge and (I - g g^T) / d at a corner.
 /// Precondition: !shafts.empty(), each with 3 or more corners.
-FieldSample DistanceToShafts(const std::vector<LiftShaft>& shafts, const Eigen::Vector3d& p);
+FieldSample DistanceToShafts(const std::vector<ShaftOutline>& shafts, const Eigen::Vector3d& p);
 
 class TraversableField {
 public:
@@ -60,9 +60,9 @@ public:
 
     /// The lift shafts of the map (an indoor map's lifts; none for roads and surface layers):
     /// where a walker who rides a lift stands.
-    const std::vector<LiftShaft>& lift_shafts() const { return lift_shafts_; }
+    const std::vector<ShaftOutline>& lift_shafts() const { return lift_shafts_; }
     /// Precondition: each shaft has 3 or more corners.
-    void set_lift_shafts(std::vector<LiftShaft> shafts);
+    void set_lift_shafts(std::vector<ShaftOutline> shafts);
 
     /// The grid the field's samples lie on (for a tiled field: the grid its tiles are cut from).
     const GridSpec& spec() const { return grid_; }
@@ -90,7 +90,7 @@ private:
     std::vector<int> tile_index_;   ///< tiles_x_ * tiles_y_, index into tiles_ or -1
     std::vector<Tile> tiles_;
     double truncation_m_ = 0.0;
-    std::vector<LiftShaft> lift_shafts_;
+    std::vector<ShaftOutline> lift_shafts_;
 };
 
 }  // namespace driftcorr
