@@ -1515,6 +1515,12 @@ TEST(CliMap, RawBuildingScanGivesTheWalkableSurfaceAndTheSameCorrection) {
                    dir);
     ASSERT_EQ(x.exit_code, kExitOk) << x.err;
     std::printf("%s", x.out.c_str());
+    // The layer line for the scenario, with the shaft the generator declares in its own scenarios.
+    EXPECT_NE(x.out.find("scenario   map: [{path: walkable.pcd, lifts: [[50, 17.5, 52, 19.5]]}]"),
+              std::string::npos)
+        << x.out;
+    EXPECT_NE(ReadFile(dir / "scenario.yaml").find("lifts: [[50, 17.5, 52, 19.5]]"),
+              std::string::npos);
     const driftcorr::SurfaceAgreement a = driftcorr::CompareSurfaces(
         driftcorr::ReadSurfacePointsPcd((dir / "walkable.pcd").string()),
         driftcorr::ReadSurfacePointsPcd((dir / "building_raw_walkable.pcd").string()), 0.1, 0.3);

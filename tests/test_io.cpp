@@ -303,7 +303,7 @@ anchor:
 map:
   - path: map.osm
   - {path: floors.PCD, role: floorplan, floor_z_m: 3.5}
-  - {path: a.bt}
+  - {path: a.bt, lifts: [[50, 17.5, 52, 19.5], [-1, 0, 1.5, 2]]}
   - {path: b.ot, format: octomap}
   - {path: c.json, role: walkways}
   - {path: d.ply}
@@ -339,6 +339,14 @@ TEST(Scenario, LoadsFolderWithDefaultsAndResolvedPaths) {
     EXPECT_EQ(s.map[1].role, LayerRole::kFloorplan);
     EXPECT_EQ(s.map[1].floor_z_m, 3.5);
     EXPECT_EQ(s.map[2].format, MapFormat::kOctomap);
+    ASSERT_EQ(s.map[2].lifts.size(), 2u);
+    EXPECT_EQ(s.map[2].lifts[0].x0, 50.0);
+    EXPECT_EQ(s.map[2].lifts[0].y0, 17.5);
+    EXPECT_EQ(s.map[2].lifts[0].x1, 52.0);
+    EXPECT_EQ(s.map[2].lifts[0].y1, 19.5);
+    EXPECT_EQ(s.map[2].lifts[1].x0, -1.0);
+    EXPECT_EQ(s.map[2].lifts[1].y1, 2.0);
+    EXPECT_TRUE(s.map[3].lifts.empty());
     EXPECT_EQ(s.map[3].format, MapFormat::kOctomap);
     EXPECT_EQ(s.map[4].format, MapFormat::kGeoJson);
     EXPECT_EQ(s.map[4].role, LayerRole::kWalkways);
@@ -496,9 +504,22 @@ INSTANTIATE_TEST_SUITE_P(
         BadScenarioCase{"map_unknown_format", "{path: b.ot, format: octomap}",
                         "{path: b.ot, format: voxels}",
                         ":20: map[3].format: unknown value 'voxels'"},
-        BadScenarioCase{"map_format_not_inferable", "{path: a.bt}", "{path: a.xyz}",
+        BadScenarioCase{"map_format_not_inferable", "{path: a.bt,", "{path: a.xyz,",
                         ":19: map[2].format: missing, and the extension"},
-        BadScenarioCase{"map_missing_path", "{path: a.bt}", "{format: bt}", ":19: map[2].path"},
+        BadScenarioCase{"map_missing_path", "{path: a.bt,", "{format: bt,", ":19: map[2].path"},
+        BadScenarioCase{"lifts_on_a_plan", "role: walkways",
+                        "role: walkways, lifts: [[0, 0, 1, 1]]",
+                        ":21: map[4].lifts: only valid on a point-cloud or OctoMap layer"},
+        BadScenarioCase{"lifts_not_a_list", "lifts: [[50, 17.5, 52, 19.5], [-1, 0, 1.5, 2]]",
+                        "lifts: 5", ":19: map[2].lifts: must be a list of lists of 4 numbers"},
+        BadScenarioCase{"lift_of_three_numbers", "[-1, 0, 1.5, 2]", "[-1, 0, 1.5]",
+                        ":19: map[2].lifts: must be a list of lists of 4 numbers (lifts[1])"},
+        BadScenarioCase{"lift_not_a_number", "[-1, 0, 1.5, 2]", "[-1, 0, 1.5, high]",
+                        ":19: map[2].lifts[1]: 'high' is not a number"},
+        BadScenarioCase{"lift_inf", "[-1, 0, 1.5, 2]", "[-1, 0, .inf, 2]",
+                        ":19: map[2].lifts[1]: '.inf' is not a finite number"},
+        BadScenarioCase{"lift_empty_footprint", "[-1, 0, 1.5, 2]", "[1.5, 0, -1, 2]",
+                        ":19: map[2].lifts: a shaft [x0, y0, x1, y1] needs x1 > x0"},
         BadScenarioCase{"map_unknown_role", "role: walkways", "role: walls",
                         ":21: map[4].role: unknown value"},
         BadScenarioCase{"map_floor_not_number", "floor_z_m: 3.5", "floor_z_m: high",

@@ -106,8 +106,9 @@ ErrorSummary Compare(const std::vector<WalkPose>& gt, const std::vector<WalkPose
     return s;
 }
 
+// The map layer declares the building's lift shaft (a scan does not show it; see docs/FORMAT.md).
 std::string ScenarioYaml(const std::vector<std::string>& header, const std::string& map_path,
-                         const std::string& map_format) {
+                         const std::string& map_format, const Rect& lift) {
     std::string yaml;
     for (const std::string& line : header) yaml += "# " + line + "\n";
     yaml += "name: synthetic-building-" + map_format + "\n";
@@ -119,6 +120,8 @@ std::string ScenarioYaml(const std::vector<std::string>& header, const std::stri
     yaml += Format("  easting_m: %.3f\n  northing_m: %.3f\n", kAnchorEasting_m, kAnchorNorthing_m);
     yaml += "  yaw_deg: 0.0\n  z_m: 0.0\n";
     yaml += "map:\n  - path: " + map_path + "\n    format: " + map_format + "\n";
+    yaml +=
+        Format("    lifts: [[%.15g, %.15g, %.15g, %.15g]]\n", lift.x0, lift.y0, lift.x1, lift.y1);
     return yaml;
 }
 
@@ -193,13 +196,13 @@ int Run(const Options& opt) {
                           WithoutFurniture(surface, building, opt.raw));
     const auto header = YamlHeader(opt, gt.size(), surface.size(), raw.size(), s);
     WriteFileAtomically((dir / "scenario_ply.yaml").string(),
-                        ScenarioYaml(header, "building.ply", "ply"));
+                        ScenarioYaml(header, "building.ply", "ply", building.lift));
     WriteFileAtomically((dir / "scenario_octomap.yaml").string(),
-                        ScenarioYaml(header, "building.bt", "bt"));
+                        ScenarioYaml(header, "building.bt", "bt", building.lift));
     WriteFileAtomically((dir / "scenario_ot.yaml").string(),
-                        ScenarioYaml(header, "building.ot", "ot"));
+                        ScenarioYaml(header, "building.ot", "ot", building.lift));
     WriteFileAtomically((dir / "scenario.yaml").string(),
-                        ScenarioYaml(header, "building.pcd", "pcd"));
+                        ScenarioYaml(header, "building.pcd", "pcd", building.lift));
     std::printf(
         "synthetic-building: %zu poses, %.1f m walked, %zu surface points, %zu raw scan points; "
         "estimate ATE %.2f m, final error %.2f m, max error %.2f m, max height error %.2f m, "

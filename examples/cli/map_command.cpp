@@ -32,7 +32,9 @@ const char* kMapUsage =
     "apart), in regions of at least --min-area (4 m^2) connected to the largest one, in voxels\n"
     "of --resolution (0.1 m; an OctoMap's own voxel size by default). A lift does\n"
     "not show in a scan: --lifts declares each shaft's footprint [m, the map's frame], walkable\n"
-    "at every 0.25 m between the floors it touches. Gaps of the scan up to --fill-gap (2 m:\n"
+    "at every 0.25 m between the floors it touches; the scenario's map layer declares them\n"
+    "again (lifts: [[x0, y0, x1, y1]], printed below) so that a lift ride is corrected into its\n"
+    "shaft. Gaps of the scan up to --fill-gap (2 m:\n"
     "holes, a doorway lost to a hole) are closed where nothing stands in the way. Writes the\n"
     "surface (-o, PCD or PLY; an\n"
     "indoor3d scenario names it as its map) and a picture of each floor next to it\n"
@@ -242,6 +244,15 @@ int Extract(const std::string& input, const std::string& output, WalkableSurface
     std::printf("time       %.3f s (read %.3f, extract %.3f, write %.3f)\n", seconds(t0, t3),
                 seconds(t0, t1), seconds(t1, t2), seconds(t2, t3));
     std::printf("wrote      %s (%zu points)\n", output.c_str(), s.points.size());
+    if (!cfg.lifts.empty()) {
+        std::string lifts;
+        for (const LiftShaft& l : cfg.lifts) {
+            lifts += Format("%s[%.15g, %.15g, %.15g, %.15g]", lifts.empty() ? "" : ", ", l.x0, l.y0,
+                            l.x1, l.y1);
+        }
+        std::printf("scenario   map: [{path: %s, lifts: [%s]}]\n",
+                    std::filesystem::path(output).filename().string().c_str(), lifts.c_str());
+    }
     return kExitOk;
 }
 

@@ -134,7 +134,7 @@ def correct(trajectory, map, anchor, *, frame: str, mode: str, ground_truth=None
     """Corrects a trajectory held in memory.
 
     trajectory: (N, 8) or (N, 4) in its own frame (N >= 3).
-    map: a layer file path, or a list of paths and dicts ``{path, format, role, floor_z_m}``
+    map: a layer file path, or a list of paths and dicts ``{path, format, role, floor_z_m, lifts}``
         (the keys of scenario.yaml's ``map:`` entries; format from the extension when absent).
     anchor: a dict with the keys of scenario.yaml's ``anchor:`` block: ``lat_deg``, ``lon_deg``
         [, ``alt_m``] or ``crs``, ``easting_m``, ``northing_m``; ``yaw_deg`` (a number or "auto",

@@ -192,7 +192,7 @@ io::MapLayerSpec LayerFrom(const py::handle& item, const std::string& key) {
         return layer;
     }
     const py::dict d = py::reinterpret_borrow<py::dict>(item);
-    CheckKeys(d, {"path", "format", "role", "floor_z_m"}, key);
+    CheckKeys(d, {"path", "format", "role", "floor_z_m", "lifts"}, key);
     if (!d.contains("path") || d["path"].is_none()) Fail(key + "['path']", "missing");
     layer.path = ExistingPath(d["path"], key + "['path']");
     if (d.contains("format") && !d["format"].is_none()) {
@@ -219,6 +219,30 @@ io::MapLayerSpec LayerFrom(const py::handle& item, const std::string& key) {
     }
     if (d.contains("floor_z_m") && !d["floor_z_m"].is_none()) {
         layer.floor_z_m = DoubleOf(d["floor_z_m"], key + "['floor_z_m']");
+    }
+    if (d.contains("lifts") && !d["lifts"].is_none()) {
+        const std::string lifts_key = key + "['lifts']";
+        const py::handle lifts = d["lifts"];
+        const std::string shape = "expected a list of [x0, y0, x1, y1] lists";
+        if (!py::isinstance<py::sequence>(lifts) || py::isinstance<py::str>(lifts)) {
+            Fail(lifts_key, shape);
+        }
+        const py::sequence seq = py::reinterpret_borrow<py::sequence>(lifts);
+        for (std::size_t i = 0; i < seq.size(); ++i) {
+            const std::string item_key = lifts_key + "[" + std::to_string(i) + "]";
+            const py::handle item = seq[i];
+            if (!py::isinstance<py::sequence>(item) || py::isinstance<py::str>(item) ||
+                py::len(item) != 4) {
+                Fail(item_key, shape);
+            }
+            const py::sequence v = py::reinterpret_borrow<py::sequence>(item);
+            auto at = [&](std::size_t k) {
+                return DoubleOf(v[k], item_key + "[" + std::to_string(k) + "]");
+            };
+            layer.lifts.push_back({at(0), at(1), at(2), at(3)});
+        }
+        const std::string problem = io::CheckLayerLifts(layer.format, layer.lifts);
+        if (!problem.empty()) Fail(lifts_key, problem);
     }
     return layer;
 }
@@ -431,6 +455,11 @@ py::list MapToList(const std::vector<io::MapLayerSpec>& layers) {
             d["role"] = l.role == io::LayerRole::kWalkways ? "walkways" : "floorplan";
         }
         if (l.floor_z_m) d["floor_z_m"] = *l.floor_z_m;
+        if (!l.lifts.empty()) {
+            py::list lifts;
+            for (const LiftShaft& s : l.lifts) lifts.append(py::make_tuple(s.x0, s.y0, s.x1, s.y1));
+            d["lifts"] = lifts;
+        }
         out.append(d);
     }
     return out;

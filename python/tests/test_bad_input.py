@@ -62,6 +62,10 @@ CASES = [
      ValueError, r"^map\[0\]\['format'\]: unknown value 'shp'"),
     ("map key", lambda p: {"map": [{"path": p["map"][0]["path"], "fromat": "osm"}]},
      ValueError, r"^map\[0\]: unknown key 'fromat'"),
+    ("lifts on roads", lambda p: {"map": [{"path": p["map"][0]["path"], "lifts": [[0, 0, 1, 1]]}]},
+     ValueError, r"^map\[0\]\['lifts'\]: only valid on a point-cloud or OctoMap layer"),
+    ("lift of 3", lambda p: {"map": [{"path": p["map"][0]["path"], "lifts": [[0, 0, 1]]}]},
+     ValueError, r"^map\[0\]\['lifts'\]\[0\]: expected a list of \[x0, y0, x1, y1\] lists"),
     ("anchor None", lambda p: {"anchor": None}, ValueError, r"^anchor: missing"),
     ("anchor no yaw", lambda p: {"anchor": anchor_with(p, yaw_deg=None)}, ValueError,
      r"^anchor\['yaw_deg'\]: missing"),
@@ -160,3 +164,19 @@ def test_stream_arguments(synthetic_short, parts):
     with pytest.raises(driftcorr.InputError, match=r"anchor.yaw_deg"):
         driftcorr.Stream(map=parts["map"], anchor=anchor_with(parts, yaw_deg="auto"),
                          frame=parts["frame"], mode=parts["mode"])
+
+
+def test_surface_layer_lifts_round_trip(synthetic_short, tmp_path):
+    """A point-cloud layer's declared lift shafts come back from load_scenario as given."""
+    (tmp_path / "cloud.pcd").write_text("")  # not opened by load_scenario
+    yaml = (synthetic_short / "scenario.yaml").read_text()
+    yaml = yaml.replace("mode: road2d", "mode: indoor3d")
+    yaml = yaml.replace("  yaw_deg: 0.0", "  yaw_deg: 0.0\n  z_m: 0.0")
+    yaml = yaml.replace("estimate.tum", str(synthetic_short / "estimate.tum"))
+    yaml = yaml.replace("ground_truth.tum", str(synthetic_short / "ground_truth.tum"))
+    yaml = yaml.replace("  - path: map.osm\n    format: osm",
+                        "  - {path: cloud.pcd, lifts: [[50, 17.5, 52, 19.5], [-1, 0, 1.5, 2]]}")
+    (tmp_path / "scenario.yaml").write_text(yaml)
+    sc = driftcorr.load_scenario(tmp_path)
+    assert sc.mode == "indoor3d"
+    assert [list(l) for l in sc.map[0]["lifts"]] == [[50, 17.5, 52, 19.5], [-1, 0, 1.5, 2]]

@@ -129,6 +129,13 @@ inline void RunScenarioYaml(std::string_view input, const std::string& tmp_dir) 
             Require(std::isfinite(*s.anchor.easting_m) && std::isfinite(*s.anchor.northing_m),
                     "anchor easting/northing not finite");
         }
+        for (const io::MapLayerSpec& layer : s.map) {
+            for (const LiftShaft& l : layer.lifts) {
+                Require(std::isfinite(l.x0) && std::isfinite(l.y0) && l.x1 > l.x0 && l.y1 > l.y0 &&
+                            std::isfinite(l.x1) && std::isfinite(l.y1),
+                        "lift footprint not finite or empty");
+            }
+        }
         for (const io::TrajectorySource* src :
              {&s.estimate, s.ground_truth ? &*s.ground_truth : nullptr}) {
             if (src == nullptr) continue;

@@ -79,6 +79,26 @@ public:
     }
     bool Has(const std::string& key) const { return Find(key).has_value(); }
     const std::string& file() const { return file_; }
+    /// `key: [[a, b, ...], ...]`: a list of lists of `n` finite numbers each; empty when absent.
+    std::vector<std::vector<double>> NumberLists(const std::string& key, std::size_t n) const {
+        std::vector<std::vector<double>> lists;
+        const std::optional<YAML::Node> list = Find(key);
+        if (!list) return lists;
+        const std::string shape = "must be a list of lists of " + std::to_string(n) + " numbers";
+        if (!list->IsSequence()) Fail(key, shape);
+        for (std::size_t i = 0; i < list->size(); ++i) {
+            const YAML::Node entry = (*list)[i];
+            const std::string entry_key = key + "[" + std::to_string(i) + "]";
+            if (!entry.IsSequence() || entry.size() != n) Fail(key, shape + " (" + entry_key + ")");
+            std::vector<double> values;
+            for (std::size_t k = 0; k < n; ++k) {
+                if (!entry[k].IsScalar()) Fail(key, shape + " (" + entry_key + ")");
+                values.push_back(ToDouble(entry_key, entry[k].Scalar()));
+            }
+            lists.push_back(std::move(values));
+        }
+        return lists;
+    }
 
     /// One warning per key not in `known` ("file:line: key: unknown key, ignored"): docs/FORMAT.md
     /// allows extensions, but a misspelt optional key (yaw_dge) must not pass unnoticed.
@@ -302,9 +322,21 @@ MapFormat ParseMapFormat(const Block& block, const std::string& path) {
     block.Fail("format", "missing, and the extension of '" + path + "' names no known map format");
 }
 
+// `lifts:` of a point-cloud / OctoMap layer: [[x0, y0, x1, y1], ...], each shaft's footprint in the
+// layer's frame.
+std::vector<LiftShaft> ParseLifts(const Block& block, MapFormat format) {
+    std::vector<LiftShaft> lifts;
+    for (const std::vector<double>& v : block.NumberLists("lifts", 4)) {
+        lifts.push_back({v[0], v[1], v[2], v[3]});
+    }
+    const std::string problem = CheckLayerLifts(format, lifts);
+    if (!problem.empty()) block.Fail("lifts", problem);
+    return lifts;
+}
+
 MapLayerSpec ParseLayer(const Block& block, const fs::path& dir,
                         std::vector<std::string>& warnings) {
-    block.WarnUnknownKeys({"path", "format", "role", "floor_z_m"}, warnings);
+    block.WarnUnknownKeys({"path", "format", "role", "floor_z_m", "lifts"}, warnings);
     MapLayerSpec layer;
     const std::string path = block.String("path");
     layer.path = ResolvePath(dir, path);
@@ -313,6 +345,7 @@ MapLayerSpec ParseLayer(const Block& block, const fs::path& dir,
         layer.role = ParseChoice(block, "role", LayerRoles());
     }
     layer.floor_z_m = block.OptDouble("floor_z_m");
+    layer.lifts = ParseLifts(block, layer.format);
     return layer;
 }
 
@@ -393,6 +426,22 @@ std::string ToString(TrajectoryFormat format) {
         case TrajectoryFormat::kEuroc: return "euroc";
     }
     return "unknown";
+}
+
+std::string CheckLayerLifts(MapFormat format, const std::vector<LiftShaft>& lifts) {
+    if (lifts.empty()) return "";
+    if (format != MapFormat::kPcd && format != MapFormat::kPly && format != MapFormat::kOctomap) {
+        return "only valid on a point-cloud or OctoMap layer (a floor plan marks its lifts with "
+               "Type: Lift)";
+    }
+    for (const LiftShaft& l : lifts) {
+        const bool finite = std::isfinite(l.x0) && std::isfinite(l.y0) && std::isfinite(l.x1) &&
+                            std::isfinite(l.y1);
+        if (!finite || !(l.x1 > l.x0 && l.y1 > l.y0)) {
+            return "a shaft [x0, y0, x1, y1] needs x1 > x0 and y1 > y0";
+        }
+    }
+    return "";
 }
 
 std::optional<TrajectoryFormat> ParseTrajectoryFormat(const std::string& name) {

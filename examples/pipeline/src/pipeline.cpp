@@ -75,11 +75,12 @@ bool IsSurfaceLayer(const io::MapLayerSpec& layer) {
            layer.format == io::MapFormat::kOctomap;
 }
 
-// The walkable surfaces of the scenario's point-cloud / OctoMap layers as a 3D field. The files
-// hold points in the anchor's local East-North frame (metres from the anchor origin) and heights
-// in the map's datum (the one z_m refers to).
+// The walkable surfaces of the scenario's point-cloud / OctoMap layers as a 3D field, with the
+// lift shafts the layers declare. The files hold points in the anchor's local East-North frame
+// (metres from the anchor origin) and heights in the map's datum (the one z_m refers to).
 TraversableField LoadSurfaceField(const io::Scenario& sc, const SurfaceFieldConfig& config) {
     std::vector<Eigen::Vector3d> points;
+    std::vector<ShaftOutline> shafts;
     for (std::size_t i = 0; i < sc.map.size(); ++i) {
         if (!IsSurfaceLayer(sc.map[i])) {
             throw InputError(sc.yaml_path, 0, "map[" + std::to_string(i) + "].format",
@@ -88,9 +89,14 @@ TraversableField LoadSurfaceField(const io::Scenario& sc, const SurfaceFieldConf
         }
         const std::vector<Eigen::Vector3d> layer = SurfaceIo().read_surface_points(sc.map[i].path);
         points.insert(points.end(), layer.begin(), layer.end());
+        for (const LiftShaft& l : sc.map[i].lifts) {
+            shafts.push_back({{l.x0, l.y0}, {l.x1, l.y0}, {l.x1, l.y1}, {l.x0, l.y1}});
+        }
     }
     try {
-        return BuildSurfaceField(points, config);
+        TraversableField field = BuildSurfaceField(points, config);
+        field.set_lift_shafts(std::move(shafts));
+        return field;
     } catch (const std::invalid_argument& e) {
         throw InputError(sc.yaml_path, 0, "map", std::string(e.what()) + " (surface_field settings)");
     }

@@ -6,6 +6,7 @@
 
 #include "driftcorr/core/frames.h"
 #include "driftcorr/core/types.h"
+#include "driftcorr/mapping/walkable_surface.h"
 
 namespace driftcorr::io {
 
@@ -52,6 +53,9 @@ struct MapLayerSpec {
     MapFormat format = MapFormat::kOsm;
     LayerRole role = LayerRole::kNone;
     std::optional<double> floor_z_m;
+    /// `lifts:` (point-cloud / OctoMap layers only): the footprints of the building's lift shafts
+    /// in the layer's frame; a shaft joins every floor. A scan does not show where a lift is.
+    std::vector<LiftShaft> lifts;
 };
 
 struct Scenario {
@@ -71,8 +75,9 @@ struct Scenario {
 /// Loads `path` (a scenario folder containing scenario.yaml, or a .yaml file). Throws
 /// InputError naming the yaml file, the line and the key for: unreadable file, YAML syntax error,
 /// missing required key, unknown mode/format/frame/role, anchor without coordinates (or with both
-/// kinds), kitti estimate without rate_hz and times, non-finite numbers, an empty map list.
-/// Does not open the files named inside (LoadTrajectory and the map readers do).
+/// kinds), kitti estimate without rate_hz and times, non-finite numbers, an empty map list,
+/// `lifts` on a layer that is no point cloud or OctoMap, or a lift footprint with x1 <= x0 or y1 <=
+/// y0. Does not open the files named inside (LoadTrajectory and the map readers do).
 Scenario LoadScenario(const std::string& path);
 
 std::string ToString(ScenarioMode mode);
@@ -80,6 +85,10 @@ std::string ToString(MapFormat format);
 std::string ToString(TrajectoryFormat format);
 /// "kitti", "tum", "csv", "euroc"; std::nullopt for anything else.
 std::optional<TrajectoryFormat> ParseTrajectoryFormat(const std::string& name);
+
+/// Empty when `lifts` may sit on a layer of `format` (point clouds and OctoMaps: a floor plan marks
+/// its lifts itself) and every footprint is finite with x1 > x0 and y1 > y0; else what is wrong.
+std::string CheckLayerLifts(MapFormat format, const std::vector<LiftShaft>& lifts);
 
 /// The names scenario.yaml accepts, for scenarios built in memory (the Python bindings):
 /// "road2d" | "indoor3d"; "osm" | "geojson" | "pcd" | "ply" | "bt" | "ot" | "octomap";
