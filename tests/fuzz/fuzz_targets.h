@@ -130,6 +130,10 @@ inline void RunScenarioYaml(std::string_view input, const std::string& tmp_dir) 
                     "anchor easting/northing not finite");
         }
         for (const io::MapLayerSpec& layer : s.map) {
+            Require(layer.lifts.empty() || layer.format == io::MapFormat::kPcd ||
+                        layer.format == io::MapFormat::kPly ||
+                        layer.format == io::MapFormat::kOctomap,
+                    "lifts on a layer that is no point cloud or OctoMap");
             for (const LiftShaft& l : layer.lifts) {
                 Require(std::isfinite(l.x0) && std::isfinite(l.y0) && l.x1 > l.x0 && l.y1 > l.y0 &&
                             std::isfinite(l.x1) && std::isfinite(l.y1),

@@ -58,8 +58,8 @@ public:
     std::optional<FieldSample> QueryCentreBilinear(const Eigen::Vector3d& p_enu) const;
     std::optional<FieldSample> QueryCorridorBilinear(const Eigen::Vector3d& p_enu) const;
 
-    /// The lift shafts of the map (an indoor map's lifts; none for roads and surface layers):
-    /// where a walker who rides a lift stands.
+    /// The lift shafts of the map (the lifts of an indoor map's plans, or those a surface layer
+    /// declares; none for roads): where a walker who rides a lift stands.
     const std::vector<ShaftOutline>& lift_shafts() const { return lift_shafts_; }
     /// Precondition: each shaft has 3 or more corners.
     void set_lift_shafts(std::vector<ShaftOutline> shafts);

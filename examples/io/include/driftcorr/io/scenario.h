@@ -75,9 +75,9 @@ struct Scenario {
 /// Loads `path` (a scenario folder containing scenario.yaml, or a .yaml file). Throws
 /// InputError naming the yaml file, the line and the key for: unreadable file, YAML syntax error,
 /// missing required key, unknown mode/format/frame/role, anchor without coordinates (or with both
-/// kinds), kitti estimate without rate_hz and times, non-finite numbers, an empty map list,
-/// `lifts` on a layer that is no point cloud or OctoMap, or a lift footprint with x1 <= x0 or y1 <=
-/// y0. Does not open the files named inside (LoadTrajectory and the map readers do).
+/// kinds), kitti estimate without rate_hz and times, non-finite numbers, an empty map list, and
+/// `lifts` that CheckLayerLifts refuses. Does not open the files named inside (LoadTrajectory and
+/// the map readers do).
 Scenario LoadScenario(const std::string& path);
 
 std::string ToString(ScenarioMode mode);
