@@ -41,18 +41,12 @@ void Score(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableFiel
            double reach_m, AnchorPlacement& pl) {
     const Eigen::Matrix2d r = Rot(pl.dyaw_rad);
     const Eigen::Vector2d shift = pivot + pl.offset_en;
-    double sum = 0.0;
-    std::size_t off = 0;
-    for (std::size_t k = 0; k < lead.p_rel.size(); ++k) {
+    const CentreFit fit = FitToCentres(field, lead.p_rel.size(), reach_m, [&](std::size_t k) {
         const Eigen::Vector2d p = r * lead.p_rel[k] + shift;
-        const auto q = field.CentreValue(Eigen::Vector3d(p.x(), p.y(), lead.up_m[k]));
-        const double d = q ? std::min(std::max(*q, 0.0), reach_m) : reach_m;
-        if (!q || *q > reach_m) ++off;
-        sum += d * d;
-    }
-    const double n = double(std::max<std::size_t>(1, lead.p_rel.size()));
-    pl.rms_m = std::sqrt(sum / n);
-    pl.off_share = double(off) / n;
+        return Eigen::Vector3d(p.x(), p.y(), lead.up_m[k]);
+    });
+    pl.rms_m = fit.rms_m;
+    pl.off_share = fit.off_share;
 }
 
 bool Distinct(const AnchorPlacement& a, const AnchorPlacement& b, const AnchorFitConfig& c) {

@@ -293,44 +293,31 @@ double MeanHeightNear(const PlanarTrajectory& est, std::size_t first, std::size_
     return n > 0 ? sum / double(n) : est.up_m[from];
 }
 
-// Share of the corrected poses [first, last], moved up by shift_m and horizontally by `offset`,
-// farther than reach_m from every walkway, and their RMS distance (each capped at reach_m).
-struct ShiftedFit {
-    double off_share = 1.0;
-    double rms_m = 0.0;
-};
-
-ShiftedFit FitShifted(const PlanarTrajectory& cor, const TraversableField& field, std::size_t first,
-                      std::size_t last, double shift_m, const Eigen::Vector2d& offset,
-                      double reach_m) {
-    double sum = 0.0;
-    std::size_t off = 0;
-    for (std::size_t i = first; i <= last; ++i) {
-        const Eigen::Vector2d p = cor.p_en[i] + offset;
-        const auto d = field.CentreValue(Eigen::Vector3d(p.x(), p.y(), cor.up_m[i] + shift_m));
-        const double m = d ? std::min(std::abs(*d), reach_m) : reach_m;
-        off += !d || std::abs(*d) > reach_m;
-        sum += m * m;
-    }
-    const double n = double(last - first + 1);
-    return {double(off) / n, std::sqrt(sum / n)};
+// CentreFit of the corrected poses [first, last], moved up by shift_m and horizontally by
+// `offset`.
+CentreFit FitShifted(const PlanarTrajectory& cor, const TraversableField& field, std::size_t first,
+                     std::size_t last, double shift_m, const Eigen::Vector2d& offset,
+                     double reach_m) {
+    return FitToCentres(field, last - first + 1, reach_m, [&](std::size_t k) {
+        const Eigen::Vector2d p = cor.p_en[first + k] + offset;
+        return Eigen::Vector3d(p.x(), p.y(), cor.up_m[first + k] + shift_m);
+    });
 }
 
 // The best fit (fewest poses off the map, then the lowest RMS) of the poses [first, last] moved
 // up by shift_m and horizontally by any offset on a 0.5 m grid within reach_m: on another floor
 // the correction would have moved the path to that floor's walkways, by up to the map term's
 // reach.
-ShiftedFit BestShiftedFit(const PlanarTrajectory& cor, const TraversableField& field,
-                          std::size_t first, std::size_t last, double shift_m, double reach_m) {
+CentreFit BestShiftedFit(const PlanarTrajectory& cor, const TraversableField& field,
+                         std::size_t first, std::size_t last, double shift_m, double reach_m) {
     constexpr double kGridM = 0.5;
     const int n = int(std::floor(reach_m / kGridM));
-    ShiftedFit best;
-    best.rms_m = reach_m;
+    CentreFit best{reach_m, 1.0};
     for (int ox = -n; ox <= n; ++ox) {
         for (int oy = -n; oy <= n; ++oy) {
             if (std::hypot(ox, oy) * kGridM > reach_m) continue;
-            const ShiftedFit fit = FitShifted(cor, field, first, last, shift_m,
-                                              kGridM * Eigen::Vector2d(ox, oy), reach_m);
+            const CentreFit fit = FitShifted(cor, field, first, last, shift_m,
+                                             kGridM * Eigen::Vector2d(ox, oy), reach_m);
             if (fit.off_share < best.off_share ||
                 (fit.off_share == best.off_share && fit.rms_m < best.rms_m)) {
                 best = fit;
@@ -376,8 +363,8 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
         if (!barometer_allows(k, v.floor_m)) continue;
         for (const double other_m : c.floor_heights_m) {
             if (other_m == v.floor_m || !barometer_allows(k, other_m)) continue;
-            const ShiftedFit other = BestShiftedFit(cor, field, v.first, v.last,
-                                                    other_m - v.floor_m, model.map_giveup_m);
+            const CentreFit other = BestShiftedFit(cor, field, v.first, v.last, other_m - v.floor_m,
+                                                   model.map_giveup_m);
             if (other.off_share > c.off_map_degraded_share) continue;
             ++ambiguous;
             for (std::size_t i = v.first; i <= v.last; ++i) {
@@ -387,8 +374,8 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
             const double stay_s = est.t_s[v.last] - est.t_s[v.first];
             if (stay_s > worst_s) {
                 worst_s = stay_s;
-                const ShiftedFit chosen = FitShifted(cor, field, v.first, v.last, 0.0,
-                                                     Eigen::Vector2d::Zero(), model.map_giveup_m);
+                const CentreFit chosen = FitShifted(cor, field, v.first, v.last, 0.0,
+                                                    Eigen::Vector2d::Zero(), model.map_giveup_m);
                 auto signed_m = [](double m) { return (m > 0.0 ? "+" : "") + FormatFixed(m, 1); };
                 const std::string heights = k + 1 < stays.size()
                                                 ? "into and out of it (" + signed_m(change_m[k]) +

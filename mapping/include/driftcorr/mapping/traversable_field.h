@@ -1,6 +1,9 @@
 #pragma once
 // The map prior as a field: where a platform can be. One interface serves the planar road mode
 // (a one-slice grid) and the 3D indoor mode.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
 #include <optional>
 #include <vector>
 
@@ -92,5 +95,29 @@ private:
     double truncation_m_ = 0.0;
     std::vector<ShaftOutline> lift_shafts_;
 };
+
+/// How well a set of points lies on the traversable centres: the share of them farther than
+/// reach_m from every centre (or outside the field), and their RMS distance, each capped at
+/// reach_m (a negative interpolated distance counts as 0).
+struct CentreFit {
+    double rms_m = 0.0;
+    double off_share = 0.0;
+};
+
+/// CentreFit of the n points point_of(0) .. point_of(n - 1) (East, North, Up) [m].
+template <class PointOf>
+CentreFit FitToCentres(const TraversableField& field, std::size_t n, double reach_m,
+                       PointOf&& point_of) {
+    double sum = 0.0;
+    std::size_t off = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::optional<double> q = field.CentreValue(point_of(k));
+        const double d = q ? std::min(std::max(*q, 0.0), reach_m) : reach_m;
+        if (!q || *q > reach_m) ++off;
+        sum += d * d;
+    }
+    const double count = double(std::max<std::size_t>(1, n));
+    return {std::sqrt(sum / count), double(off) / count};
+}
 
 }  // namespace driftcorr
