@@ -215,6 +215,21 @@ void PrintStarts(const CorrectionResult& r) {
     std::printf(" m\n");
 }
 
+// One line per floor hypothesis of the batch correction (CorrectionResult::floor_hypotheses).
+void PrintFloorHypotheses(const CorrectionResult& r) {
+    for (const CorrectionResult::FloorHypothesis& h : r.floor_hypotheses) {
+        std::printf("floors     the change from %.1f m ending at %.0f s onto %.1f m: NLL ",
+                    h.from_m, h.t_s, h.tried_m);
+        if (std::isnan(h.nll)) {
+            std::printf("failed");
+        } else {
+            std::printf("%.1f", h.nll);
+        }
+        std::printf(" against %.1f on %.1f m, %s\n", h.against, h.chosen_m,
+                    h.kept ? "kept" : "not kept");
+    }
+}
+
 void PrintVerdict(const Verdict& v) {
     std::printf("verdict    %s", ToString(v.level).c_str());
     std::printf(" (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
@@ -257,6 +272,7 @@ void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
                     " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
         PrintStarts(r);
+        PrintFloorHypotheses(r);
     }
     std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
                 " incremental %.3f, refine %.3f); peak memory %.0f MB\n", total, run.timings.load_s,

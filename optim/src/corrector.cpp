@@ -8,6 +8,7 @@
 
 #include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
+#include "driftcorr/core/observables.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/window_problem.h"
 
@@ -118,6 +119,55 @@ IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
                              progress);
 }
 
+namespace {
+
+// The spans where the estimate's height stays level (LevelSpans over the observed height
+// changes, with the floor term's window and height): the stays on a floor between its floor
+// changes.
+struct LevelRun {
+    std::size_t first = 0, last = 0;
+};
+
+std::vector<LevelRun> LevelRuns(const TrajectoryState& s, const std::vector<double>& t_s,
+                                const ModelConfig& model) {
+    std::vector<double> up_m(s.obs.size(), 0.0);
+    for (std::size_t i = 1; i < s.obs.size(); ++i) up_m[i] = up_m[i - 1] + s.obs[i].dup_m;
+    const std::vector<std::uint8_t> level =
+        LevelSpans(t_s, up_m, model.floor_level_window_s, model.floor_level_height_m);
+    std::vector<LevelRun> runs;
+    for (std::size_t i = 0; i < level.size(); ++i) {
+        if (!level[i]) continue;
+        if (!runs.empty() && runs.back().last + 1 == i) {
+            runs.back().last = i;
+        } else {
+            runs.push_back({i, i});
+        }
+    }
+    return runs;
+}
+
+// The floor nearest to the mean corrected height over poses [first, last].
+double FloorOf(const PlanarTrajectory& cor, const std::vector<double>& floors_m, std::size_t first,
+               std::size_t last) {
+    double sum = 0.0;
+    for (std::size_t i = first; i <= last; ++i) sum += cor.up_m[i];
+    return NearestFloor(floors_m, sum / double(last - first + 1));
+}
+
+}  // namespace
+
+// Each start scale runs the whole correction (incremental pass and refinement); the lowest NLL
+// is kept. Then the floor hypotheses (3D, floors known, restart_height_gains not empty): after
+// every floor change of the estimate (a change of restart_height_change_m or more between two
+// level runs), each other floor that the change reaches when read with a gain within the range
+// of restart_height_gains is tried: the whole correction again, from the kept start, with that
+// change's steps read to land on that floor (the windows do not re-read them), refined and
+// scored against the observations as they are. One whose NLL is lower by more than
+// floor_hypothesis_margin is kept, and later changes are read from there. The windows' own floor
+// restarts see a window of path: a stay that fits the wrong floor's walkways for its first tens
+// of metres (the floors of a building are alike near their lifts) keeps that floor, and what
+// denies it (walkways that floor does not have, a stair climb from it to no floor) comes later.
+// Time: one correction per start and per floor tried.
 IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vector<double>& t_s,
                                        const TraversableField* field, const CorrectorConfig& cfg,
                                        CorrectionResult& result, const ProgressCallback& progress) {
@@ -126,36 +176,90 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectFromStarts needs a start scale");
     CorrectorConfig each = cfg;
     each.compute_covariance = false;
+    const bool floor_hypotheses = field && !initial.fix_height &&
+                                  !cfg.model.floor_heights_m.empty() &&
+                                  !cfg.restart_height_gains.empty();
     std::optional<IncrementalCorrector> best;
     std::vector<double> nll;
     std::vector<std::vector<Eigen::Vector2d>> paths;  // each start's corrected positions
-    CorrectionResult work;  // the counters and times over every start
-    for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
-        // The last start takes the initial state itself, not a copy.
-        TrajectoryState state = k + 1 < cfg.start_scales.size() ? initial : std::move(initial);
-        std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
+    CorrectionResult work;  // the counters and times over every correction
+    // One whole correction from `state`, scored against `obs` when given (else its own).
+    auto correct = [&](TrajectoryState state, const std::vector<StepObservation>* obs) {
         IncrementalCorrector inc(std::move(state), field, each);
         inc.SolveRemaining(progress);
+        if (obs) inc.ReplaceObservations(*obs);
         CorrectionResult r = inc.Finish(t_s, progress);
         work.windows += r.windows, work.window_retries += r.window_retries;
         work.window_restarts += r.window_restarts, work.iterations += r.iterations;
         work.incremental_s += r.incremental_s, work.refine_s += r.refine_s;
+        return std::make_pair(std::move(inc), std::move(r));
+    };
+    auto better = [&](const CorrectionResult& r) {
+        return !best || (Usable(r.status) && (!Usable(result.status) || r.nll < result.nll));
+    };
+    // The last start takes the initial state itself, not a copy, unless the floors need it.
+    std::optional<TrajectoryState> observed;
+    if (floor_hypotheses) observed = initial;
+    for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
+        TrajectoryState state = k + 1 < cfg.start_scales.size() ? initial : std::move(initial);
+        std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
+        auto [inc, r] = correct(std::move(state), nullptr);
         nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
         paths.push_back(Usable(r.status) ? r.corrected.p_en : std::vector<Eigen::Vector2d>{});
-        const bool better =
-            !best || (Usable(r.status) && (!Usable(result.status) || r.nll < result.nll));
-        if (!better) continue;
+        if (!better(r)) continue;
         best.emplace(std::move(inc));
         result = std::move(r);
         result.start_chosen = k;
     }
+    const std::size_t start_chosen = result.start_chosen;
+    std::vector<CorrectionResult::FloorHypothesis> tried;
+    if (floor_hypotheses && Usable(result.status)) {
+        const std::vector<double>& floors = cfg.model.floor_heights_m;
+        const auto [gain_min, gain_max] =
+            std::minmax_element(cfg.restart_height_gains.begin(), cfg.restart_height_gains.end());
+        TrajectoryState read = *observed;  // the observations with the kept readings
+        std::fill(read.scales.begin(), read.scales.end(), cfg.start_scales[start_chosen]);
+        const std::vector<LevelRun> runs = LevelRuns(read, t_s, cfg.model);
+        for (std::size_t j = 1; j < runs.size(); ++j) {
+            const std::size_t from = runs[j - 1].last, to = runs[j].first;
+            double change_m = 0.0;
+            for (std::size_t i = from + 1; i <= to; ++i) change_m += read.obs[i].dup_m;
+            if (std::abs(change_m) < cfg.restart_height_change_m) continue;
+            const double before_m =
+                FloorOf(result.corrected, floors, runs[j - 1].first, runs[j - 1].last);
+            const double after_m = FloorOf(result.corrected, floors, runs[j].first, runs[j].last);
+            for (const double floor_m : floors) {
+                const double gain = (floor_m - before_m) / change_m;
+                if (floor_m == after_m || gain < *gain_min || gain > *gain_max) continue;
+                TrajectoryState trial = read;
+                trial.height_settled.resize(trial.obs.size(), 0);
+                for (std::size_t i = from + 1; i <= to; ++i) {
+                    trial.obs[i].dup_m *= gain;
+                    trial.height_settled[i] = 1;
+                }
+                auto [inc, r] = correct(trial, &observed->obs);
+                const double nll_m =
+                    Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN();
+                tried.push_back({t_s[to] - t_s[0], before_m, after_m, floor_m, nll_m, result.nll});
+                if (!Usable(r.status) || r.nll >= result.nll - cfg.floor_hypothesis_margin)
+                    continue;
+                tried.back().kept = true;
+                best.emplace(std::move(inc));
+                result = std::move(r);
+                read = std::move(trial);
+                break;
+            }
+        }
+    }
+    result.floor_hypotheses = std::move(tried);
+    result.start_chosen = start_chosen;
     result.start_scales = cfg.start_scales;
     result.start_nll = std::move(nll);
-    const std::vector<Eigen::Vector2d>& kept = paths[result.start_chosen];
+    const std::vector<Eigen::Vector2d>& kept_path = paths[start_chosen];
     for (const std::vector<Eigen::Vector2d>& path : paths) {
-        result.start_rms_m.push_back(path.empty() || kept.empty()
+        result.start_rms_m.push_back(path.empty() || kept_path.empty()
                                          ? std::numeric_limits<double>::quiet_NaN()
-                                         : RmsDistance(path, kept));
+                                         : RmsDistance(path, kept_path));
     }
     result.windows = work.windows, result.window_retries = work.window_retries;
     result.window_restarts = work.window_restarts, result.iterations = work.iterations;

@@ -129,10 +129,16 @@ SolveReport SolveWindow(TrajectoryState& s, const TraversableField* field,
     return rep2;
 }
 
-// Sum of |height change| over the steps into poses [first, last] [m].
+bool HeightSettled(const TrajectoryState& s, std::size_t i) {
+    return !s.height_settled.empty() && s.height_settled[i];
+}
+
+// Sum of |height change| over the steps into poses [first, last] whose reading is not settled [m].
 double HeightTravel(const TrajectoryState& s, std::size_t first, std::size_t last) {
     double sum = 0.0;
-    for (std::size_t i = first; i <= last; ++i) sum += std::abs(s.obs[i].dup_m);
+    for (std::size_t i = first; i <= last; ++i) {
+        if (!HeightSettled(s, i)) sum += std::abs(s.obs[i].dup_m);
+    }
     return sum;
 }
 
@@ -209,7 +215,7 @@ void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to, doubl
     for (std::size_t i = from; i <= to; ++i) {
         const double bias = s.bias_segment.empty() ? 0.0 : s.biases[s.bias_segment[i]];
         StepObservation o = s.obs[i];
-        o.dup_m *= height_gain;
+        if (!HeightSettled(s, i)) o.dup_m *= height_gain;
         s.poses[i] = ComposeStep(s.poses[i - 1], o, s.scales[s.scale_segment[i]], s.fix_height,
                                  s.poses[i].p.z(), bias);
     }
@@ -367,6 +373,11 @@ void IncrementalCorrector::SolveRemaining(const ProgressCallback& progress) {
         SolveChunk(NextChunkEnd());
         if (progress) progress({"incremental", done_ + 1, size()});
     }
+}
+
+void IncrementalCorrector::ReplaceObservations(std::vector<StepObservation> obs) {
+    DRIFTCORR_CHECK(obs.size() == size(), "ReplaceObservations needs one observation a pose");
+    state_.obs = std::move(obs);
 }
 
 double IncrementalCorrector::Nll() {

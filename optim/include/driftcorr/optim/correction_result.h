@@ -39,6 +39,18 @@ struct CorrectionResult {
     /// to the kept one [m] (NaN: not usable; 0 for the kept one) and the one that was kept.
     std::vector<double> start_scales, start_nll, start_rms_m;
     std::size_t start_chosen = 0;
+    /// The floor hypotheses of the batch correction (CorrectorConfig::floor_hypothesis_margin):
+    /// each whole correction re-run on another floor after a floor change of the estimate.
+    struct FloorHypothesis {
+        double t_s = 0.0;       ///< the change ends (time from the first pose) [s]
+        double from_m = 0.0;    ///< the floor before the change [m]
+        double chosen_m = 0.0;  ///< the floor after it in the correction it was tried against
+        double tried_m = 0.0;   ///< the floor tried [m]
+        double nll = 0.0;       ///< that correction's NLL (NaN: not usable)
+        double against = 0.0;   ///< the NLL it was compared with
+        bool kept = false;
+    };
+    std::vector<FloorHypothesis> floor_hypotheses;
     /// The odometry's step lengths as the model observed them [m], one per pose (step into pose
     /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
     std::vector<double> step_length_m;

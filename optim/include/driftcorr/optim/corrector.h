@@ -22,7 +22,10 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 /// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry
 /// only). Pose 0 is the known initial position and heading and stays fixed. The whole correction
 /// runs from each of config.start_scales, and the usable one of lowest NLL is kept
-/// (CorrectionResult::start_scales, start_nll, start_chosen); the covariance is the kept one's.
+/// (CorrectionResult::start_scales, start_nll, start_chosen). In 3D with floors known, it then
+/// runs again on the other floors a floor change of the estimate can reach, and keeps one whose
+/// NLL is lower by more than config.floor_hypothesis_margin (CorrectionResult::floor_hypotheses).
+/// The covariance is the kept correction's.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& config,
                                    const ProgressCallback& progress = {});

@@ -38,6 +38,14 @@ struct CorrectorConfig {
     /// the floor nearest to the reading can be the wrong one; the lowest NLL wins. Empty: none.
     std::vector<double> restart_height_gains = {0.7, 0.85, 1.2, 1.4};
     double restart_height_change_m = 2.0;  ///< [m]
+    /// The batch correction's floor hypotheses (CorrectFromStarts): after each floor change of
+    /// the estimate, the whole correction is re-run on each other floor that the change reaches
+    /// when read with a gain within the range of restart_height_gains (empty: none); one is kept
+    /// when its NLL is lower by more than floor_hypothesis_margin. Two floors alike near their
+    /// lifts differ by a few units of NLL either way, from the solves' own spread; a margin of 3 (a
+    /// likelihood ratio of 20, "strong" evidence) keeps the floor the windows chose unless the
+    /// walk speaks against it. Time: one correction per floor tried.
+    double floor_hypothesis_margin = 3.0;  ///< [-]
     double restart_offroad_m = 6.0;       ///< [m]
     double restart_offroad_share = 0.05;  ///< [-]
     double restart_nll_per_pose = 0.3;    ///< [-]
@@ -87,6 +95,9 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
      "share of off-map poses that restarts a window"},
     {"restart_nll_per_pose", Field<&CorrectorConfig::restart_nll_per_pose>(), kNonNegative,
      "a window whose NLL per pose exceeds this restarts"},
+    {"floor_hypothesis_margin", Field<&CorrectorConfig::floor_hypothesis_margin>(), kNonNegative,
+     "3D: a whole correction on another floor after a floor change is kept when its NLL is lower "
+     "by more than this"},
     {"stationary_m", Field<&CorrectorConfig::stationary_m>(), kNonNegative,
      "steps shorter than this are stops"},
     {"window_newton", Field<&CorrectorConfig::window_newton>(), kNoRange,

@@ -67,6 +67,10 @@ public:
     CorrectionResult Finish(const std::vector<double>& t_s, const ProgressCallback& progress = {});
 
     const TrajectoryState& state() const { return state_; }
+    /// Replaces every step observation (the poses stay): a correction composed from other
+    /// readings of the odometry is then refined and scored against `obs`. Precondition:
+    /// obs.size() == size().
+    void ReplaceObservations(std::vector<StepObservation> obs);
     /// The NLL of the current state: the objective of the soft terms over poses [1, size()-1]
     /// (what the final solve minimises; its hard corridor adds no cost). Leaves the state as it
     /// is. Precondition: size() >= 2.
@@ -107,7 +111,8 @@ PoseState ComposeStep(const PoseState& a, const StepObservation& step, double sc
                       bool fix_height, double up_fixed_m, double bias_rad_s);
 
 /// Dead-reckons poses [from, to] by composing the odometry onto the (corrected) pose from-1 with
-/// each step's segment scale, the height changes times `height_gain`. Precondition:
+/// each step's segment scale, the height changes times `height_gain` (those of the steps whose
+/// reading is settled, TrajectoryState::height_settled, as they are). Precondition:
 /// 1 <= from, to < s.poses.size().
 void ComposeOdometry(TrajectoryState& s, std::size_t from, std::size_t to,
                      double height_gain = 1.0);

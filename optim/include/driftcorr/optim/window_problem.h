@@ -42,6 +42,9 @@ struct TrajectoryState {
     std::vector<int> bias_segment;
     std::vector<double> biases;         ///< one per bias segment [rad/s]
     bool fix_height = true;             ///< planar mode: heights stay as initialised
+    /// Steps whose height change is read as settled (obs index; empty: none): a window's floor
+    /// restarts (CorrectorConfig::restart_height_gains) neither count nor re-read them.
+    std::vector<std::uint8_t> height_settled;
 };
 
 /// Bounds of the step-length scale variables: a scale at a bound means the map and the odometry
