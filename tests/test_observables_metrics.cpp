@@ -104,6 +104,79 @@ TEST(Observables, RideSpansFindTheLiftRideNotAWaitAStopOrAClimb) {
     EXPECT_EQ(RideSpans(obs, 5.0, 9.0, 3.0, 5.0)[cabin], 1);
 }
 
+// A lift ride read with lag: 1 m while waiting at the door, 9 m during the ride, 1.5 m during
+// the 2 s standing after it, then 0.8, 0.4 and 0.2 m over the first steps out (0.5 s each), and a
+// stair climb 10 s later. What comes after the ride's step (2.9 m) moves into it, the walk after
+// it is level, the door's reading and the climb keep theirs; total height change and every other
+// observation unchanged. A source that reports in the cabin at a fixed rate keeps its ramp.
+TEST(Observables, MoveRideLagPutsTheLaggedReadingIntoTheRide) {
+    std::vector<StepObservation> obs(1);
+    auto add = [&obs](double dt, double length, double dup) {
+        StepObservation o;
+        o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
+        obs.push_back(o);
+        return obs.size() - 1;
+    };
+    for (int k = 0; k < 5; ++k) add(0.5, 0.6, 0.0);
+    add(0.5, 0.6, 0.0);  // into the cabin
+    add(8.0, 0.0, 1.0);  // the door closes
+    const std::size_t ride = add(10.0, 0.0, 9.0);
+    const std::size_t stand = add(2.0, 0.0, 1.5);
+    const std::size_t out = add(0.5, 0.6, 0.8);
+    add(0.5, 0.6, 0.4);
+    add(0.5, 0.6, 0.2);
+    for (int k = 0; k < 20; ++k) add(0.5, 0.6, 0.0);
+    const std::size_t climb = add(0.5, 0.6, 0.2);
+    for (int k = 0; k < 5; ++k) add(0.5, 0.6, 0.2);
+    const std::vector<StepObservation> before = obs;
+    EXPECT_EQ(MoveRideLag(obs, 5.0, 2.0, 3.0, 5.0), 1u);
+    double total_before = 0.0, total_after = 0.0;
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        total_before += before[i].dup_m, total_after += obs[i].dup_m;
+        EXPECT_EQ(obs[i].dt_s, before[i].dt_s);
+        EXPECT_EQ(obs[i].length_m, before[i].length_m);
+        if (i == ride) {
+            EXPECT_NEAR(obs[i].dup_m, 11.9, 1e-12);
+        } else if (i == ride - 1) {
+            EXPECT_EQ(obs[i].dup_m, 1.0);
+        } else if (i >= climb) {
+            EXPECT_EQ(obs[i].dup_m, 0.2) << i;
+        } else {
+            EXPECT_EQ(obs[i].dup_m, 0.0) << i;
+        }
+    }
+    EXPECT_NEAR(total_after, total_before, 1e-12);
+    EXPECT_GT(before[stand].dup_m + before[out].dup_m, 0.0);
+    // Read without lag, the steps out keep their reading; a walk without a ride is left alone.
+    std::vector<StepObservation> no_lag = before;
+    EXPECT_EQ(MoveRideLag(no_lag, 5.0, 2.0, 3.0, 0.0), 1u);
+    EXPECT_NEAR(no_lag[ride].dup_m, 10.5, 1e-12);
+    EXPECT_EQ(no_lag[out].dup_m, 0.8);
+    // Cabin poses every 0.5 s, 0.5 m each, then 0.2 and 0.1 m of lag standing: the ramp stays.
+    std::vector<StepObservation> cabin(1);
+    auto step = [&cabin](double dt, double length, double dup) {
+        StepObservation o;
+        o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
+        cabin.push_back(o);
+    };
+    for (int k = 0; k < 5; ++k) step(0.5, 0.6, 0.0);
+    for (int k = 0; k < 12; ++k) step(0.5, 0.0, 0.5);
+    step(0.5, 0.0, 0.2);
+    step(0.5, 0.0, 0.1);
+    for (int k = 0; k < 5; ++k) step(0.5, 0.6, 0.0);
+    EXPECT_EQ(MoveRideLag(cabin, 5.0, 2.0, 3.0, 5.0), 1u);
+    for (int k = 6; k <= 16; ++k) EXPECT_EQ(cabin[k].dup_m, 0.5) << k;
+    EXPECT_NEAR(cabin[17].dup_m, 0.8, 1e-12);
+    EXPECT_EQ(cabin[18].dup_m, 0.0);
+    EXPECT_EQ(cabin[19].dup_m, 0.0);
+    std::vector<StepObservation> stairs(before.begin() + climb - 1, before.end());
+    const std::vector<StepObservation> stairs_before = stairs;
+    EXPECT_EQ(MoveRideLag(stairs, 5.0, 2.0, 3.0, 5.0), 0u);
+    for (std::size_t i = 1; i < stairs.size(); ++i) {
+        EXPECT_EQ(stairs[i].dup_m, stairs_before[i].dup_m);
+    }
+}
+
 TEST(Observables, SquareWithYawHasKnownLengthsTurnsAndUnwrappedHeadings) {
     // A 10 m square driven counter-clockwise, facing along each side; the yaw of pose 3 is given
     // wrapped (-pi/2), the unwrapped headings climb to 2 pi.

@@ -181,6 +181,42 @@ std::vector<std::uint8_t> RideSpans(const std::vector<StepObservation>& obs, dou
     return ride;
 }
 
+std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double min_height_m,
+                        double gap_s, double lag_s) {
+    const std::vector<std::uint8_t> ride = RideSpans(obs, min_s, min_height_m, gap_s, lag_s);
+    const std::size_t n = obs.size();
+    std::size_t rides = 0;
+    for (std::size_t a = 0; a < n;) {  // a ride's poses: a .. b
+        if (!ride[a]) {
+            ++a;
+            continue;
+        }
+        std::size_t b = a;
+        while (b + 1 < n && ride[b + 1]) ++b;
+        // The ride's last step that changes height by at least half its largest change: the
+        // cabin arrives there; what the steps after it read is lag.
+        double largest_m = 0.0;
+        for (std::size_t i = a + 1; i <= b; ++i)
+            largest_m = std::max(largest_m, std::abs(obs[i].dup_m));
+        std::size_t main = b;
+        while (std::abs(obs[main].dup_m) < 0.5 * largest_m) --main;
+        auto move = [&](std::size_t i) {
+            obs[main].dup_m += obs[i].dup_m;
+            obs[i].dup_m = 0.0;
+        };
+        for (std::size_t i = main + 1; i <= b; ++i) move(i);
+        double after_s = 0.0;  // up to the next ride at most
+        for (std::size_t i = b + 1; i < n && !ride[i]; ++i) {
+            after_s += std::max(obs[i].dt_s, 0.0);
+            if (after_s > lag_s) break;
+            move(i);
+        }
+        ++rides;
+        a = b + 1;
+    }
+    return rides;
+}
+
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m) {
     DRIFTCORR_CHECK(!floor_heights_m.empty(), "no floor");
     return *std::min_element(

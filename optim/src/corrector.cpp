@@ -137,7 +137,10 @@ std::vector<LevelRun> LevelRuns(const TrajectoryState& s, const std::vector<doub
     std::vector<LevelRun> runs;
     for (std::size_t i = 0; i < level.size(); ++i) {
         if (!level[i]) continue;
-        if (!runs.empty() && runs.back().last + 1 == i) {
+        // Two level poses in a row with a height change between them (a lift ride between two
+        // poses: each is level over the time around it) end one run and start the next.
+        if (!runs.empty() && runs.back().last + 1 == i &&
+            std::abs(up_m[i] - up_m[i - 1]) <= model.floor_level_height_m) {
             runs.back().last = i;
         } else {
             runs.push_back({i, i});

@@ -249,6 +249,10 @@ TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseSta
     s.obs = std::move(obs);
     RepairSpeedEpisodes(s.obs, cfg.model.outlier_accel_mps2, kOutlierWindowS, kOutlierEpisodeS,
                         kOutlierDeviation);
+    if (!fix_height) {
+        const ModelConfig& m = cfg.model;
+        MoveRideLag(s.obs, m.ride_min_s, m.ride_min_height_m, m.ride_gap_s, m.ride_lag_s);
+    }
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
     s.bias_segment = BiasSegments(s.obs, cfg.model.heading_bias_segment_s);
@@ -406,8 +410,10 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
     result.scale_min = *std::min_element(state_.scales.begin(), state_.scales.end());
     result.scale_max = *std::max_element(state_.scales.begin(), state_.scales.end());
     result.step_length_m.resize(n);
+    result.height_change_m.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         result.step_length_m[i] = i > 0 ? state_.obs[i].length_m : 0.0;
+        result.height_change_m[i] = i > 0 ? state_.obs[i].dup_m : 0.0;
         result.repaired_steps += state_.obs[i].repaired ? 1 : 0;
     }
     result.nll = Nll();

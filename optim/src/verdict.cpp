@@ -493,10 +493,17 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     }
     if (field && !field->empty()) {
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
-        if (!field->planar()) JudgeHeightChanges(estimate, result.corrected, config, v, f);
+        // The heights as the model observed them (a lift ride's lagged reading in the ride).
+        PlanarTrajectory observed = estimate;
+        if (result.height_change_m.size() == estimate.size()) {
+            for (std::size_t i = 1; i < observed.size(); ++i) {
+                observed.up_m[i] = observed.up_m[i - 1] + result.height_change_m[i];
+            }
+        }
+        if (!field->planar()) JudgeHeightChanges(observed, result.corrected, config, v, f);
         if (!field->planar() && !config.floor_heights_m.empty()) {
-            JudgeLevelOffFloor(estimate, result.corrected, config, v, f);
-            JudgeFloorAlternatives(estimate, result.corrected, *field, model, config, v, f);
+            JudgeLevelOffFloor(observed, result.corrected, config, v, f);
+            JudgeFloorAlternatives(observed, result.corrected, *field, model, config, v, f);
         }
     }
     return v;

@@ -63,6 +63,17 @@ std::vector<std::uint8_t> LevelSpans(const std::vector<double>& t_s,
 std::vector<std::uint8_t> RideSpans(const std::vector<StepObservation>& obs, double min_s,
                                     double min_height_m, double gap_s, double lag_s);
 
+/// A barometer lags a lift ride by seconds: besides the ride's own steps, the standing after it
+/// and the first steps out of the cabin read part of its height change (the real Zero2four walk:
+/// 8.2 m of its 13.6 m ride come in its first step out). For each ride of RideSpans (same
+/// parameters), the height changes read after its last step of at least half its largest change
+/// (where the cabin arrives: the standing after it, and the steps within lag_s after the ride)
+/// move into that step, so the pose where it ends stands at the height the ride reached and the
+/// walk after it is level. Returns the number of rides.
+/// obs as ComputeObservations returns it (obs[0] unused).
+std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double min_height_m,
+                        double gap_s, double lag_s);
+
 /// The one of floor_heights_m nearest to up_m. Precondition: floor_heights_m not empty.
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m);
 

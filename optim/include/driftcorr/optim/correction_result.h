@@ -55,6 +55,10 @@ struct CorrectionResult {
     /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
     std::vector<double> step_length_m;
     std::size_t repaired_steps = 0;  ///< steps whose length was replaced
+    /// The odometry's height changes as the model observed them [m], one per pose (step into
+    /// pose i; [0] = 0): the estimate's, except a lift ride's lagged reading moved into the ride
+    /// (MoveRideLag, 3D). Empty when the solver does not say (the paper's).
+    std::vector<double> height_change_m;
     SolveReport refine_report;
     double incremental_s = 0.0;  ///< wall time of the incremental pass [s]
     double refine_s = 0.0;       ///< wall time of the refinement [s]
