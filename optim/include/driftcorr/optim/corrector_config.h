@@ -41,11 +41,12 @@ struct CorrectorConfig {
     /// The batch correction's floor hypotheses (CorrectFromStarts): after each floor change of
     /// the estimate, the whole correction is re-run on each other floor that the change reaches
     /// when read with a gain within the range of restart_height_gains (empty: none); one is kept
-    /// when its NLL is lower by more than floor_hypothesis_margin. Two floors alike near their
-    /// lifts differ by a few units of NLL either way, from the solves' own spread; a margin of 3 (a
-    /// likelihood ratio of 20, "strong" evidence) keeps the floor the windows chose unless the
-    /// walk speaks against it. Time: one correction per floor tried.
-    double floor_hypothesis_margin = 3.0;  ///< [-]
+    /// when its NLL is lower by more than floor_hypothesis_margin. On floors alike near their
+    /// lifts the solves' own basins move the NLL by tens of units either way (a generated walk
+    /// whose right floor's correction came out 13.4 above its wrong one's): only a larger
+    /// difference, a walk that the other floor explains far better, changes the floor the
+    /// windows chose. Time: one correction per floor tried.
+    double floor_hypothesis_margin = 15.0;  ///< [-]
     double restart_offroad_m = 6.0;       ///< [m]
     double restart_offroad_share = 0.05;  ///< [-]
     double restart_nll_per_pose = 0.3;    ///< [-]
