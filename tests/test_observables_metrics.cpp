@@ -67,6 +67,15 @@ TEST(Observables, LevelSpansEndAWindowHalfBeforeAClimbAndStartOneAfter) {
     EXPECT_TRUE(LevelSpans({}, {}, 20.0, 1.0).empty());
 }
 
+// Appends a step observation (dt, length, height change; stationary when it does not move) and
+// returns the pose it leads into.
+std::size_t AddStep(std::vector<StepObservation>& obs, double dt, double length, double dup) {
+    StepObservation o;
+    o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
+    obs.push_back(o);
+    return obs.size() - 1;
+}
+
 // Steps of 0.6 m every 0.5 s, and in between: a 10 s wait (one step of 10 s, level), a lift ride
 // (a step into the cabin, 12 s standing, 8 s standing while the barometer reads 10 m, the last
 // 2 m of it 1 s after the ride: its lag), a 2 s stop while the height jumps 3 m (too short for a
@@ -74,10 +83,7 @@ TEST(Observables, LevelSpansEndAWindowHalfBeforeAClimbAndStartOneAfter) {
 TEST(Observables, RideSpansFindTheLiftRideNotAWaitAStopOrAClimb) {
     std::vector<StepObservation> obs(1);
     auto add = [&obs](double dt, double length, double dup) {
-        StepObservation o;
-        o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
-        obs.push_back(o);
-        return obs.size() - 1;  // the pose it leads into
+        return AddStep(obs, dt, length, dup);
     };
     auto walk = [&](int steps, double dup) {
         for (int k = 0; k < steps; ++k) add(0.5, 0.6, dup);
@@ -112,10 +118,7 @@ TEST(Observables, RideSpansFindTheLiftRideNotAWaitAStopOrAClimb) {
 TEST(Observables, MoveRideLagPutsTheLaggedReadingIntoTheRide) {
     std::vector<StepObservation> obs(1);
     auto add = [&obs](double dt, double length, double dup) {
-        StepObservation o;
-        o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
-        obs.push_back(o);
-        return obs.size() - 1;
+        return AddStep(obs, dt, length, dup);
     };
     for (int k = 0; k < 5; ++k) add(0.5, 0.6, 0.0);
     add(0.5, 0.6, 0.0);  // into the cabin
@@ -154,11 +157,7 @@ TEST(Observables, MoveRideLagPutsTheLaggedReadingIntoTheRide) {
     EXPECT_EQ(no_lag[out].dup_m, 0.8);
     // Cabin poses every 0.5 s, 0.5 m each, then 0.2 and 0.1 m of lag standing: the ramp stays.
     std::vector<StepObservation> cabin(1);
-    auto step = [&cabin](double dt, double length, double dup) {
-        StepObservation o;
-        o.dt_s = dt, o.length_m = length, o.dup_m = dup, o.stationary = length < 1e-3;
-        cabin.push_back(o);
-    };
+    auto step = [&cabin](double dt, double length, double dup) { AddStep(cabin, dt, length, dup); };
     for (int k = 0; k < 5; ++k) step(0.5, 0.6, 0.0);
     for (int k = 0; k < 12; ++k) step(0.5, 0.0, 0.5);
     step(0.5, 0.0, 0.2);

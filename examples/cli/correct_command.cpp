@@ -444,7 +444,7 @@ io::Scenario ScenarioFromOptions(const Args& a) {
                          "kitti_camera: x right, y down, z forward)");
     }
     s.anchor = ParseAnchorOption(a);
-    s.map.push_back({a.osm, io::MapFormat::kOsm, io::LayerRole::kNone, std::nullopt});
+    s.map.push_back({a.osm, io::MapFormat::kOsm, io::LayerRole::kNone, std::nullopt, {}});
     return s;
 }
 
