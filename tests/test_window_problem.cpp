@@ -710,6 +710,31 @@ TEST(WindowProblem, ObjectiveAtTheTruthIsOnlyThePreservationPrior) {
     for (int k = 0; k < p.NumVariables(); ++k) EXPECT_LT(std::abs(g[k]), 1e-6) << "variable " << k;
 }
 
+// The first scale segment's prior is about ModelConfig::scale_prior_mean: at the same point, a
+// window whose prior is about the first scale's value costs 0.5 ((s - 1) / sigma)^2 less than one
+// about 1, every other term being the same.
+TEST(WindowProblem, TheFirstScalesPriorIsAboutItsMean) {
+    ModelConfig about_one = Model();
+    about_one.scale_range_sigma = 0.0;
+    ModelConfig about_s = about_one;
+    about_s.scale_prior_mean = 1.3;
+    TrajectoryState s = StateFrom(Curve(), about_one, true);
+    std::fill(s.scales.begin(), s.scales.end(), 1.3);
+    WindowProblem a(s, nullptr, about_one, 1, 29, std::vector<std::uint8_t>(29, 0));
+    WindowProblem b(s, nullptr, about_s, 1, 29, std::vector<std::uint8_t>(29, 0));
+    ASSERT_EQ(a.NumVariables(), b.NumVariables());
+    std::vector<double> x(a.NumVariables());
+    a.InitialPoint(x.data());
+    const double r = 0.3 / about_one.scale_prior_sigma;
+    EXPECT_NEAR(a.Objective(x.data()) - b.Objective(x.data()), 0.5 * r * r, 1e-9);
+    // A window after the first segment ties its scales to the fixed ones before it: no prior.
+    WindowProblem c(s, nullptr, about_one, 20, 29, std::vector<std::uint8_t>(10, 0));
+    WindowProblem d(s, nullptr, about_s, 20, 29, std::vector<std::uint8_t>(10, 0));
+    std::vector<double> y(c.NumVariables());
+    c.InitialPoint(y.data());
+    EXPECT_EQ(c.Objective(y.data()), d.Objective(y.data()));
+}
+
 TEST(WindowProblem, StoreWritesTheSolutionBack) {
     const ModelConfig model = Model();
     TrajectoryState s = StateFrom(Curve(), model, true);

@@ -186,10 +186,17 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     std::vector<double> nll;
     std::vector<std::vector<Eigen::Vector2d>> paths;  // each start's corrected positions
     CorrectionResult work;  // the counters and times over every correction
-    // One whole correction from `state`, scored against `obs` when given (else its own).
-    auto correct = [&](TrajectoryState state, const std::vector<StepObservation>* obs) {
-        IncrementalCorrector inc(std::move(state), field, each);
+    // One whole correction from `state`: its windows hold the scale about `scale` (the prior's
+    // mean, so that a start is a hypothesis the first windows keep rather than one the prior
+    // about 1 pulls back where the map cannot tell), its final solve about the configured mean,
+    // against `obs` when given (else its own), so that every start's NLL compares.
+    auto correct = [&](TrajectoryState state, double scale,
+                       const std::vector<StepObservation>* obs) {
+        CorrectorConfig held = each;
+        held.model.scale_prior_mean = scale;
+        IncrementalCorrector inc(std::move(state), field, held);
         inc.SolveRemaining(progress);
+        inc.SetScalePriorMean(cfg.model.scale_prior_mean);
         if (obs) inc.ReplaceObservations(*obs);
         CorrectionResult r = inc.Finish(t_s, progress);
         work.windows += r.windows, work.window_retries += r.window_retries;
@@ -206,7 +213,7 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
         TrajectoryState state = k + 1 < cfg.start_scales.size() ? initial : std::move(initial);
         std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
-        auto [inc, r] = correct(std::move(state), nullptr);
+        auto [inc, r] = correct(std::move(state), cfg.start_scales[k], nullptr);
         nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
         paths.push_back(Usable(r.status) ? r.corrected.p_en : std::vector<Eigen::Vector2d>{});
         if (!better(r)) continue;
@@ -240,7 +247,7 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
                     trial.obs[i].dup_m *= gain;
                     trial.height_settled[i] = 1;
                 }
-                auto [inc, r] = correct(trial, &observed->obs);
+                auto [inc, r] = correct(trial, cfg.start_scales[start_chosen], &observed->obs);
                 const double nll_m =
                     Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN();
                 tried.push_back({t_s[to] - t_s[0], before_m, after_m, floor_m, nll_m, result.nll});

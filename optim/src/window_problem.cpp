@@ -251,8 +251,9 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
     }
 }
 
-// Segment 0 carries the prior around 1 (Gaussian: the walk from a fixed 1); later segments the
-// (robust) random walk from the one before; each the plausible range (ModelConfig).
+// Segment 0 carries the prior around scale_prior_mean (Gaussian: the walk from a fixed value);
+// later segments the (robust) random walk from the one before; each the plausible range
+// (ModelConfig).
 void WindowProblem::AddScaleBlocks() {
     for (int sgm = seg_first_; sgm <= seg_last_; ++sgm) {
         if (prior_ && prior_->scale_segment == sgm) continue;  // in the boundary prior
@@ -261,7 +262,8 @@ void WindowProblem::AddScaleBlocks() {
                      : RandomWalkTerm{cfg_.scale_rw_sigma, 1.0, cfg_.scale_rw_robust_k};
         blocks_.push_back(Core<RandomWalkTerm, 2>(TermFamily::kScaleWalk, walk));
         const int a = ScaleVar(sgm - 1);
-        blocks_.back()->Bind(0, a, a >= 0 ? 0.0 : (sgm > 0 ? state_.scales[sgm - 1] : 1.0));
+        blocks_.back()->Bind(
+            0, a, a >= 0 ? 0.0 : (sgm > 0 ? state_.scales[sgm - 1] : cfg_.scale_prior_mean));
         blocks_.back()->Bind(1, ScaleVar(sgm), 0.0);
         if (cfg_.scale_range_sigma > 0.0) {
             blocks_.push_back(Core<ScaleRangeTerm, 1>(

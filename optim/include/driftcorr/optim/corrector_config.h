@@ -29,8 +29,10 @@ struct CorrectorConfig {
     /// than one, the whole correction runs from each and the lowest NLL of the corrected
     /// trajectory wins: the scale is what a walk's first windows settle, and a map that lets a
     /// squeezed or stretched path fit as well as the true one (a building's dense corridors)
-    /// keeps the basin it starts in. The scale prior (about 1, scale_prior_sigma) is the same
-    /// for every start, so their NLLs compare. Time: one correction per start.
+    /// keeps the basin it starts in. A start's windows hold the scale prior about the start's
+    /// scale (a prior about 1 pulled every start back to the same basin along a corridor whose
+    /// side doors repeat); its final solve holds it about 1, as every start's does, so their NLLs
+    /// compare. Time: one correction per start.
     std::vector<double> start_scales = {1.0};
     /// A window whose observed height changes add up to restart_height_change_m or more (it
     /// changes floor; 3D modes only) is also solved from starts whose height changes are read

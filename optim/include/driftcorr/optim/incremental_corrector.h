@@ -75,6 +75,10 @@ public:
     /// (what the final solve minimises; its hard corridor adds no cost). Leaves the state as it
     /// is. Precondition: size() >= 2.
     double Nll();
+    /// The mean of the first scale's prior in the solves from now on (ModelConfig::
+    /// scale_prior_mean): CorrectFromStarts solves a start's windows about the start's scale and
+    /// its final solve, whose NLL is compared, about the configured mean.
+    void SetScalePriorMean(double mean) { cfg_.model.scale_prior_mean = mean; }
     /// The covariance of the current state (ComputeCovariance with config.covariance) and its
     /// time, into `result`.
     void AddCovariance(CorrectionResult& result) const;

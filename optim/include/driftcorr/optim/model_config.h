@@ -84,9 +84,12 @@ struct ModelConfig {
     double ride_gap_s = 3.0;         ///< [s]
     double ride_lag_s = 5.0;         ///< [s]
     // Step-length scale: one variable per scale_segment_m of estimated path, random walk between
-    // segments, prior around 1 on the first.
+    // segments, prior around scale_prior_mean on the first.
     double scale_segment_m = 150.0;   ///< [m]
     double scale_prior_sigma = 0.1;   ///< [-]
+    /// Not a parameter: 1 (the odometry's own scale) in every NLL that is scored; the batch
+    /// corrector's windows hold it at a start scale (CorrectorConfig::start_scales).
+    double scale_prior_mean = 1.0;    ///< [-]
     double scale_rw_sigma = 0.01;     ///< [-] per segment
     /// The plausible scale range as a prior: no cost within [scale_range_min, scale_range_max],
     /// Gaussian with scale_range_sigma beyond (metric odometry is a few percent off; pedestrian
