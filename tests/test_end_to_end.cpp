@@ -302,8 +302,8 @@ TEST(EndToEndIndoor, AWholeCorrectionOnAnotherFloorIsKeptWhenTheWalkExplainsItBe
 
 // A generated walk in the real HCU building (seed 26, one of the seeds the start scales were
 // chosen on) whose steps are 1.29x the PDR's: corrected from scale 1 alone its path stays squeezed
-// into a corridor beside the true one (measured ATE 9.59 m); from the pedestrian starts (1, 1.25,
-// 1.5) the lowest NLL is that of a start near the true scale (1.21 m). Each start's NLL is what a
+// into a corridor beside the true one (measured ATE 6.46 m); from the pedestrian starts (1, 1.25,
+// 1.5) the lowest NLL is that of a start near the true scale (1.22 m). Each start's NLL is what a
 // correction from that start alone reaches, and the kept one is the lowest.
 TEST(EndToEndIndoor, TheStartScaleOfLowestNllIsKept) {
     const std::string walk = GeneratedHcuWalk(26);
@@ -384,10 +384,10 @@ OnlineRun RunOnlineOn(const pipeline::PreparedScenario& ps, const OnlineConfig& 
 }
 
 // The online corrector from the pedestrian start scales, one hypothesis each, on the walk above
-// (seed 26). From scale 1 alone its causal output follows the squeezed path (measured ATE 11.63
+// (seed 26). From scale 1 alone its causal output follows the squeezed path (measured ATE 8.47
 // m); with the hypotheses the output moves to the start of lower NLL once the first chunk is
-// solved (5.08 m) and ends on the start the batch keeps. Its Finish() is the batch correction,
-// start scales included (from scale 1 alone it was 9.59 m). Threaded, the hypotheses run on their
+// solved (3.72 m) and ends on the start the batch keeps. Its Finish() is the batch correction,
+// start scales included (from scale 1 alone it was 6.46 m). Threaded, the hypotheses run on their
 // own workers and every one's solves are counted.
 TEST(EndToEndIndoor, OnlineOutputFollowsTheStartScaleOfLowestNll) {
     const std::string walk = GeneratedHcuWalk(26);

@@ -169,14 +169,18 @@ FixedLagSmoother::FixedLagSmoother(const PoseState& pose0, bool fix_height,
       field_(field),
       cfg_(config),
       marginalise_(marginalise),
-      boundary_scale_(boundary_scale) {
+      boundary_scale_(boundary_scale),
+      scored_prior_mean_(config.model.scale_prior_mean) {
     dist_.assign(1, 0.0);
     state_.scales[0] = start_scale;
+    cfg_.model.scale_prior_mean = start_scale;
 }
 
 double FixedLagSmoother::Nll(std::size_t end) {
     DRIFTCORR_CHECK(end >= 1 && end <= solved_end_, "Nll of poses not solved");
-    return SoftNll(state_, field_, cfg_.model, end);
+    ModelConfig scored = cfg_.model;
+    scored.scale_prior_mean = scored_prior_mean_;
+    return SoftNll(state_, field_, scored, end);
 }
 
 void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& step) {

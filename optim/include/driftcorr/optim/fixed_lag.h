@@ -89,7 +89,8 @@ public:
     /// at its last solution (the batch windows' rule). `boundary_scale`: the prior is joint with
     /// the boundary segment's scale (MarginalPrior with_scale).
     /// `start_scale`: the step-length scale the first segment starts from (later segments start
-    /// from the latest estimate).
+    /// from the latest estimate); the windows hold the scale prior about it (a hypothesis the
+    /// first windows keep), Nll() about config's mean, so that hypotheses' NLLs compare.
     FixedLagSmoother(const PoseState& pose0, bool fix_height, const TraversableField* field,
                      const CorrectorConfig& config, bool marginalise = true,
                      bool boundary_scale = true, double start_scale = 1.0);
@@ -124,6 +125,7 @@ private:
     CorrectorConfig cfg_;
     bool marginalise_;
     bool boundary_scale_;
+    double scored_prior_mean_;                   ///< the scale prior's mean in Nll()
     std::vector<double> dist_;                   ///< path length from pose 0 [m]
     double elapsed_s_ = 0.0;                     ///< time of the appended steps [s]
     std::size_t solved_end_ = 0;                 ///< last pose of the last solve

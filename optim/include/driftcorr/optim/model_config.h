@@ -87,8 +87,9 @@ struct ModelConfig {
     // segments, prior around scale_prior_mean on the first.
     double scale_segment_m = 150.0;   ///< [m]
     double scale_prior_sigma = 0.1;   ///< [-]
-    /// Not a parameter: 1 (the odometry's own scale) in every NLL that is scored; the batch
-    /// corrector's windows hold it at a start scale (CorrectorConfig::start_scales).
+    /// Not a parameter: 1 (the odometry's own scale) in every NLL that is scored; the windows of
+    /// a start scale hypothesis hold it at the start (CorrectorConfig::start_scales; online, the
+    /// FixedLagSmoother's start_scale).
     double scale_prior_mean = 1.0;    ///< [-]
     double scale_rw_sigma = 0.01;     ///< [-] per segment
     /// The plausible scale range as a prior: no cost within [scale_range_min, scale_range_max],
