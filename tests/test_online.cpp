@@ -390,6 +390,42 @@ TEST(Online, WithoutHeadingsStraightLineIsKept) {
     EXPECT_TRUE(Usable(online.Finish().status));
 }
 
+// Two start scales on odometry alone (no map): each hypothesis keeps its scale, their NLLs differ
+// only by the scale prior (0.5 (0.2 / 0.2)^2 = 0.5), so the output of the lower (scale 1) carries
+// the other's offset, 0.2 of the path, with a weight of exp(-0.5) / (1 + exp(-0.5)) = 0.38 in its
+// covariance.
+TEST(Online, TheCovarianceHoldsTheHypothesesOfCloseNll) {
+    auto last = [](const std::vector<double>& starts) {
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.corrector.start_scales = starts;
+        cfg.corrector.model.scale_prior_sigma = 0.2;
+        cfg.corrector.model.scale_range_sigma = 0.0;
+        OnlineCorrector online(nullptr, cfg);
+        PushResult r;
+        for (int i = 0; i < 200; ++i) {
+            r = online.Push(PlanarPose{0.5 * i, {1.0 * i, 0.0}, 0.0, 0.0});
+            EXPECT_TRUE(r.Accepted());
+        }
+        EXPECT_TRUE(r.covariance_ok);
+        return r;
+    };
+    const PushResult two = last({1.0, 1.2});
+    const PushResult one = last({1.0});
+    // Along the track (East) each hypothesis's own variance is about the scale prior's (0.2 of
+    // the path, as the offset); the mixture adds w offset^2. Across it nothing changes.
+    const double offset_m = 0.2 * 199.0;
+    const double along_two = two.covariance.xy_m2(0, 0), along_one = one.covariance.xy_m2(0, 0);
+    std::printf("along-track sd from two starts %.2f m, from one %.2f m; offset %.1f m\n",
+                std::sqrt(along_two), std::sqrt(along_one), offset_m);
+    EXPECT_EQ(two.start_scale, 1.0);
+    EXPECT_NEAR(two.corrected.p_en.x(), one.corrected.p_en.x(), 0.5);
+    const double w = std::exp(-0.5) / (1.0 + std::exp(-0.5));
+    EXPECT_NEAR(along_two - along_one, w * offset_m * offset_m, 0.15 * w * offset_m * offset_m);
+    EXPECT_NEAR(two.covariance.xy_m2(1, 1), one.covariance.xy_m2(1, 1),
+                0.5 * one.covariance.xy_m2(1, 1));
+}
+
 TEST(TumLine, ParsesAndRejects) {
     const io::TumLine ok = io::ParseTumLine(" 1.5 1 2 3 0 0 0 2\r");
     ASSERT_EQ(ok.kind, io::TumLine::Kind::kPose);

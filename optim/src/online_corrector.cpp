@@ -269,8 +269,10 @@ PushResult OnlineCorrector::TakeHypotheses(const PlanarPose& pose, bool ahead_of
         waited_s += results.back().waited_s;
     }
     ChooseHypothesis();
+    const PoseCovariance mixture = MixtureCovariance(results);
     PushResult r = std::move(results[chosen_]);
     r.waited_s = waited_s;
+    if (r.covariance_ok) r.covariance = mixture;
     std::lock_guard<std::mutex> lock(mutex_);  // the outputs' ages (the solves': Statistics)
     ++stats_.poses;
     if (!r.fresh) ++stats_.stale_poses;
@@ -305,8 +307,35 @@ void OnlineCorrector::ChooseHypothesis() {
             static_cast<std::size_t>(std::min_element(nll.begin(), nll.end()) - nll.begin());
         if (nll[best] < nll[chosen_] - kNllTie * std::abs(nll[chosen_])) chosen_ = best;
         chosen_at_ = it->first;
+        weights_.clear();
+        for (const double v : nll) weights_.push_back(std::exp(-(v - nll[best])));
         return;
     }
+}
+
+// The covariance about the chosen output of the mixture of every hypothesis's output (weights_,
+// equal before the first choice): sum of w_k (C_k + d_k d_k^T) / sum of w_k, d_k the offset of
+// hypothesis k's pose from the chosen one's (East, North, up, yaw). Only the chosen one's
+// covariance when another's is not known.
+PoseCovariance OnlineCorrector::MixtureCovariance(const std::vector<PushResult>& results) const {
+    const PushResult& chosen = results[chosen_];
+    PoseCovariance m;
+    double total = 0.0;
+    for (std::size_t k = 0; k < results.size(); ++k) {
+        const PushResult& h = results[k];
+        if (!h.covariance_ok) return chosen.covariance;
+        const double w = weights_.empty() ? 1.0 : weights_[k];
+        const Eigen::Vector2d d = h.corrected.p_en - chosen.corrected.p_en;
+        const double dz = h.corrected.up_m - chosen.corrected.up_m;
+        const double dyaw = AngleDiff(*h.corrected.yaw_rad, *chosen.corrected.yaw_rad);
+        m.xy_m2 += w * (h.covariance.xy_m2 + d * d.transpose());
+        m.z_m2 += w * (h.covariance.z_m2 + dz * dz);
+        m.yaw_rad2 += w * (h.covariance.yaw_rad2 + dyaw * dyaw);
+        m.xy_yaw_m_rad += w * (h.covariance.xy_yaw_m_rad + d * dyaw);
+        total += w;
+    }
+    m.xy_m2 /= total, m.z_m2 /= total, m.yaw_rad2 /= total, m.xy_yaw_m_rad /= total;
+    return m;
 }
 
 // The input's pace over the last kPaceWindow poses (stream time against wall time outside Push),
