@@ -157,6 +157,32 @@ double FloorOf(const PlanarTrajectory& cor, const std::vector<double>& floors_m,
     return NearestFloor(floors_m, sum / double(last - first + 1));
 }
 
+// The covariance of the mixture of the starts' corrections about the kept one: each start weighs
+// exp(-(its NLL - the kept one's)) and adds its offset from the kept path (squared) to the kept
+// one's covariance, which stands in for its own, so that where two starts' corrections of close
+// NLL part the covariance says so. Starts that met the kept one's basin add nothing.
+// `kept_start`: the start whose correction is the result (paths.size() when a floor hypothesis
+// replaced it).
+void AddStartsToCovariance(const std::vector<std::vector<Eigen::Vector2d>>& paths,
+                           const std::vector<double>& nll, std::size_t kept_start,
+                           CorrectionResult& result) {
+    if (result.covariance.status != CovarianceStatus::kOk) return;
+    std::vector<PoseCovariance>& poses = result.covariance.poses;
+    const std::vector<Eigen::Vector2d>& kept = result.corrected.p_en;
+    double total = 1.0;  // the kept correction's weight
+    std::vector<Eigen::Matrix2d> spread(poses.size(), Eigen::Matrix2d::Zero());
+    for (std::size_t k = 0; k < paths.size(); ++k) {
+        if (k == kept_start || paths[k].size() != kept.size() || !std::isfinite(nll[k])) continue;
+        const double w = std::exp(-std::max(nll[k] - result.nll, 0.0));
+        total += w;
+        for (std::size_t i = 0; i < poses.size(); ++i) {
+            const Eigen::Vector2d d = paths[k][i] - kept[i];
+            spread[i] += w * d * d.transpose();
+        }
+    }
+    for (std::size_t i = 0; i < poses.size(); ++i) poses[i].xy_m2 += spread[i] / total;
+}
+
 }  // namespace
 
 // Each start scale runs the whole correction (incremental pass and refinement); the lowest NLL
@@ -274,7 +300,14 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     result.windows = work.windows, result.window_retries = work.window_retries;
     result.window_restarts = work.window_restarts, result.iterations = work.iterations;
     result.incremental_s = work.incremental_s, result.refine_s = work.refine_s;
-    if (Usable(result.status) && cfg.compute_covariance) best->AddCovariance(result);
+    if (Usable(result.status) && cfg.compute_covariance) {
+        best->AddCovariance(result);
+        const bool floor_kept =
+            std::any_of(result.floor_hypotheses.begin(), result.floor_hypotheses.end(),
+                        [](const auto& h) { return h.kept; });
+        AddStartsToCovariance(paths, result.start_nll, floor_kept ? paths.size() : start_chosen,
+                              result);
+    }
     return std::move(*best);
 }
 
