@@ -491,17 +491,19 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
         JudgeScale(estimate, result.step_length_m, result.corrected, model.scale_segment_m, c, v,
                    f);
     }
-    if (field && !field->empty()) {
+    if (field && !field->empty())
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
-        // The heights as the model observed them (a lift ride's lagged reading in the ride).
+    if (field && !field->empty() && !field->planar()) {
+        // The heights as the model observed them (a lift ride's lagged reading in the ride);
+        // only the 3D checks read them.
         PlanarTrajectory observed = estimate;
         if (result.height_change_m.size() == estimate.size()) {
             for (std::size_t i = 1; i < observed.size(); ++i) {
                 observed.up_m[i] = observed.up_m[i - 1] + result.height_change_m[i];
             }
         }
-        if (!field->planar()) JudgeHeightChanges(observed, result.corrected, config, v, f);
-        if (!field->planar() && !config.floor_heights_m.empty()) {
+        JudgeHeightChanges(observed, result.corrected, config, v, f);
+        if (!config.floor_heights_m.empty()) {
             JudgeLevelOffFloor(observed, result.corrected, config, v, f);
             JudgeFloorAlternatives(observed, result.corrected, *field, model, config, v, f);
         }
