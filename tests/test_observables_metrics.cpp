@@ -115,6 +115,57 @@ TEST(Observables, RideSpansFindTheLiftRideNotAWaitAStopOrAClimb) {
 // stair climb 10 s later. What comes after the ride's step (2.9 m) moves into it, the walk after
 // it is level, the door's reading and the climb keep theirs; total height change and every other
 // observation unchanged. A source that reports in the cabin at a fixed rate keeps its ramp.
+// Steps of 0.7 m every 0.6 s: a level walk, a stair climb of 24 risers (0.17 m a step, read
+// 0.8x by the barometer), a level walk, a lift ride (standing 15 s while the barometer reads 12 m,
+// the last 1.5 m on the first two steps out: its lag, which MoveRideLag moves into the ride
+// first, as the correction does) and a level walk with a pressure jump of 0.5 m over two steps.
+// The climb's steps become treads of 0.45 m (its first and last two may not: the window around
+// them climbs for part of its span); the ride, the steps out of it, the jump and the level walk
+// do not.
+TEST(Observables, StepsAmidAStairClimbAreTreads) {
+    std::vector<StepObservation> obs(1);
+    auto walk = [&obs](int steps, double dup) {
+        std::size_t last = 0;
+        for (int k = 0; k < steps; ++k) last = AddStep(obs, 0.6, 0.7, dup);
+        return last;
+    };
+    walk(20, 0.0);
+    const std::size_t climb_first = obs.size();
+    const std::size_t climb_last = walk(24, 0.8 * 0.17);
+    walk(20, 0.0);
+    AddStep(obs, 15.0, 0.0, 10.5);  // the ride
+    const std::size_t out = walk(2, 0.75);
+    walk(20, 0.0);
+    const std::size_t jump = walk(2, 0.25);
+    walk(20, 0.0);
+    std::vector<StepObservation> unmoved = obs;
+    EXPECT_EQ(MoveRideLag(obs, 5.0, 2.0, 3.0, 5.0), 1u);
+    const std::vector<StepObservation> before = obs;
+    const std::size_t treads = MarkStairTreads(obs, 0.45, 4.0, 0.15, 3.0);
+    EXPECT_GE(treads, 20u);
+    EXPECT_LE(treads, 28u);
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        if (i >= climb_first + 2 && i + 2 <= climb_last) EXPECT_TRUE(obs[i].tread) << "pose " << i;
+        if (i + 2 < climb_first || i > climb_last + 2) EXPECT_FALSE(obs[i].tread) << "pose " << i;
+        EXPECT_EQ(obs[i].length_m, obs[i].tread ? 0.45 : before[i].length_m) << "pose " << i;
+        EXPECT_EQ(obs[i].observed_length_m, obs[i].tread ? 0.7 : 0.0) << "pose " << i;
+        EXPECT_EQ(obs[i].dup_m, before[i].dup_m);
+        EXPECT_EQ(obs[i].dt_s, before[i].dt_s);
+    }
+    EXPECT_FALSE(obs[out].tread);
+    EXPECT_FALSE(obs[jump].tread);
+    // Marked once: a second pass finds nothing new. A threshold above the climb's rate finds none.
+    EXPECT_EQ(MarkStairTreads(obs, 0.45, 4.0, 0.15, 3.0), 0u);
+    std::vector<StepObservation> slow = before;
+    EXPECT_EQ(MarkStairTreads(slow, 0.45, 4.0, 0.3, 3.0), 0u);
+    // Left in the steps out, the ride's lag reads as a climb there (1.5 m over 1.2 s of walking).
+    EXPECT_GT(MarkStairTreads(unmoved, 0.45, 4.0, 0.15, 3.0), treads);
+    EXPECT_TRUE(unmoved[out].tread);
+    // The run of a tread is its own: scaled, a level step moves scale x length, a tread its run.
+    EXPECT_DOUBLE_EQ(ScaledLength(obs[climb_first + 5], 1.4), 0.45);
+    EXPECT_DOUBLE_EQ(ScaledLength(obs[1], 1.4), 1.4 * 0.7);
+}
+
 TEST(Observables, MoveRideLagPutsTheLaggedReadingIntoTheRide) {
     std::vector<StepObservation> obs(1);
     auto add = [&obs](double dt, double length, double dup) {

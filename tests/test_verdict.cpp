@@ -206,5 +206,41 @@ TEST(VerdictIndoor, TheModelsPlausibleScaleRangeIsTheVerdicts) {
     EXPECT_FALSE(HasReason(judge(no_prior, squeezed), "plausible scale"));
 }
 
+// A stair flight's treads run shorter than the odometry's level steps, and the model does not
+// scale them (MarkStairTreads): poses 60-119 (a climb of 60 s) move 0.04 m a second where the
+// estimate's steps read 0.1, the rest as read. Counted as scaled steps, the climb reads as a walk
+// squeezed below 0.6x (failed); without the treads, the scale is 1.
+TEST(VerdictIndoor, StairTreadsAreNotASqueezedWalk) {
+    const TraversableField field = TwoFloors();
+    const PlanarTrajectory estimate = Walk([](int) { return 0.0; }, 0.1);
+    PlanarTrajectory corrected = estimate;
+    double x = corrected.p_en[0].x();
+    for (std::size_t k = 1; k < corrected.size(); ++k) {
+        x += k >= 60 && k < 120 ? 0.04 : 0.1;
+        corrected.p_en[k].x() = x;
+    }
+    ModelConfig pedestrian;
+    pedestrian.scale_segment_m = 3.0;
+    pedestrian.scale_range_min = 0.9;
+    pedestrian.scale_range_max = 1.5;
+    CorrectionResult result = Result(corrected);
+    result.step_length_m.assign(estimate.size(), 0.1);
+    result.step_length_m[0] = 0.0;
+    auto judge = [&](const CorrectionResult& r) {
+        return JudgeCorrection(estimate, &field, pedestrian, r, nullptr, false, true,
+                               VerdictConfig{});
+    };
+    const Verdict squeezed = judge(result);
+    EXPECT_EQ(squeezed.level, VerdictLevel::kFailed);
+    EXPECT_TRUE(HasReason(squeezed, "stretches or squeezes the drive"));
+    EXPECT_LT(squeezed.scale_min, 0.6);
+    result.tread_steps.assign(estimate.size(), 0);
+    std::fill(result.tread_steps.begin() + 60, result.tread_steps.begin() + 120, 1);
+    const Verdict v = judge(result);
+    EXPECT_EQ(v.level, VerdictLevel::kOk) << (v.reasons.empty() ? "" : v.reasons.front());
+    EXPECT_NEAR(v.scale_min, 1.0, 1e-9);
+    EXPECT_NEAR(v.scale_max, 1.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace driftcorr

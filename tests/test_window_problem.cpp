@@ -735,6 +735,34 @@ TEST(WindowProblem, TheFirstScalesPriorIsAboutItsMean) {
     EXPECT_EQ(c.Objective(y.data()), d.Objective(y.data()));
 }
 
+// A stair tread's run is its own (MarkStairTreads): its length term does not read the scale.
+// Steps 5-10 observed as treads of their own length cost nothing at the estimate, as before; at a
+// scale of 1.2 the six steps' length terms, 0.5 (0.2 L / sigma)^2 each as scaled steps, are gone,
+// every other term the same.
+TEST(WindowProblem, AStairTreadsRunIsNotScaled) {
+    const ModelConfig model = Model();
+    TrajectoryState scaled = StateFrom(Curve(), model, false);
+    TrajectoryState treads = scaled;
+    double removed = 0.0;
+    for (std::size_t i = 5; i <= 10; ++i) {
+        const StepObservation& o = scaled.obs[i];
+        treads.obs[i].tread = true;
+        treads.obs[i].observed_length_m = o.length_m;
+        const double sigma = StepNoiseOf(model, o).length_m, r = 0.2 * o.length_m / sigma;
+        removed += 0.5 * model.step_weight * r * r;
+    }
+    WindowProblem a(scaled, nullptr, model, 1, 29, std::vector<std::uint8_t>(29, 0));
+    WindowProblem b(treads, nullptr, model, 1, 29, std::vector<std::uint8_t>(29, 0));
+    ASSERT_EQ(a.NumVariables(), b.NumVariables());
+    std::vector<double> x(a.NumVariables());
+    a.InitialPoint(x.data());
+    EXPECT_NEAR(a.Objective(x.data()), b.Objective(x.data()), 1e-12);
+    x[a.ScaleVar(scaled.scale_segment[5])] = 1.2;
+    ASSERT_EQ(scaled.scale_segment[5], scaled.scale_segment[10]);
+    EXPECT_GT(removed, 1.0);
+    EXPECT_NEAR(a.Objective(x.data()) - b.Objective(x.data()), removed, 1e-9 * removed);
+}
+
 TEST(WindowProblem, StoreWritesTheSolutionBack) {
     const ModelConfig model = Model();
     TrajectoryState s = StateFrom(Curve(), model, true);

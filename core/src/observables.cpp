@@ -217,6 +217,50 @@ std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double 
     return rides;
 }
 
+std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, double window_s,
+                            double min_rate_mps, double gap_s) {
+    // Building codes ask three risers of a flight at least: fewer steps amid a height change are
+    // the barometer's (a door, a draught), not stairs.
+    constexpr std::size_t kMinRisers = 3;
+    const std::size_t n = obs.size();
+    auto walking = [&](std::size_t i) { return !obs[i].stationary && obs[i].dt_s <= gap_s; };
+    std::vector<double> t_s(n, 0.0);
+    for (std::size_t i = 1; i < n; ++i) t_s[i] = t_s[i - 1] + std::max(obs[i].dt_s, 0.0);
+    // Prefix sums over the walking steps: height change and time.
+    std::vector<double> up_m(n + 1, 0.0), walk_s(n + 1, 0.0);
+    for (std::size_t i = 1; i < n; ++i) {
+        const bool w = walking(i);
+        up_m[i + 1] = up_m[i] + (w ? obs[i].dup_m : 0.0);
+        walk_s[i + 1] = walk_s[i] + (w ? obs[i].dt_s : 0.0);
+    }
+    std::vector<std::uint8_t> tread(n, 0);
+    std::size_t lo = 1, hi = 1, count = 0;  // the steps of [lo, hi) lie within the window
+    for (std::size_t i = 1; i < n; ++i) {
+        while (hi < n && t_s[hi] <= t_s[i] + 0.5 * window_s) ++hi;
+        while (t_s[lo] < t_s[i] - 0.5 * window_s) ++lo;
+        const double rise_m = up_m[hi] - up_m[lo], time_s = walk_s[hi] - walk_s[lo];
+        tread[i] = walking(i) && time_s > 0.0 && std::abs(rise_m) >= min_rate_mps * time_s;
+    }
+    for (std::size_t a = 1; a < n;) {  // a flight: the treads a .. b - 1, at least kMinRisers
+        if (!tread[a]) {
+            ++a;
+            continue;
+        }
+        std::size_t b = a;
+        while (b < n && tread[b]) ++b;
+        for (std::size_t i = a; b - a >= kMinRisers && i < b; ++i) {
+            StepObservation& o = obs[i];
+            if (o.tread) continue;
+            if (!o.repaired) o.observed_length_m = o.length_m;
+            o.length_m = tread_m;
+            o.tread = true;
+            ++count;
+        }
+        a = b;
+    }
+    return count;
+}
+
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m) {
     DRIFTCORR_CHECK(!floor_heights_m.empty(), "no floor");
     return *std::min_element(

@@ -455,7 +455,7 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
 
 PoseMatrix PropagateStep(const PoseMatrix& sigma_a, const PoseState& a, const StepObservation& o,
                          double scale, bool fix_height, const ModelConfig& model) {
-    const double phi = a.yaw_rad + o.direction_rad, len = scale * o.length_m;
+    const double phi = a.yaw_rad + o.direction_rad, len = ScaledLength(o, scale);
     const Eigen::Vector2d along(std::cos(phi), std::sin(phi)), across(-along.y(), along.x());
     PoseMatrix f = PoseMatrix::Identity();  // d pose_b / d pose_a (ComposeStep)
     f.block<2, 1>(0, 3) = len * across;

@@ -234,7 +234,7 @@ void SeedNewScales(TrajectoryState& s, std::size_t from, std::size_t to) {
 PoseState ComposeStep(const PoseState& a, const StepObservation& o, double scale, bool fix_height,
                       double up_fixed_m, double bias_rad_s) {
     const double phi = a.yaw_rad + o.direction_rad;
-    const double len = scale * o.length_m;
+    const double len = ScaledLength(o, scale);
     PoseState b;
     const double up = fix_height ? up_fixed_m : a.p.z() + o.dup_m;
     b.p = Eigen::Vector3d(a.p.x() + len * std::cos(phi), a.p.y() + len * std::sin(phi), up);
@@ -252,6 +252,9 @@ TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseSta
     if (!fix_height) {
         const ModelConfig& m = cfg.model;
         MoveRideLag(s.obs, m.ride_min_s, m.ride_min_height_m, m.ride_gap_s, m.ride_lag_s);
+        if (m.tread_m > 0.0) {
+            MarkStairTreads(s.obs, m.tread_m, m.tread_window_s, m.tread_rate_mps, m.ride_gap_s);
+        }
     }
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
@@ -411,7 +414,9 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
     result.scale_max = *std::max_element(state_.scales.begin(), state_.scales.end());
     result.step_length_m.resize(n);
     result.height_change_m.resize(n);
+    result.tread_steps.assign(n, 0);
     for (std::size_t i = 0; i < n; ++i) {
+        result.tread_steps[i] = state_.obs[i].tread ? 1 : 0;
         result.step_length_m[i] = i > 0 ? state_.obs[i].length_m : 0.0;
         result.height_change_m[i] = i > 0 ? state_.obs[i].dup_m : 0.0;
         result.repaired_steps += state_.obs[i].repaired ? 1 : 0;

@@ -53,18 +53,21 @@ void JudgeSolver(const CorrectionResult& r, Findings& f) {
 // The step-length scale each stretch of `segment_m` of estimated path implies: corrected path
 // length over estimated path length. Flags the poses of implausible stretches.
 // step_m: the odometry's step lengths as the model observed them (dropped steps repaired); the
-// estimate's own when empty.
+// estimate's own when empty. Stair treads (`tread`, when not empty) count on neither side.
 void JudgeScale(const PlanarTrajectory& est, const std::vector<double>& step_m,
-                const PlanarTrajectory& cor, double segment_m, const VerdictConfig& c, Verdict& v,
-                Findings& f) {
+                const std::vector<std::uint8_t>& tread, const PlanarTrajectory& cor,
+                double segment_m, const VerdictConfig& c, Verdict& v, Findings& f) {
     const bool model_steps = step_m.size() == est.size();
+    const bool treads = tread.size() == est.size();
     std::size_t start = 0;
     double est_m = 0.0, cor_m = 0.0;
     v.scale_min = 1e9, v.scale_max = -1e9;
     std::size_t implausible = 0;
     for (std::size_t i = 1; i < est.size(); ++i) {
-        est_m += model_steps ? step_m[i] : (est.p_en[i] - est.p_en[i - 1]).norm();
-        cor_m += (cor.p_en[i] - cor.p_en[i - 1]).norm();
+        if (!(treads && tread[i])) {  // a stair tread's run is not the odometry's scaled
+            est_m += model_steps ? step_m[i] : (est.p_en[i] - est.p_en[i - 1]).norm();
+            cor_m += (cor.p_en[i] - cor.p_en[i - 1]).norm();
+        }
         const bool last = i + 1 == est.size();
         if (est_m < segment_m && !(last && est_m > 0.25 * segment_m)) continue;
         if (est_m >= 0.25 * segment_m) {
@@ -488,8 +491,8 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
         }
         c.scale_failed_min = std::min(c.scale_failed_min, c.scale_plausible_min);
         c.scale_failed_max = std::max(c.scale_failed_max, c.scale_plausible_max);
-        JudgeScale(estimate, result.step_length_m, result.corrected, model.scale_segment_m, c, v,
-                   f);
+        JudgeScale(estimate, result.step_length_m, result.tread_steps, result.corrected,
+                   model.scale_segment_m, c, v, f);
     }
     if (field && !field->empty())
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);

@@ -187,7 +187,7 @@ StepNoise StepNoiseOf(const ModelConfig& m, const StepObservation& o) {
     StepNoise n;
     const double len_rel =
         o.repaired ? std::max(m.step_sigma_rel, m.outlier_sigma_rel) : m.step_sigma_rel;
-    n.length_m = m.step_sigma_m + len_rel * o.length_m;
+    n.length_m = o.tread ? m.tread_sigma_m : m.step_sigma_m + len_rel * o.length_m;
     n.lateral_m = m.lateral_sigma_m + m.lateral_sigma_rel * o.length_m;
     const double rw = m.heading_rw_rad_per_sqrt_s, rel = m.heading_sigma_rel * o.dheading_rad;
     n.heading_rad =
@@ -225,8 +225,9 @@ void WindowProblem::AddStepBlocks(std::size_t i) {
         blocks_.push_back(Core<HeightChangeTerm, 9>(
             TermFamily::kHeightChange, HeightChangeTerm{o.dup_m, hs, cfg_.height_weight}));
     }
-    const int scale_var = IsJump(i) ? -1 : ScaleVar(state_.scale_segment[i]);
-    const double scale_fixed = IsJump(i) ? 1.0 : state_.scales[state_.scale_segment[i]];
+    const bool unscaled = IsJump(i) || o.tread;  // a tread's run is its own
+    const int scale_var = unscaled ? -1 : ScaleVar(state_.scale_segment[i]);
+    const double scale_fixed = unscaled ? 1.0 : state_.scales[state_.scale_segment[i]];
     for (std::size_t b = begin; b < blocks_.size(); ++b) {
         BindPose(*blocks_[b], kXa, i - 1);
         BindPose(*blocks_[b], kXb, i);

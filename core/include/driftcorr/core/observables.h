@@ -18,8 +18,16 @@ struct StepObservation {
     /// The odometry's length for this step was an outlier (RepairSpeedEpisodes): length_m holds
     /// the speed the neighbouring steps imply, observed_length_m what the odometry said.
     bool repaired = false;
-    double observed_length_m = 0.0;  ///< [m], set when repaired
+    /// A stair tread (MarkStairTreads): length_m holds the tread's run, which the step-length
+    /// scale does not scale, observed_length_m what the odometry said.
+    bool tread = false;
+    double observed_length_m = 0.0;  ///< [m], set when repaired or a tread
 };
+
+/// The horizontal length a step moves at step-length scale `scale`: a tread's run is its own.
+inline double ScaledLength(const StepObservation& o, double scale) {
+    return o.tread ? o.length_m : scale * o.length_m;
+}
 
 /// Observations of a planar trajectory: result[i] describes the step into pose i; result[0] is
 /// all zeros. Headings come from `traj.yaw_rad` when present; otherwise from the step directions
@@ -73,6 +81,18 @@ std::vector<std::uint8_t> RideSpans(const std::vector<StepObservation>& obs, dou
 /// obs as ComputeObservations returns it (obs[0] unused).
 std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double min_height_m,
                         double gap_s, double lag_s);
+
+/// Stair treads: a walker climbing or descending stairs steps from tread to tread, so a step's
+/// horizontal run is a tread's (about 0.29 m under the step rule 2 x rise + run = 0.63 m for a
+/// 0.17 m rise), while a step model reads it as a level step (the real Zero2four walk: 0.39 m a
+/// step along its stairs, with their landings, against 0.84 m on its level floors, for the same
+/// 0.47-0.51 m of the PDR's). A walking step (not stationary, not longer than gap_s) amid a
+/// height change of at least min_rate_mps, read over the walking steps within window_s around it
+/// (their height change over their time: standing, as in a lift, counts neither), becomes a
+/// tread: tread = true, length_m = tread_m, observed_length_m the odometry's. Returns the number
+/// of treads. obs as ComputeObservations returns it (obs[0] unused).
+std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, double window_s,
+                            double min_rate_mps, double gap_s);
 
 /// The one of floor_heights_m nearest to up_m. Precondition: floor_heights_m not empty.
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m);

@@ -55,6 +55,9 @@ struct CorrectionResult {
     /// i; [0] = 0): the estimate's, except the dropped steps RepairSpeedEpisodes replaced.
     std::vector<double> step_length_m;
     std::size_t repaired_steps = 0;  ///< steps whose length was replaced
+    /// 1 where the model observed the step as a stair tread (MarkStairTreads: its run is its own,
+    /// not the odometry's scaled), one per pose; empty when the solver does not say.
+    std::vector<std::uint8_t> tread_steps;
     /// The odometry's height changes as the model observed them [m], one per pose (step into
     /// pose i; [0] = 0): the estimate's, except a lift ride's lagged reading moved into the ride
     /// (MoveRideLag, 3D). Empty when the solver does not say (the paper's).

@@ -83,6 +83,14 @@ struct ModelConfig {
     double ride_min_height_m = 2.0;  ///< [m]
     double ride_gap_s = 3.0;         ///< [s]
     double ride_lag_s = 5.0;         ///< [s]
+    /// Stair treads (indoor3d, batch; off by default: docs/results.md, "Stair treads"): a
+    /// walking step amid a height change of tread_rate_mps or more over the tread_window_s
+    /// around it (core MarkStairTreads) runs a tread of tread_m, sigma tread_sigma_m, whatever
+    /// length the odometry read and unscaled. tread_m = 0: every step as read.
+    double tread_m = 0.0;          ///< [m]
+    double tread_sigma_m = 0.15;   ///< [m]
+    double tread_window_s = 4.0;   ///< [s]
+    double tread_rate_mps = 0.15;  ///< [m/s]
     // Step-length scale: one variable per scale_segment_m of estimated path, random walk between
     // segments, prior around scale_prior_mean on the first.
     double scale_segment_m = 150.0;   ///< [m]
@@ -180,6 +188,13 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "no step for this long counts as standing"},
     {"ride_lag_s", Field<&ModelConfig::ride_lag_s>(), kNonNegative,
      "the ride's height change is read up to this long after it (barometer lag)"},
+    {"tread_m", Field<&ModelConfig::tread_m>(), kNonNegative,
+     "horizontal run of a step amid a stair climb or descent (indoor3d); 0: steps as read"},
+    {"tread_sigma_m", Field<&ModelConfig::tread_sigma_m>(), kPositive, "sigma of a tread's run"},
+    {"tread_window_s", Field<&ModelConfig::tread_window_s>(), kPositive,
+     "a step is a tread when the walking steps within this span around it..."},
+    {"tread_rate_mps", Field<&ModelConfig::tread_rate_mps>(), kPositive,
+     "...change height at least this fast"},
     {"scale_segment_m", Field<&ModelConfig::scale_segment_m>(), kPositive,
      "one step-length scale unknown per this much estimated path"},
     {"scale_prior_sigma", Field<&ModelConfig::scale_prior_sigma>(), kPositive,

@@ -15,7 +15,8 @@
 //    The plausible range is the model's own (ModelConfig::scale_range_min/max) when it has a
 //    range prior, else VerdictConfig::scale_plausible_min/max.
 //    Measured against the odometry as the model observed it (CorrectionResult::step_length_m:
-//    dropped-step episodes repaired), so a repaired episode is not counted as a stretch;
+//    dropped-step episodes repaired), so a repaired episode is not counted as a stretch, and
+//    without the stair treads, whose run the scale does not scale (tread_steps);
 //  - the start: the given anchor puts the leading path far from the map while another heading or
 //    position fits it well (AnchorFitResult), or an estimated start that another start fits as
 //    well;
