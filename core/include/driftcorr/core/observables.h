@@ -88,9 +88,11 @@ std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double 
 /// step along its stairs, with their landings, against 0.84 m on its level floors, for the same
 /// 0.47-0.51 m of the PDR's). A walking step (not stationary, not longer than gap_s) amid a
 /// height change of at least min_rate_mps, read over the walking steps within window_s around it
-/// (their height change over their time: standing, as in a lift, counts neither), becomes a
-/// tread: tread = true, length_m = tread_m, observed_length_m the odometry's. Returns the number
-/// of treads. obs as ComputeObservations returns it (obs[0] unused).
+/// (their height change over their time: standing, as in a lift, counts neither), in a run of
+/// at least three such steps (a flight's fewest risers), becomes a tread: tread = true,
+/// length_m = tread_m, observed_length_m the odometry's. Returns the number of new treads.
+/// obs as ComputeObservations returns it (obs[0] unused); a lift ride's lagged reading moved
+/// into the ride first (MoveRideLag), or it reads as a climb on the steps out of the cabin.
 std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, double window_s,
                             double min_rate_mps, double gap_s);
 
