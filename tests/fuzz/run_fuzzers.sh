@@ -14,10 +14,11 @@
 # the test_fuzz_regressions test in the ordinary build).
 #
 # Each target runs on a copy of its seed corpus (tests/fuzz/corpus/<target>, never grown by a run)
-# with its dictionary (tests/fuzz/dict/) when there is one. Prints executions per second and the
-# final corpus size per target. Exits non-zero when a target found a crash (a sanitizer report,
-# an uncaught exception other than InputError, a timeout, an out-of-memory); the reproducer is
-# kept and its path printed: rerun it with `<build_dir>/tests/fuzz/fuzz_<target> <file>`.
+# with its dictionary (tests/fuzz/dict/) when there is one, FUZZ_JOBS targets at a time (default
+# 2). Prints executions per second and the final corpus size per target. Exits non-zero when a
+# target found a crash (a sanitizer report, an uncaught exception other than InputError, a
+# timeout, an out-of-memory); the reproducer is kept and its path printed: rerun it with
+# `<build_dir>/tests/fuzz/fuzz_<target> <file>`.
 set -euo pipefail
 
 SECONDS_PER_TARGET="${1:-30}"
@@ -41,26 +42,45 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1}"
 
 WORK="$(mktemp -d "${TMPDIR:-/tmp}/driftcorr_fuzz_run.XXXXXX")"
 export TMPDIR="$WORK"  # the harnesses' temp files go here too
+# One libFuzzer process per target: two at a time keep both cores of a CI machine busy.
+FUZZ_JOBS="${FUZZ_JOBS:-2}"
+run_target() {
+    local target="$1"
+    local corpus="$WORK/corpus_$target" artifacts="$WORK/artifacts_$target/"
+    mkdir -p "$corpus" "$artifacts"
+    cp "$FUZZ_DIR/corpus/$target/"* "$corpus/"
+    local args=(-max_total_time="$SECONDS_PER_TARGET" -max_len=4096 -timeout=5 -rss_limit_mb=2048
+                -print_final_stats=1 -artifact_prefix="$artifacts")
+    if [[ "$FUZZ_SEED" != random ]]; then args+=(-seed="$FUZZ_SEED"); fi
+    if [[ -n "${DICTS[$target]:-}" ]]; then args+=(-dict="$FUZZ_DIR/dict/${DICTS[$target]}.dict"); fi
+    local status=0
+    "$BUILD_DIR/tests/fuzz/fuzz_$target" "${args[@]}" "$corpus" >"$WORK/$target.log" 2>&1 || status=$?
+    echo "$status" >"$WORK/$target.status"
+}
+running=0
+for target in "${TARGETS[@]}"; do
+    if [[ $running -ge $FUZZ_JOBS ]]; then
+        wait -n || true
+        running=$((running - 1))
+    fi
+    run_target "$target" &
+    running=$((running + 1))
+done
+wait || true
+
 failed=0
 printf '\n%-14s %10s %16s %8s  %s\n' target exec/s corpus_units/size new result
 for target in "${TARGETS[@]}"; do
-    corpus="$WORK/corpus_$target"
     artifacts="$WORK/artifacts_$target/"
     log="$WORK/$target.log"
-    mkdir -p "$corpus" "$artifacts"
-    cp "$FUZZ_DIR/corpus/$target/"* "$corpus/"
-    args=(-max_total_time="$SECONDS_PER_TARGET" -max_len=4096 -timeout=5 -rss_limit_mb=2048
-          -print_final_stats=1 -artifact_prefix="$artifacts")
-    if [[ "$FUZZ_SEED" != random ]]; then args+=(-seed="$FUZZ_SEED"); fi
-    if [[ -n "${DICTS[$target]:-}" ]]; then args+=(-dict="$FUZZ_DIR/dict/${DICTS[$target]}.dict"); fi
-    status=0
-    "$BUILD_DIR/tests/fuzz/fuzz_$target" "${args[@]}" "$corpus" >"$log" 2>&1 || status=$?
+    [[ -f "$log" ]] || : >"$log"  # a target that could not start has no log
+    status="$(cat "$WORK/$target.status" 2>/dev/null || echo 'not run')"
     execs="$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -n 1)"
     added="$(sed -n 's/^stat::new_units_added: *//p' "$log" | tail -n 1)"
     # libFuzzer's last status line: "#N DONE cov: C ft: F corp: UNITS/BYTES exec/s: E rss: R".
     corp="$(grep -E '^#[0-9]+[[:space:]]+DONE ' "$log" | tail -n 1 | sed -n 's/.* corp: \([^ ]*\) .*/\1/p' || true)"
     crash="$(find "$artifacts" -type f | head -n 1)"
-    if [[ $status -ne 0 || -n "$crash" ]]; then
+    if [[ "$status" != 0 || -n "$crash" ]]; then
         failed=1
         printf '%-14s %10s %16s %8s  %s\n' "$target" "${execs:-?}" "${corp:-?}" "${added:-?}" \
             "FAILED (exit $status)"
