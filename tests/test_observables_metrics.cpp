@@ -110,11 +110,6 @@ TEST(Observables, RideSpansFindTheLiftRideNotAWaitAStopOrAClimb) {
     EXPECT_EQ(RideSpans(obs, 5.0, 9.0, 3.0, 5.0)[cabin], 1);
 }
 
-// A lift ride read with lag: 1 m while waiting at the door, 9 m during the ride, 1.5 m during
-// the 2 s standing after it, then 0.8, 0.4 and 0.2 m over the first steps out (0.5 s each), and a
-// stair climb 10 s later. What comes after the ride's step (2.9 m) moves into it, the walk after
-// it is level, the door's reading and the climb keep theirs; total height change and every other
-// observation unchanged. A source that reports in the cabin at a fixed rate keeps its ramp.
 // Steps of 0.7 m every 0.6 s: a level walk, a stair climb of 24 risers (0.17 m a step, read
 // 0.8x by the barometer), a level walk, a lift ride (standing 15 s while the barometer reads 12 m,
 // the last 1.5 m on the first two steps out: its lag, which MoveRideLag moves into the ride
@@ -166,6 +161,11 @@ TEST(Observables, StepsAmidAStairClimbAreTreads) {
     EXPECT_DOUBLE_EQ(ScaledLength(obs[1], 1.4), 1.4 * 0.7);
 }
 
+// A lift ride read with lag: 1 m while waiting at the door, 9 m during the ride, 1.5 m during
+// the 2 s standing after it, then 0.8, 0.4 and 0.2 m over the first steps out (0.5 s each), and a
+// stair climb 10 s later. What comes after the ride's step (2.9 m) moves into it, the walk after
+// it is level, the door's reading and the climb keep theirs; total height change and every other
+// observation unchanged. A source that reports in the cabin at a fixed rate keeps its ramp.
 TEST(Observables, MoveRideLagPutsTheLaggedReadingIntoTheRide) {
     std::vector<StepObservation> obs(1);
     auto add = [&obs](double dt, double length, double dup) {
