@@ -426,6 +426,26 @@ TEST(Online, TheCovarianceHoldsTheHypothesesOfCloseNll) {
                 0.5 * one.covariance.xy_m2(1, 1));
 }
 
+// Before every hypothesis has solved, the outputs come from the start nearest the scale prior's
+// mean, and on odometry alone (NLLs apart only by the prior about that mean) they stay with it:
+// each output lies at that start's scale times the odometry's path.
+TEST(Online, TheOutputsStartFromTheStartNearestTheScalePriorMean) {
+    for (const auto& [mean, nearest] : {std::pair{1.0, 1.0}, {1.2, 1.25}, {1.45, 1.5}}) {
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.corrector.start_scales = {1.0, 1.25, 1.5};
+        cfg.corrector.model.scale_prior_mean = mean;
+        cfg.corrector.model.scale_range_sigma = 0.0;
+        OnlineCorrector online(nullptr, cfg);
+        for (int i = 0; i < 200; ++i) {
+            const PushResult r = online.Push(PlanarPose{0.5 * i, {1.0 * i, 0.0}, 0.0, 0.0});
+            ASSERT_TRUE(r.Accepted());
+            ASSERT_EQ(r.start_scale, nearest) << "mean " << mean << ", pose " << i;
+            EXPECT_NEAR(r.corrected.p_en.x(), nearest * i, 0.02 * i + 0.1) << mean << " " << i;
+        }
+    }
+}
+
 TEST(TumLine, ParsesAndRejects) {
     const io::TumLine ok = io::ParseTumLine(" 1.5 1 2 3 0 0 0 2\r");
     ASSERT_EQ(ok.kind, io::TumLine::Kind::kPose);

@@ -248,5 +248,16 @@ TEST(CorrectorConfig, StartScalesMustBeListedAndInsideTheScaleBounds) {
     EXPECT_EQ(c.Validate(), "");
 }
 
+// The scale prior's mean is a scale too: inside the scale variables' bounds.
+TEST(ModelConfig, ScalePriorMeanMustLieInsideTheScaleBounds) {
+    ModelConfig m;
+    m.scale_prior_mean = kScaleMax;
+    EXPECT_EQ(m.Validate(), "");
+    m.scale_prior_mean = kScaleMax * 1.01;
+    EXPECT_NE(m.Validate().find("scale_prior_mean"), std::string::npos) << m.Validate();
+    m.scale_prior_mean = kScaleMin * 0.99;
+    EXPECT_NE(m.Validate().find("scale_prior_mean"), std::string::npos) << m.Validate();
+}
+
 }  // namespace
 }  // namespace driftcorr

@@ -73,11 +73,16 @@ OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConf
     DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");
     const std::vector<double>& starts = cfg_.corrector.start_scales;
     if (starts.size() > 1) {
-        for (const double scale : starts) {
+        // The start nearest the scale prior's mean solves from the first pose and gives the
+        // outputs until every hypothesis has solved (the first one of the nearest).
+        const double mean = cfg_.corrector.model.scale_prior_mean;
+        for (std::size_t k = 1; k < starts.size(); ++k) {
+            if (std::abs(starts[k] - mean) < std::abs(starts[chosen_] - mean)) chosen_ = k;
+        }
+        for (std::size_t k = 0; k < starts.size(); ++k) {
             OnlineConfig one = cfg_;
-            one.corrector.start_scales = {scale};
-            const bool first_at_chunk = !hypotheses_.empty();
-            hypotheses_.emplace_back(new OnlineCorrector(field, one, scale, first_at_chunk));
+            one.corrector.start_scales = {starts[k]};
+            hypotheses_.emplace_back(new OnlineCorrector(field, one, starts[k], k != chosen_));
         }
         return;
     }

@@ -28,7 +28,8 @@
 //
 // And what a causal output (each pose corrected with the epochs up to it, the online mode's) cannot
 // know: on the first straight, up to the first cut, nothing has yet told the step-length scale,
-// so a causal corrector moves by the estimate's steps at the model's prior scale of 1. Its
+// so a causal corrector moves by the estimate's steps at the model's prior scale (the default
+// model's ModelConfig::scale_prior_mean for the scenario's mode, or environment SCALE_PRIOR). Its
 // along-track error there, with zero error everywhere else, is printed as the causal bound of the
 // first straight (RMS over the whole drive or walk). After it, a causal corrector can at best carry
 // the scale of the path before each straight (as on the final straight above) until the straight's
@@ -60,6 +61,8 @@ double kTurnDeg = 30.0;
 // Indoors a straight also ends where the true height changed this much since the last cut [m]
 // (environment CLIMB_M).
 double kClimbM = 0.5;
+// The causal first straight's scale when > 0 (environment SCALE_PRIOR), else the model's prior.
+double kScalePrior = 0.0;
 
 std::vector<double> PathLength(const PlanarTrajectory& t) {
     std::vector<double> s(t.size(), 0.0);
@@ -74,9 +77,10 @@ double PathRatio(const std::vector<double>& sg, const std::vector<double>& se, s
 }
 
 // The best scale a corrector could have learned before pose `from`: the PathRatio of the
-// kScaleWindowM of path before it; the prior scale of 1 at the start.
-double ScaleBefore(const std::vector<double>& sg, const std::vector<double>& se, std::size_t from) {
-    if (from == 0) return 1.0;
+// kScaleWindowM of path before it; the prior scale at the start.
+double ScaleBefore(const std::vector<double>& sg, const std::vector<double>& se, std::size_t from,
+                   double prior) {
+    if (from == 0) return prior;
     std::size_t back = from;
     while (back > 0 && sg[from] - sg[back] < kScaleWindowM) --back;
     return PathRatio(sg, se, back, from);
@@ -106,6 +110,10 @@ void Evaluate(const std::string& dir) {
     const PlanarTrajectory& est = ps.estimate;
     const std::size_t n = gt.size();
     const std::vector<double> sg = PathLength(gt), se = PathLength(est);
+    const double prior = kScalePrior > 0.0
+                             ? kScalePrior
+                             : pipeline::CorrectorFor(ps.scenario, pipeline::PipelineConfig{})
+                                   .model.scale_prior_mean;
     // The final direction, from the last moving chord.
     double final_dir = std::nan("");
     for (std::size_t i = n; i-- > 0 && std::isnan(final_dir);) final_dir = Direction(gt, sg, i);
@@ -115,7 +123,7 @@ void Evaluate(const std::string& dir) {
         if (!std::isnan(d) && std::abs(AngleDiff(d, final_dir)) > DegToRad(kStraightDeg)) break;
         --k;
     }
-    const double scale_before = ScaleBefore(sg, se, k);
+    const double scale_before = ScaleBefore(sg, se, k, prior);
     const double scale_on = PathRatio(sg, se, k, n - 1);
     double sum_sq = 0.0, final_err = 0.0;
     for (std::size_t i = k; i < n; ++i) {
@@ -149,11 +157,11 @@ void Evaluate(const std::string& dir) {
     // Along each straight: the estimate's steps scaled to the straight's true length (every
     // straight; the last one, which no turn ends, by the scale of the path before it, as above),
     // or by the scale of the path before it (causal). The causal first straight at the prior
-    // scale of 1, up to its turn or the first climb.
+    // scale, up to its turn or the first climb.
     double every_sq = 0.0, causal_sq = 0.0;
     for (std::size_t c = 0; c + 1 < cuts.size(); ++c) {
         const std::size_t from = cuts[c], to = cuts[c + 1];
-        const double before = ScaleBefore(sg, se, from);
+        const double before = ScaleBefore(sg, se, from, prior);
         const double scale = c + 2 == cuts.size() ? before : PathRatio(sg, se, from, to);
         for (std::size_t i = from; i <= to; ++i) {
             every_sq += std::pow((sg[i] - sg[from]) - scale * (se[i] - se[from]), 2);
@@ -162,15 +170,15 @@ void Evaluate(const std::string& dir) {
     }
     const std::size_t first_end = cuts.size() > 1 ? cuts[1] : n - 1;
     double first_sq = 0.0;
-    for (std::size_t i = 0; i <= first_end; ++i) first_sq += std::pow(sg[i] - se[i], 2);
+    for (std::size_t i = 0; i <= first_end; ++i) first_sq += std::pow(sg[i] - prior * se[i], 2);
     std::printf(
         "%-30s straight from pose %5zu of %5zu, %6.0f m | scale before %.3f, on it %.3f | "
         "bound: final >= %6.1f m, ATE >= %5.2f m | every straight (%zu): ATE >= %5.2f m | "
-        "causal: first straight to pose %zu (%.0f m, scale %.3f) ATE >= %5.2f m, every "
+        "causal: first straight to pose %zu (%.0f m, scale %.3f, prior %.2f) ATE >= %5.2f m, every "
         "straight %5.2f m\n",
         ps.scenario.name.c_str(), k, n, sg[n - 1] - sg[k], scale_before, scale_on, final_err,
         std::sqrt(sum_sq / double(n)), cuts.size() - 1, std::sqrt(every_sq / double(n)), first_end,
-        sg[first_end], PathRatio(sg, se, 0, first_end), std::sqrt(first_sq / double(n)),
+        sg[first_end], PathRatio(sg, se, 0, first_end), prior, std::sqrt(first_sq / double(n)),
         std::sqrt(causal_sq / double(n)));
     std::fflush(stdout);
 }
@@ -181,5 +189,6 @@ int main(int argc, char** argv) {
     if (const char* d = std::getenv("STRAIGHT_DEG")) kStraightDeg = std::atof(d);
     if (const char* d = std::getenv("TURN_DEG")) kTurnDeg = std::atof(d);
     if (const char* d = std::getenv("CLIMB_M")) kClimbM = std::atof(d);
+    if (const char* d = std::getenv("SCALE_PRIOR")) kScalePrior = std::atof(d);
     return driftcorr::bench::ForEachScenario(argc, argv, Evaluate);
 }

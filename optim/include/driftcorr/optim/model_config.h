@@ -9,6 +9,10 @@
 
 namespace driftcorr {
 
+/// Bounds of the step-length scale variables: a scale at a bound means the map and the odometry
+/// disagree (a wrong anchor, a map of another place, an estimate that is not odometry).
+constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
+
 struct ModelConfig {
     // Step length: sigma = step_sigma_m + step_sigma_rel * L.
     double step_sigma_m = 0.02;       ///< [m]
@@ -95,9 +99,10 @@ struct ModelConfig {
     // segments, prior around scale_prior_mean on the first.
     double scale_segment_m = 150.0;   ///< [m]
     double scale_prior_sigma = 0.1;   ///< [-]
-    /// Not a parameter: 1 (the odometry's own scale) in every NLL that is scored; the windows of
-    /// a start scale hypothesis hold it at the start (CorrectorConfig::start_scales; online, the
-    /// FixedLagSmoother's start_scale).
+    /// The scale every scored NLL's prior is about (by default 1, the odometry's own scale; online,
+    /// the start nearest it gives the first outputs); the windows of a start scale hypothesis
+    /// hold it at the start (CorrectorConfig::start_scales; online, the FixedLagSmoother's
+    /// start_scale).
     double scale_prior_mean = 1.0;    ///< [-]
     double scale_rw_sigma = 0.01;     ///< [-] per segment
     /// The plausible scale range as a prior: no cost within [scale_range_min, scale_range_max],
@@ -197,8 +202,10 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "...change height at least this fast"},
     {"scale_segment_m", Field<&ModelConfig::scale_segment_m>(), kPositive,
      "one step-length scale unknown per this much estimated path"},
+    {"scale_prior_mean", Field<&ModelConfig::scale_prior_mean>(), Between(kScaleMin, kScaleMax),
+     "mean of the first scale's prior"},
     {"scale_prior_sigma", Field<&ModelConfig::scale_prior_sigma>(), kPositive,
-     "prior of the first scale around 1"},
+     "prior of the first scale around scale_prior_mean"},
     {"scale_rw_sigma", Field<&ModelConfig::scale_rw_sigma>(), kPositive,
      "random walk of the scale per segment"},
     {"scale_rw_robust_k", Field<&ModelConfig::scale_rw_robust_k>(), kNonNegative,

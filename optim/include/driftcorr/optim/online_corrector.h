@@ -22,14 +22,15 @@
 //    between are skipped, not queued).
 //  - Start scales (CorrectorConfig::start_scales, more than one: the pedestrian model's): one
 //    hypothesis per start scale runs the whole online correction from that scale (its own solver
-//    and, threaded, its own worker), fed every pose. The hypotheses of the other starts solve
-//    first at the end of the first chunk (the chunk rule above): a window of a few metres holds
-//    no basin but the scale prior's, and every start would meet there (measured on a generated
-//    HCU walk solved from the first pose on: the three starts' NLLs equal at every solve). After
-//    each solve a hypothesis records the NLL of its poses up to that solve's end
+//    and, threaded, its own worker), fed every pose. The start nearest the scale prior's mean
+//    (ModelConfig::scale_prior_mean) solves from the first pose; the hypotheses of the other
+//    starts solve first at the end of the first chunk (the chunk rule above): a window of a few
+//    metres holds no basin but the scale prior's, and every start would meet there (measured on
+//    a generated HCU walk solved from the first pose on: the three starts' NLLs equal at every
+//    solve). After each solve a hypothesis records the NLL of its poses up to that solve's end
 //    (FixedLagSmoother::Nll, time linear in the walk: the batch's score over the part solved so
-//    far). A Push returns the output of the hypothesis of lowest NLL at the
-//    latest solve end that every hypothesis has reached (the first start until there is one),
+//    far). A Push returns the output of the hypothesis of lowest NLL at the latest solve end
+//    that every hypothesis has reached (the start nearest the prior's mean until there is one),
 //    so the output may switch to another hypothesis, as the batch keeps another start.
 //    PushResult::start_scale says which; another hypothesis replaces the chosen one only when its
 //    NLL is lower by more than kNllTie. Statistics() give the ages of the outputs returned and

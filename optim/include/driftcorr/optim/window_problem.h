@@ -47,10 +47,6 @@ struct TrajectoryState {
     std::vector<std::uint8_t> height_settled;
 };
 
-/// Bounds of the step-length scale variables: a scale at a bound means the map and the odometry
-/// disagree (a wrong anchor, a map of another place, an estimate that is not odometry).
-constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
-
 /// Assigns scale segments from the estimated path length (one per `segment_m`).
 std::vector<int> ScaleSegments(const std::vector<StepObservation>& obs, double segment_m);
 /// The estimated path from pose 0 to each pose [m]: the sum of the step lengths obs[1..i].
