@@ -73,8 +73,8 @@ OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConf
     DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");
     const std::vector<double>& starts = cfg_.corrector.start_scales;
     if (starts.size() > 1) {
-        // The start nearest the scale prior's mean solves from the first pose and gives the
-        // outputs until every hypothesis has solved (the first one of the nearest).
+        // The start nearest the scale prior's mean (the first of equally near ones) solves from
+        // the first pose and gives the outputs until every hypothesis has solved.
         const double mean = cfg_.corrector.model.scale_prior_mean;
         for (std::size_t k = 1; k < starts.size(); ++k) {
             if (std::abs(starts[k] - mean) < std::abs(starts[chosen_] - mean)) chosen_ = k;
