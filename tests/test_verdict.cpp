@@ -1,6 +1,7 @@
 // The verdict's indoor checks on hand-made trajectories in buildings of two or three floors: a
 // corrected floor change that the estimate's heights deny, level walking between floors, a floor
-// that another floor explains as well, and the plausible scale the model declares.
+// that another floor explains as well, and the plausible scale the model declares; online, causal
+// outputs a floor or a branch away from the smoothed trajectory.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -240,6 +241,78 @@ TEST(VerdictIndoor, StairTreadsAreNotASqueezedWalk) {
     EXPECT_EQ(v.level, VerdictLevel::kOk) << (v.reasons.empty() ? "" : v.reasons.front());
     EXPECT_NEAR(v.scale_min, 1.0, 1e-9);
     EXPECT_NEAR(v.scale_max, 1.0, 1e-9);
+}
+
+// Online (JudgeOnline): the causal outputs against the smoothed trajectory. The smoothed
+// trajectory rides a lift from the ground floor to the top one (8 m over 60-80 s) and stays
+// there, as the barometer reads; the causal chain ends its ride on the middle floor (4 m) and
+// stays there `stay_s` seconds before it follows. An online output lags a floor change by a few
+// seconds; a level window (20 s) or more a floor apart is a wrong floor on one side.
+TEST(VerdictOnline, CausalOutputsAFloorApartAreNotOk) {
+    const TraversableField field = Floors({40.0, 40.0, 40.0});
+    const PlanarTrajectory smoothed =
+        Walk([](int k) { return std::clamp(0.4 * (k - 60), 0.0, 8.0); });
+    auto causal_staying = [&](int stay_s) {
+        PlanarTrajectory causal = smoothed;
+        for (int k = 80; k < 80 + stay_s; ++k) causal.up_m[k] = 4.0;
+        return causal;
+    };
+    const ModelConfig model;
+    VerdictConfig config;
+    config.floor_heights_m = {0.0, 4.0, 8.0};
+    auto judge = [&](const PlanarTrajectory& causal) {
+        return JudgeOnline(smoothed, causal, &field, model, Result(smoothed), config);
+    };
+    const OnlineVerdict same = judge(smoothed);
+    EXPECT_EQ(same.verdict.level, VerdictLevel::kOk)
+        << (same.verdict.reasons.empty() ? "" : same.verdict.reasons.front());
+    EXPECT_EQ(same.check.floor_apart_share, 0.0);
+    const OnlineVerdict lag = judge(causal_staying(15));  // 14 s from first to last pose
+    EXPECT_EQ(lag.verdict.level, VerdictLevel::kOk);
+    EXPECT_EQ(lag.check.floor_apart_share, 0.0);
+    const OnlineVerdict stay = judge(causal_staying(40));
+    EXPECT_EQ(stay.verdict.level, VerdictLevel::kDegraded);
+    EXPECT_NEAR(stay.check.floor_apart_share, 40.0 / 201.0, 1e-12);
+    EXPECT_NEAR(stay.check.floor_apart_longest_s, 39.0, 1e-12);
+    EXPECT_NEAR(stay.check.floor_apart_max_m, 4.0, 1e-12);
+    EXPECT_TRUE(HasReason(stay.verdict,
+                          "20 % of the causal outputs stood up to 4.0 m above or "
+                          "below the smoothed trajectory (39 s in a row)"))
+        << (stay.verdict.reasons.empty() ? "no reason" : stay.verdict.reasons.front());
+    // Beyond off_map_failed_share (30 %) of the poses: failed.
+    const OnlineVerdict rest = judge(causal_staying(100));
+    EXPECT_EQ(rest.verdict.level, VerdictLevel::kFailed);
+    EXPECT_FALSE(rest.check.disagree);  // horizontally they agree
+    // A longer window lets the same stay pass.
+    config.level_window_s = 60.0;
+    EXPECT_EQ(judge(causal_staying(40)).verdict.level, VerdictLevel::kOk);
+}
+
+// Horizontally: causal outputs farther from the smoothed trajectory (RMS) than the input lies
+// from it followed a wrong branch on one side. The input lies 3 m beside the smoothed
+// trajectory; causal outputs 2 m beside it agree, 4 m beside it do not.
+TEST(VerdictOnline, CausalOutputsFartherThanTheInputFail) {
+    const TraversableField field = TwoFloors();
+    const PlanarTrajectory smoothed = Walk([](int) { return 0.0; });
+    auto beside = [&](double dy_m) {
+        PlanarTrajectory t = smoothed;
+        for (Eigen::Vector2d& p : t.p_en) p.y() += dy_m;
+        return t;
+    };
+    const ModelConfig model;
+    const VerdictConfig config;
+    const PlanarTrajectory input = beside(3.0);
+    const OnlineVerdict near =
+        JudgeOnline(input, beside(2.0), &field, model, Result(smoothed), config);
+    EXPECT_FALSE(near.check.disagree);
+    EXPECT_FALSE(HasReason(near.verdict, "wrong branch"));
+    const OnlineVerdict far =
+        JudgeOnline(input, beside(4.0), &field, model, Result(smoothed), config);
+    EXPECT_TRUE(far.check.disagree);
+    EXPECT_NEAR(far.check.causal_rms_m, 4.0, 1e-9);
+    EXPECT_NEAR(far.check.input_rms_m, 3.0, 1e-9);
+    EXPECT_EQ(far.verdict.level, VerdictLevel::kFailed);
+    EXPECT_TRUE(HasReason(far.verdict, "followed a wrong branch of the map"));
 }
 
 }  // namespace

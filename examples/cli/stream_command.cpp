@@ -248,6 +248,13 @@ private:
                      "driftcorr stream: causal outputs against the smoothed trajectory: RMS %.2f m, "
                      "max %.2f m (the input: RMS %.2f m)\n",
                      c.causal_rms_m, c.causal_max_m, c.input_rms_m);
+        if (c.floor_apart_share > 0.0) {
+            std::fprintf(
+                stderr,
+                "driftcorr stream: causal outputs a floor apart from the smoothed "
+                "trajectory: %.1f %% of the poses, %.0f s in a row at most, up to %.1f m\n",
+                100.0 * c.floor_apart_share, c.floor_apart_longest_s, c.floor_apart_max_m);
+        }
     }
     void Skip(long number, const std::string& why) {
         ++skipped_;

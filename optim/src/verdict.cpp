@@ -515,7 +515,7 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
 }
 
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
-                              const PlanarTrajectory& smoothed) {
+                              const PlanarTrajectory& smoothed, const VerdictConfig& config) {
     DRIFTCORR_CHECK(
         input.size() == causal.size() && causal.size() == smoothed.size() && input.size() > 0,
         "CheckCausalOutput: the trajectories must have the same poses");
@@ -527,10 +527,31 @@ CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTraject
         c.causal_max_m = std::max(c.causal_max_m, dc);
         input_sq += (input.p_en[i] - smoothed.p_en[i]).squaredNorm();
     }
-    const double n = double(smoothed.size());
-    c.causal_rms_m = std::sqrt(causal_sq / n);
-    c.input_rms_m = std::sqrt(input_sq / n);
+    const std::size_t n = smoothed.size();
+    c.causal_rms_m = std::sqrt(causal_sq / double(n));
+    c.input_rms_m = std::sqrt(input_sq / double(n));
     c.disagree = c.causal_rms_m > c.input_rms_m;
+    if (causal.up_m.size() != n || smoothed.up_m.size() != n || smoothed.t_s.size() != n) return c;
+    std::size_t apart = 0;
+    std::optional<std::size_t> run_start;
+    double run_max_m = 0.0;
+    for (std::size_t i = 0; i <= n; ++i) {
+        const double dz = i < n ? std::abs(causal.up_m[i] - smoothed.up_m[i]) : 0.0;
+        if (dz > config.height_disagree_m) {
+            if (!run_start) run_start = i, run_max_m = 0.0;
+            run_max_m = std::max(run_max_m, dz);
+            continue;
+        }
+        if (!run_start) continue;
+        const double run_s = smoothed.t_s[i - 1] - smoothed.t_s[*run_start];  // [*run_start, i)
+        if (run_s >= config.level_window_s) {
+            apart += i - *run_start;
+            c.floor_apart_longest_s = std::max(c.floor_apart_longest_s, run_s);
+            c.floor_apart_max_m = std::max(c.floor_apart_max_m, run_max_m);
+        }
+        run_start.reset();
+    }
+    c.floor_apart_share = double(apart) / double(n);
     return c;
 }
 
@@ -538,17 +559,23 @@ OnlineVerdict JudgeOnline(const PlanarTrajectory& input, const PlanarTrajectory&
                           const TraversableField* field, const ModelConfig& model,
                           const CorrectionResult& smoothed, const VerdictConfig& config) {
     OnlineVerdict out{JudgeCorrection(input, field, model, smoothed, nullptr, false, true, config),
-                      CheckCausalOutput(input, causal, smoothed.corrected)};
+                      CheckCausalOutput(input, causal, smoothed.corrected, config)};
     const CausalCheck& c = out.check;
-    if (!c.disagree) return out;
-    Verdict& v = out.verdict;
-    v.level = VerdictLevel::kFailed;
-    v.reasons.push_back("failed: the causal outputs and the smoothed trajectory lie " +
-                        FormatFixed(c.causal_rms_m, 2) +
-                        " m apart (RMS), farther than the input lies from the smoothed "
-                        "trajectory (" +
-                        FormatFixed(c.input_rms_m, 2) +
-                        " m): one of them followed a wrong branch of the map");
+    Findings f(out.verdict);
+    if (c.disagree) {
+        f.Failed(
+            "the causal outputs and the smoothed trajectory lie " + FormatFixed(c.causal_rms_m, 2) +
+            " m apart (RMS), farther than the input lies from the smoothed trajectory (" +
+            FormatFixed(c.input_rms_m, 2) + " m): one of them followed a wrong branch of the map");
+    }
+    if (c.floor_apart_share > 0.0) {
+        f.ByShare(c.floor_apart_share, config.off_map_failed_share,
+                  FormatPercent(c.floor_apart_share) + " of the causal outputs stood up to " +
+                      FormatFixed(c.floor_apart_max_m, 1) +
+                      " m above or below the smoothed trajectory (" +
+                      FormatFixed(c.floor_apart_longest_s, 0) +
+                      " s in a row): a floor apart, so one of them stood on a wrong floor");
+    }
     return out;
 }
 

@@ -185,15 +185,25 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
 /// both ways: a causal chain stuck on a wrong road while the smoothed solve recovered, and a
 /// smoothed solve in a wrong corridor while the causal chain stayed right), and with no ground
 /// truth neither can be vouched for.
+/// In height (3D: both trajectories carry heights): causal outputs more than height_disagree_m
+/// above or below the smoothed trajectory for level_window_s or longer in a row stand a floor
+/// apart from it (a causal chain that rode a lift to another floor than the smoothed solve and
+/// stayed there), where an online output only lags a floor change by a few seconds. Those runs'
+/// share of the poses (floor_apart_share) is degraded, failed beyond off_map_failed_share.
 struct CausalCheck {
     double causal_rms_m = 0.0, causal_max_m = 0.0;  ///< causal output to smoothed [m]
     double input_rms_m = 0.0;                       ///< input to smoothed [m]
     bool disagree = false;
+    double floor_apart_share = 0.0;      ///< [-] poses in runs a floor apart, of all poses
+    double floor_apart_longest_s = 0.0;  ///< [s] the longest such run
+    double floor_apart_max_m = 0.0;      ///< [m] the largest height difference in those runs
 };
 
-/// Precondition: the three trajectories have the same poses (same size, > 0).
+/// Precondition: the three trajectories have the same poses (same size, > 0). `config`: the
+/// height check's thresholds (height_disagree_m, level_window_s).
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
-                              const PlanarTrajectory& smoothed);
+                              const PlanarTrajectory& smoothed,
+                              const VerdictConfig& config = VerdictConfig{});
 
 /// The verdict on an online run and the check behind it.
 struct OnlineVerdict {
@@ -203,8 +213,9 @@ struct OnlineVerdict {
 
 /// The verdict on an online run (the stream, eval's online method, the Python Stream): its
 /// `smoothed` result judged as a correction of `input` (JudgeCorrection: the start given, the
-/// scale estimated), with CheckCausalOutput's finding on its `causal` outputs; a disagreement
-/// fails both. Precondition: `smoothed` is usable and has the poses of `input` and `causal`.
+/// scale estimated), with CheckCausalOutput's findings on its `causal` outputs; a disagreement
+/// fails both, outputs a floor apart degrade or fail both (CausalCheck). Precondition: `smoothed`
+/// is usable and has the poses of `input` and `causal`.
 OnlineVerdict JudgeOnline(const PlanarTrajectory& input, const PlanarTrajectory& causal,
                           const TraversableField* field, const ModelConfig& model,
                           const CorrectionResult& smoothed, const VerdictConfig& config);
