@@ -286,6 +286,10 @@ TEST(VerdictOnline, CausalOutputsAFloorApartAreNotOk) {
     // A longer window lets the same stay pass.
     config.level_window_s = 60.0;
     EXPECT_EQ(judge(causal_staying(40)).verdict.level, VerdictLevel::kOk);
+    // In 2D (no height thresholds: the heights are not corrected) there is no height check.
+    EXPECT_EQ(CheckCausalOutput(smoothed, causal_staying(100), smoothed).floor_apart_share, 0.0);
+    EXPECT_GT(CheckCausalOutput(smoothed, causal_staying(100), smoothed, &config).floor_apart_share,
+              0.0);
 }
 
 // Horizontally: causal outputs farther from the smoothed trajectory (RMS) than the input lies

@@ -515,7 +515,7 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
 }
 
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
-                              const PlanarTrajectory& smoothed, const VerdictConfig& config) {
+                              const PlanarTrajectory& smoothed, const VerdictConfig* heights) {
     DRIFTCORR_CHECK(
         input.size() == causal.size() && causal.size() == smoothed.size() && input.size() > 0,
         "CheckCausalOutput: the trajectories must have the same poses");
@@ -531,20 +531,23 @@ CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTraject
     c.causal_rms_m = std::sqrt(causal_sq / double(n));
     c.input_rms_m = std::sqrt(input_sq / double(n));
     c.disagree = c.causal_rms_m > c.input_rms_m;
-    if (causal.up_m.size() != n || smoothed.up_m.size() != n || smoothed.t_s.size() != n) return c;
+    if (!heights || causal.up_m.size() != n || smoothed.up_m.size() != n ||
+        smoothed.t_s.size() != n) {
+        return c;
+    }
     std::size_t apart = 0;
     std::optional<std::size_t> run_start;
     double run_max_m = 0.0;
     for (std::size_t i = 0; i <= n; ++i) {
         const double dz = i < n ? std::abs(causal.up_m[i] - smoothed.up_m[i]) : 0.0;
-        if (dz > config.height_disagree_m) {
+        if (dz > heights->height_disagree_m) {
             if (!run_start) run_start = i, run_max_m = 0.0;
             run_max_m = std::max(run_max_m, dz);
             continue;
         }
         if (!run_start) continue;
         const double run_s = smoothed.t_s[i - 1] - smoothed.t_s[*run_start];  // [*run_start, i)
-        if (run_s >= config.level_window_s) {
+        if (run_s >= heights->level_window_s) {
             apart += i - *run_start;
             c.floor_apart_longest_s = std::max(c.floor_apart_longest_s, run_s);
             c.floor_apart_max_m = std::max(c.floor_apart_max_m, run_max_m);
@@ -559,7 +562,8 @@ OnlineVerdict JudgeOnline(const PlanarTrajectory& input, const PlanarTrajectory&
                           const TraversableField* field, const ModelConfig& model,
                           const CorrectionResult& smoothed, const VerdictConfig& config) {
     OnlineVerdict out{JudgeCorrection(input, field, model, smoothed, nullptr, false, true, config),
-                      CheckCausalOutput(input, causal, smoothed.corrected, config)};
+                      CheckCausalOutput(input, causal, smoothed.corrected,
+                                        field && !field->planar() ? &config : nullptr)};
     const CausalCheck& c = out.check;
     Findings f(out.verdict);
     if (c.disagree) {

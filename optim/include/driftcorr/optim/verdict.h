@@ -199,11 +199,12 @@ struct CausalCheck {
     double floor_apart_max_m = 0.0;      ///< [m] the largest height difference in those runs
 };
 
-/// Precondition: the three trajectories have the same poses (same size, > 0). `config`: the
-/// height check's thresholds (height_disagree_m, level_window_s).
+/// Precondition: the three trajectories have the same poses (same size, > 0). `heights`: the
+/// height check's thresholds (height_disagree_m, level_window_s); null: no height check (2D,
+/// where the heights are not corrected).
 CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTrajectory& causal,
                               const PlanarTrajectory& smoothed,
-                              const VerdictConfig& config = VerdictConfig{});
+                              const VerdictConfig* heights = nullptr);
 
 /// The verdict on an online run and the check behind it.
 struct OnlineVerdict {
