@@ -185,11 +185,11 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
 /// both ways: a causal chain stuck on a wrong road while the smoothed solve recovered, and a
 /// smoothed solve in a wrong corridor while the causal chain stayed right), and with no ground
 /// truth neither can be vouched for.
-/// In height (3D: both trajectories carry heights): causal outputs more than height_disagree_m
-/// above or below the smoothed trajectory for level_window_s or longer in a row stand a floor
-/// apart from it (a causal chain that rode a lift to another floor than the smoothed solve and
-/// stayed there), where an online output only lags a floor change by a few seconds. Those runs'
-/// share of the poses (floor_apart_share) is degraded, failed beyond off_map_failed_share.
+/// In height (3D fields, where the heights are corrected): causal outputs more than
+/// height_disagree_m above or below the smoothed trajectory for level_window_s or longer in a row
+/// stand a floor apart from it (a causal chain that rode a lift to another floor than the smoothed
+/// solve and stayed there), where an online output only lags a floor change by a few seconds. Those
+/// runs' share of the poses (floor_apart_share) is degraded, failed beyond off_map_failed_share.
 struct CausalCheck {
     double causal_rms_m = 0.0, causal_max_m = 0.0;  ///< causal output to smoothed [m]
     double input_rms_m = 0.0;                       ///< input to smoothed [m]
