@@ -199,42 +199,53 @@ void JudgeHeightChanges(const PlanarTrajectory& est, const PlanarTrajectory& cor
     f.ByShare(share, c.off_map_failed_share, what);
 }
 
+// A run of consecutive poses [first, last] that a check finds off, lasting duration_s (time of the
+// last pose minus time of the first); worst: the largest amount off in it.
+struct LongRun {
+    std::size_t first = 0, last = 0;
+    double duration_s = 0.0, worst = 0.0;
+};
+
+// The runs of consecutive poses with off(i) true that last at least min_s; amount(i) gives each
+// run's worst.
+template <class Off, class Amount>
+std::vector<LongRun> LongRuns(const std::vector<double>& t_s, Off off, Amount amount,
+                              double min_s) {
+    std::vector<LongRun> runs;
+    for (std::size_t i = 0; i < t_s.size();) {
+        if (!off(i)) {
+            ++i;
+            continue;
+        }
+        LongRun r{i, i, 0.0, amount(i)};
+        while (r.last + 1 < t_s.size() && off(r.last + 1))
+            r.worst = std::max(r.worst, amount(++r.last));
+        r.duration_s = t_s[r.last] - t_s[r.first];
+        if (r.duration_s >= min_s) runs.push_back(r);
+        i = r.last + 1;
+    }
+    return runs;
+}
+
 // Level walking between floors (VerdictConfig::floor_heights_m, not empty): runs of poses off every
 // floor while the estimate is level; only runs of level_window_s / 2 or more count and are flagged.
 void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor,
                         const VerdictConfig& c, Verdict& v, Findings& f) {
-    const double half_s = 0.5 * c.level_window_s;
-    auto floor_distance = [&c](double up_m) {
-        return std::abs(up_m - NearestFloor(c.floor_heights_m, up_m));
+    auto floor_distance = [&](std::size_t i) {
+        return std::abs(cor.up_m[i] - NearestFloor(c.floor_heights_m, cor.up_m[i]));
     };
     const std::vector<std::uint8_t> level =
         LevelSpans(est.t_s, est.up_m, c.level_window_s, c.level_height_m);
+    const std::vector<LongRun> runs = LongRuns(
+        est.t_s, [&](std::size_t i) { return level[i] && floor_distance(i) > c.off_floor_m; },
+        floor_distance, 0.5 * c.level_window_s);
     std::size_t flagged = 0;
-    std::optional<std::size_t> run_start;
-    double longest_s = 0.0, worst_m = 0.0, run_worst_m = 0.0;
-    for (std::size_t i = 0; i <= cor.size(); ++i) {
-        bool off = false;
-        double off_m = 0.0;
-        if (i < cor.size()) {
-            off_m = floor_distance(cor.up_m[i]);
-            off = off_m > c.off_floor_m && level[i];
-        }
-        if (off) {
-            if (!run_start) run_start = i, run_worst_m = 0.0;
-            run_worst_m = std::max(run_worst_m, off_m);
-            continue;
-        }
-        if (run_start) {  // the run [*run_start, i) ends
-            const double run_s = est.t_s[i - 1] - est.t_s[*run_start];
-            if (run_s >= half_s) {
-                longest_s = std::max(longest_s, run_s);
-                worst_m = std::max(worst_m, run_worst_m);
-                for (std::size_t k = *run_start; k < i; ++k)
-                    v.pose_flags[k] |= kPoseHeightDisagrees;
-                flagged += i - *run_start;
-            }
-            run_start.reset();
-        }
+    double longest_s = 0.0, worst_m = 0.0;
+    for (const LongRun& r : runs) {
+        longest_s = std::max(longest_s, r.duration_s);
+        worst_m = std::max(worst_m, r.worst);
+        for (std::size_t k = r.first; k <= r.last; ++k) v.pose_flags[k] |= kPoseHeightDisagrees;
+        flagged += r.last - r.first + 1;
     }
     if (flagged == 0) return;
     const double share = double(flagged) / double(cor.size());
@@ -535,24 +546,14 @@ CausalCheck CheckCausalOutput(const PlanarTrajectory& input, const PlanarTraject
         smoothed.t_s.size() != n) {
         return c;
     }
+    auto dz = [&](std::size_t i) { return std::abs(causal.up_m[i] - smoothed.up_m[i]); };
     std::size_t apart = 0;
-    std::optional<std::size_t> run_start;
-    double run_max_m = 0.0;
-    for (std::size_t i = 0; i <= n; ++i) {
-        const double dz = i < n ? std::abs(causal.up_m[i] - smoothed.up_m[i]) : 0.0;
-        if (dz > heights->height_disagree_m) {
-            if (!run_start) run_start = i, run_max_m = 0.0;
-            run_max_m = std::max(run_max_m, dz);
-            continue;
-        }
-        if (!run_start) continue;
-        const double run_s = smoothed.t_s[i - 1] - smoothed.t_s[*run_start];  // [*run_start, i)
-        if (run_s >= heights->level_window_s) {
-            apart += i - *run_start;
-            c.floor_apart_longest_s = std::max(c.floor_apart_longest_s, run_s);
-            c.floor_apart_max_m = std::max(c.floor_apart_max_m, run_max_m);
-        }
-        run_start.reset();
+    for (const LongRun& r : LongRuns(
+             smoothed.t_s, [&](std::size_t i) { return dz(i) > heights->height_disagree_m; }, dz,
+             heights->level_window_s)) {
+        apart += r.last - r.first + 1;
+        c.floor_apart_longest_s = std::max(c.floor_apart_longest_s, r.duration_s);
+        c.floor_apart_max_m = std::max(c.floor_apart_max_m, r.worst);
     }
     c.floor_apart_share = double(apart) / double(n);
     return c;
