@@ -77,8 +77,8 @@ void Evaluate(const std::string& dir) {
         s_batch += e_batch * e_batch;
         ++count;
         if (std::getenv("CAUSAL_VERBOSE")) {
-            std::printf("  %zu prefix-batch %.2f online %.2f batch %.2f\n", i, e_prefix, e_online,
-                        e_batch);
+            std::printf("  %zu prefix-batch %.2f (height %+.2f) online %.2f batch %.2f\n", i,
+                        e_prefix, r.corrected.up_m[i] - gt.up_m[i], e_online, e_batch);
         }
     }
     if (count == 0) {
