@@ -224,9 +224,13 @@ void PrintFloorHypotheses(const CorrectionResult& r) {
             std::printf("failed");
         } else {
             std::printf("%.1f", h.nll);
+            if (h.gain_nll != 0.0 || h.against_gain_nll != 0.0)
+                std::printf(" + %.1f of the gains", h.gain_nll);
         }
-        std::printf(" against %.1f on %.1f m, %s\n", h.against, h.chosen_m,
-                    h.kept ? "kept" : "not kept");
+        std::printf(" against %.1f", h.against);
+        if (h.gain_nll != 0.0 || h.against_gain_nll != 0.0)
+            std::printf(" + %.1f", h.against_gain_nll);
+        std::printf(" on %.1f m, %s\n", h.chosen_m, h.kept ? "kept" : "not kept");
     }
 }
 

@@ -157,6 +157,40 @@ double FloorOf(const PlanarTrajectory& cor, const std::vector<double>& floors_m,
     return NearestFloor(floors_m, sum / double(last - first + 1));
 }
 
+// CorrectorConfig::floor_gain_sigma: the NLL of the gains of the floor changes between `runs`
+// (those `obs` reads as restart_height_change_m or more) as `cor` takes them, floor to floor,
+// about one gain per kind (a lift ride or walked), each kind's gain at its best (the mean log).
+// A gain is clamped to [1/4, 4] before its log: a change `cor` does not take, or takes the
+// other way, costs as much as the farthest gain.
+double GainNll(const std::vector<StepObservation>& obs, const std::vector<LevelRun>& runs,
+               const std::vector<std::uint8_t>& ride, const PlanarTrajectory& cor,
+               const std::vector<double>& floors_m, const CorrectorConfig& cfg) {
+    if (cfg.floor_gain_sigma <= 0.0) return 0.0;
+    constexpr double kGainMin = 0.25, kGainMax = 4.0;
+    std::vector<double> log_gain[2];  // walked, ride
+    for (std::size_t j = 1; j < runs.size(); ++j) {
+        const std::size_t from = runs[j - 1].last, to = runs[j].first;
+        double read_m = 0.0;
+        bool in_ride = false;
+        for (std::size_t i = from + 1; i <= to; ++i) {
+            read_m += obs[i].dup_m;
+            in_ride = in_ride || ride[i];
+        }
+        if (std::abs(read_m) < cfg.restart_height_change_m) continue;
+        const double taken_m = FloorOf(cor, floors_m, runs[j].first, runs[j].last) -
+                               FloorOf(cor, floors_m, runs[j - 1].first, runs[j - 1].last);
+        log_gain[in_ride].push_back(std::log(std::clamp(taken_m / read_m, kGainMin, kGainMax)));
+    }
+    double nll = 0.0;
+    for (const std::vector<double>& g : log_gain) {
+        if (g.size() < 2) continue;
+        double mean = 0.0;
+        for (double v : g) mean += v / double(g.size());
+        for (double v : g) nll += 0.5 * (v - mean) * (v - mean);
+    }
+    return nll / (cfg.floor_gain_sigma * cfg.floor_gain_sigma);
+}
+
 // The covariance of the mixture of the starts' corrections about the kept one: each start weighs
 // exp(-(its NLL - the kept one's)) and adds its offset from the kept path (squared) to the kept
 // one's covariance, which stands in for its own, so that where two starts' corrections of close
@@ -191,10 +225,11 @@ void AddStartsToCovariance(const std::vector<std::vector<Eigen::Vector2d>>& path
 // level runs), each other floor that the change reaches when read with a gain within the range
 // of restart_height_gains is tried: the whole correction again, from the kept start, with that
 // change's steps read to land on that floor (the windows do not re-read them), refined and
-// scored against the observations as they are. One whose NLL is lower by more than
-// floor_hypothesis_margin is kept, and later changes are read from there. The windows' own floor
-// restarts see a window of path: a stay that fits the wrong floor's walkways for its first tens
-// of metres (the floors of a building are alike near their lifts) keeps that floor, and what
+// scored against the observations as they are, plus the NLL of its floor changes' gains
+// (GainNll; the correction it is tried against scored alike). One whose score is lower by more
+// than floor_hypothesis_margin is kept, and later changes are read from there. The windows' own
+// floor restarts see a window of path: a stay that fits the wrong floor's walkways for its first
+// tens of metres (the floors of a building are alike near their lifts) keeps that floor, and what
 // denies it (walkways that floor does not have, a stair climb from it to no floor) comes later.
 // Time: one correction per start and per floor tried.
 IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vector<double>& t_s,
@@ -256,6 +291,13 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
         TrajectoryState read = *observed;  // the observations with the kept readings
         std::fill(read.scales.begin(), read.scales.end(), cfg.start_scales[start_chosen]);
         const std::vector<LevelRun> runs = LevelRuns(read, t_s, cfg.model);
+        const ModelConfig& m = cfg.model;
+        const std::vector<std::uint8_t> ride =
+            RideSpans(observed->obs, m.ride_min_s, m.ride_min_height_m, m.ride_gap_s, m.ride_lag_s);
+        auto gain_nll = [&](const CorrectionResult& r) {
+            return GainNll(observed->obs, runs, ride, r.corrected, floors, cfg);
+        };
+        double kept_gain_nll = gain_nll(result);
         for (std::size_t j = 1; j < runs.size(); ++j) {
             const std::size_t from = runs[j - 1].last, to = runs[j].first;
             double change_m = 0.0;
@@ -276,10 +318,14 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
                 auto [inc, r] = correct(trial, cfg.start_scales[start_chosen], &observed->obs);
                 const double nll_m =
                     Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN();
-                tried.push_back({t_s[to] - t_s[0], before_m, after_m, floor_m, nll_m, result.nll});
-                if (!Usable(r.status) || r.nll >= result.nll - cfg.floor_hypothesis_margin)
+                const double trial_gain_nll = Usable(r.status) ? gain_nll(r) : 0.0;
+                tried.push_back({t_s[to] - t_s[0], before_m, after_m, floor_m, nll_m, result.nll,
+                                 trial_gain_nll, kept_gain_nll});
+                if (!Usable(r.status) || r.nll + trial_gain_nll >= result.nll + kept_gain_nll -
+                                                                       cfg.floor_hypothesis_margin)
                     continue;
                 tried.back().kept = true;
+                kept_gain_nll = trial_gain_nll;
                 best.emplace(std::move(inc));
                 result = std::move(r);
                 read = std::move(trial);

@@ -48,6 +48,9 @@ struct CorrectionResult {
         double tried_m = 0.0;   ///< the floor tried [m]
         double nll = 0.0;       ///< that correction's NLL (NaN: not usable)
         double against = 0.0;   ///< the NLL it was compared with
+        /// The NLL of each one's floor changes' gains (CorrectorConfig::floor_gain_sigma; 0: off),
+        /// added to its NLL in the comparison.
+        double gain_nll = 0.0, against_gain_nll = 0.0;
         bool kept = false;
     };
     std::vector<FloorHypothesis> floor_hypotheses;

@@ -24,7 +24,8 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
 /// runs from each of config.start_scales, and the usable one of lowest NLL is kept
 /// (CorrectionResult::start_scales, start_nll, start_chosen). In 3D with floors known, it then
 /// runs again on the other floors a floor change of the estimate can reach, and keeps one whose
-/// NLL is lower by more than config.floor_hypothesis_margin (CorrectionResult::floor_hypotheses).
+/// NLL, plus that of its floor changes' gains (config.floor_gain_sigma), is lower by more than
+/// config.floor_hypothesis_margin (CorrectionResult::floor_hypotheses).
 /// The covariance is the kept correction's.
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& config,

@@ -49,6 +49,13 @@ struct CorrectorConfig {
     /// difference, a walk that the other floor explains far better, changes the floor the
     /// windows chose. Time: one correction per floor tried.
     double floor_hypothesis_margin = 15.0;  ///< [-]
+    /// One barometer reads a walk's floor changes of one kind alike: the floor hypotheses are
+    /// scored by their NLL plus that of the changes' gains (the corrected floor change over the
+    /// estimate's, of each change of restart_height_change_m or more) about one gain per kind, a
+    /// lift ride (ModelConfig ride_*: RideSpans) or a walked change, log-normal with this sigma.
+    /// A barometer's gain holds within a walk, but differs between a stair hall and a lift shaft
+    /// (the real Zero2four walk: stairs 0.81x, lift 1.12x). 0: NLL alone.
+    double floor_gain_sigma = 0.0;        ///< [-] (of the log gain)
     double restart_offroad_m = 6.0;       ///< [m]
     double restart_offroad_share = 0.05;  ///< [-]
     double restart_nll_per_pose = 0.3;    ///< [-]
@@ -101,6 +108,9 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
     {"floor_hypothesis_margin", Field<&CorrectorConfig::floor_hypothesis_margin>(), kNonNegative,
      "3D: a whole correction on another floor after a floor change is kept when its NLL is lower "
      "by more than this"},
+    {"floor_gain_sigma", Field<&CorrectorConfig::floor_gain_sigma>(), kNonNegative,
+     "3D: floor hypotheses scored with their floor changes' gains about one per kind (lift, "
+     "walked), log sigma; 0: NLL alone"},
     {"stationary_m", Field<&CorrectorConfig::stationary_m>(), kNonNegative,
      "steps shorter than this are stops"},
     {"window_newton", Field<&CorrectorConfig::window_newton>(), kNoRange,
