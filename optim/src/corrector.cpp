@@ -157,29 +157,48 @@ double FloorOf(const PlanarTrajectory& cor, const std::vector<double>& floors_m,
     return NearestFloor(floors_m, sum / double(last - first + 1));
 }
 
-// CorrectorConfig::floor_gain_sigma: the NLL of the gains of the floor changes between `runs`
-// (those `obs` reads as restart_height_change_m or more) as `cor` takes them, floor to floor,
-// about one gain per kind (a lift ride or walked), each kind's gain at its best (the mean log).
-// A gain is clamped to [1/4, 4] before its log: a change `cor` does not take, or takes the
-// other way, costs as much as the farthest gain.
-double GainNll(const std::vector<StepObservation>& obs, const std::vector<LevelRun>& runs,
-               const std::vector<std::uint8_t>& ride, const PlanarTrajectory& cor,
-               const std::vector<double>& floors_m, const CorrectorConfig& cfg) {
+// A floor change of the estimate: the steps (from, to] between two level runs (runs[run - 1] and
+// runs[run]) whose observed height changes add up to read_m, restart_height_change_m or more;
+// ride: one of its poses is in a lift ride (RideSpans).
+struct FloorChange {
+    std::size_t run = 0, from = 0, to = 0;
+    double read_m = 0.0;
+    bool ride = false;
+};
+
+std::vector<FloorChange> FloorChanges(const std::vector<StepObservation>& obs,
+                                      const std::vector<LevelRun>& runs,
+                                      const CorrectorConfig& cfg) {
+    const ModelConfig& m = cfg.model;
+    const std::vector<std::uint8_t> ride =
+        RideSpans(obs, m.ride_min_s, m.ride_min_height_m, m.ride_gap_s, m.ride_lag_s);
+    std::vector<FloorChange> changes;
+    for (std::size_t j = 1; j < runs.size(); ++j) {
+        FloorChange c{j, runs[j - 1].last, runs[j].first};
+        for (std::size_t i = c.from + 1; i <= c.to; ++i) {
+            c.read_m += obs[i].dup_m;
+            c.ride = c.ride || ride[i];
+        }
+        if (std::abs(c.read_m) >= cfg.restart_height_change_m) changes.push_back(c);
+    }
+    return changes;
+}
+
+// CorrectorConfig::floor_gain_sigma: the NLL of the gains of `changes` as `cor` takes them,
+// floor to floor, about one gain per kind (a lift ride or walked), each kind's gain at its best
+// (the mean log). A gain is clamped to [1/4, 4] before its log: a change `cor` does not take, or
+// takes the other way, costs as much as the farthest gain.
+double GainNll(const std::vector<FloorChange>& changes, const std::vector<LevelRun>& runs,
+               const PlanarTrajectory& cor, const std::vector<double>& floors_m,
+               const CorrectorConfig& cfg) {
     if (cfg.floor_gain_sigma <= 0.0) return 0.0;
     constexpr double kGainMin = 0.25, kGainMax = 4.0;
     std::vector<double> log_gain[2];  // walked, ride
-    for (std::size_t j = 1; j < runs.size(); ++j) {
-        const std::size_t from = runs[j - 1].last, to = runs[j].first;
-        double read_m = 0.0;
-        bool in_ride = false;
-        for (std::size_t i = from + 1; i <= to; ++i) {
-            read_m += obs[i].dup_m;
-            in_ride = in_ride || ride[i];
-        }
-        if (std::abs(read_m) < cfg.restart_height_change_m) continue;
-        const double taken_m = FloorOf(cor, floors_m, runs[j].first, runs[j].last) -
-                               FloorOf(cor, floors_m, runs[j - 1].first, runs[j - 1].last);
-        log_gain[in_ride].push_back(std::log(std::clamp(taken_m / read_m, kGainMin, kGainMax)));
+    for (const FloorChange& c : changes) {
+        const LevelRun &before = runs[c.run - 1], &after = runs[c.run];
+        const double taken_m = FloorOf(cor, floors_m, after.first, after.last) -
+                               FloorOf(cor, floors_m, before.first, before.last);
+        log_gain[c.ride].push_back(std::log(std::clamp(taken_m / c.read_m, kGainMin, kGainMax)));
     }
     double nll = 0.0;
     for (const std::vector<double>& g : log_gain) {
@@ -291,23 +310,21 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
         TrajectoryState read = *observed;  // the observations with the kept readings
         std::fill(read.scales.begin(), read.scales.end(), cfg.start_scales[start_chosen]);
         const std::vector<LevelRun> runs = LevelRuns(read, t_s, cfg.model);
-        const ModelConfig& m = cfg.model;
-        const std::vector<std::uint8_t> ride =
-            RideSpans(observed->obs, m.ride_min_s, m.ride_min_height_m, m.ride_gap_s, m.ride_lag_s);
+        // As observed: a kept hypothesis re-reads its own change's steps, and later changes'
+        // steps lie after them.
+        const std::vector<FloorChange> changes = FloorChanges(observed->obs, runs, cfg);
         auto gain_nll = [&](const CorrectionResult& r) {
-            return GainNll(observed->obs, runs, ride, r.corrected, floors, cfg);
+            return GainNll(changes, runs, r.corrected, floors, cfg);
         };
         double kept_gain_nll = gain_nll(result);
-        for (std::size_t j = 1; j < runs.size(); ++j) {
-            const std::size_t from = runs[j - 1].last, to = runs[j].first;
-            double change_m = 0.0;
-            for (std::size_t i = from + 1; i <= to; ++i) change_m += read.obs[i].dup_m;
-            if (std::abs(change_m) < cfg.restart_height_change_m) continue;
+        for (const FloorChange& c : changes) {
+            const std::size_t from = c.from, to = c.to;
             const double before_m =
-                FloorOf(result.corrected, floors, runs[j - 1].first, runs[j - 1].last);
-            const double after_m = FloorOf(result.corrected, floors, runs[j].first, runs[j].last);
+                FloorOf(result.corrected, floors, runs[c.run - 1].first, runs[c.run - 1].last);
+            const double after_m =
+                FloorOf(result.corrected, floors, runs[c.run].first, runs[c.run].last);
             for (const double floor_m : floors) {
-                const double gain = (floor_m - before_m) / change_m;
+                const double gain = (floor_m - before_m) / c.read_m;
                 if (floor_m == after_m || gain < *gain_min || gain > *gain_max) continue;
                 TrajectoryState trial = read;
                 trial.height_settled.resize(trial.obs.size(), 0);
