@@ -218,18 +218,17 @@ void PrintStarts(const CorrectionResult& r) {
 // One line per floor hypothesis of the batch correction (CorrectionResult::floor_hypotheses).
 void PrintFloorHypotheses(const CorrectionResult& r) {
     for (const CorrectionResult::FloorHypothesis& h : r.floor_hypotheses) {
+        const bool gains = h.gain_nll != 0.0 || h.against_gain_nll != 0.0;
         std::printf("floors     the change from %.1f m ending at %.0f s onto %.1f m: NLL ",
                     h.from_m, h.t_s, h.tried_m);
         if (std::isnan(h.nll)) {
             std::printf("failed");
         } else {
             std::printf("%.1f", h.nll);
-            if (h.gain_nll != 0.0 || h.against_gain_nll != 0.0)
-                std::printf(" + %.1f of the gains", h.gain_nll);
+            if (gains) std::printf(" + %.1f of the gains", h.gain_nll);
         }
         std::printf(" against %.1f", h.against);
-        if (h.gain_nll != 0.0 || h.against_gain_nll != 0.0)
-            std::printf(" + %.1f", h.against_gain_nll);
+        if (gains) std::printf(" + %.1f", h.against_gain_nll);
         std::printf(" on %.1f m, %s\n", h.chosen_m, h.kept ? "kept" : "not kept");
     }
 }
