@@ -219,15 +219,16 @@ TEST(HcuWalkGenerator, DeterministicAndEveryWalkChangesFloor) {
 }
 
 // The walk of `seed` from the HCU walk generator (datasets/ipin21/make_hcu_walks.py) in a fresh
-// temporary folder; "" when the HCU plans are not present.
-std::string GeneratedHcuWalk(int seed) {
+// temporary folder; "" when the HCU plans are not present. Without `gait`, the walker's steps
+// are alike along a leg (--gait-sd 0: the walks the tests below describe).
+std::string GeneratedHcuWalk(int seed, bool gait = false) {
     const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
     if (!fs::exists(src + "/scenario.yaml")) return "";
     const std::string n = std::to_string(seed);
     const std::string out = TmpDir("hcu_walk_" + n);
     const std::string cmd = "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) +
                             "/datasets/ipin21/make_hcu_walks.py " + src + " " + out + " --seeds " +
-                            n + "-" + n + " > /dev/null";
+                            n + "-" + n + (gait ? "" : " --gait-sd 0") + " > /dev/null";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
     return out + "/walk_" + n;
 }

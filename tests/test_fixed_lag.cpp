@@ -216,6 +216,39 @@ TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
     }
 }
 
+// Online, a step is read about the median of the steps so far (ModelConfig::step_length_exponent):
+// with the odometry alone each solved step is median_so_far^(1 - e) * L^e long.
+TEST(FixedLagSmoother, StepsAreReadAboutTheMedianOfTheStepsSoFar) {
+    CorrectorConfig cfg;
+    cfg.model = Model();
+    cfg.model.heading_bias_segment_s = 0.0;
+    cfg.model.step_length_exponent = 0.5;
+    cfg.model.scale_prior_sigma = 1e-3;  // the scale stays 1
+    cfg.window_m = 1e3;
+    const double lengths[] = {0.0, 0.5, 0.9, 0.7, 0.6, 0.8, 0.55};
+    const double prefix_median[] = {0.0, 0.5, 0.9, 0.7, 0.7, 0.7, 0.7};  // upper median
+    PoseState pose;
+    FixedLagSmoother smoother(pose, true, nullptr, cfg);
+    const std::size_t n = std::size(lengths);
+    for (std::size_t i = 1; i < n; ++i) {
+        StepObservation o;
+        o.dt_s = 0.5;
+        o.length_m = lengths[i];
+        pose.p.x() += lengths[i];
+        smoother.Append(pose, o);
+    }
+    const FixedLagSolution sol = smoother.Solve(n - 1, false);
+    ASSERT_TRUE(sol.usable);
+    ASSERT_EQ(sol.first, 1u);  // pose 0 is the known start, at the origin
+    auto at = [&](std::size_t i) {
+        return i == 0 ? Eigen::Vector3d::Zero().eval() : sol.poses[i - sol.first].p;
+    };
+    for (std::size_t i = 1; i < n; ++i) {
+        const double read = std::sqrt(prefix_median[i] * lengths[i]);
+        EXPECT_NEAR((at(i) - at(i - 1)).norm(), read, 1e-4) << "step " << i;
+    }
+}
+
 // A growing trajectory's dropped-step episode is repaired once the speed after it has been seen,
 // and only then; an episode older than the span (20 s) is left to the batch repair.
 TEST(RepairRecentEpisodes, RepairsAnEpisodeOnceItsEndIsSeen) {

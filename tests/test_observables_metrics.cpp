@@ -398,6 +398,43 @@ TEST(RepairSpeedEpisodes, LoneEdgesAndDoubledEpisodesAreNotRepaired) {
     for (const auto& o : long_drop) EXPECT_FALSE(o.repaired);
 }
 
+// Steps of 0.5 s: lengths 0.5, 0.6, ..., 0.9 m, a stop, a tread, a repaired step and a jump.
+TEST(ReadAtGait, MovingStepsAreReadAboutTheirMedianTheRestAsRead) {
+    std::vector<StepObservation> obs(10);
+    const double lengths[] = {0.0, 0.5, 0.6, 0.7, 0.8, 0.9, 0.0, 0.3, 0.4, 20.0};
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        obs[i].dt_s = 0.5;
+        obs[i].length_m = lengths[i];
+    }
+    obs[6].stationary = true;
+    obs[7].tread = true;
+    obs[8].repaired = true;
+    const double max_speed_mps = 10.0;  // step 9 (40 m/s) is a jump
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        EXPECT_EQ(GaitStep(obs[i], max_speed_mps), i <= 5) << "step " << i;
+    }
+    const double median_m = MedianGaitStep(obs, max_speed_mps);
+    EXPECT_DOUBLE_EQ(median_m, 0.7);
+    const auto before = obs;
+    for (StepObservation& o : obs) ReadAtGait(o, median_m, 0.25, max_speed_mps);
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        if (i > 5) {
+            EXPECT_EQ(obs[i].length_m, before[i].length_m) << "step " << i;
+            continue;
+        }
+        // The log length moves three quarters of the way to the median's, and no further.
+        EXPECT_NEAR(std::log(obs[i].length_m / median_m),
+                    0.25 * std::log(before[i].length_m / median_m), 1e-12)
+            << "step " << i;
+        EXPECT_EQ(obs[i].observed_length_m, before[i].length_m);
+    }
+    auto as_read = before;
+    for (StepObservation& o : as_read) ReadAtGait(o, median_m, 1.0, max_speed_mps);
+    for (std::size_t i = 0; i < obs.size(); ++i) EXPECT_EQ(as_read[i].length_m, lengths[i]);
+    std::vector<StepObservation> stops(3);  // no moving step: no median, nothing read anew
+    EXPECT_EQ(MedianGaitStep(stops, max_speed_mps), 0.0);
+}
+
 TEST(Metrics, TenPoseExampleWithKnownErrors) {
     // Ground truth along East every 10 m; the estimate is off by e_i metres in the direction
     // (0.6, 0.8), and its height is off by 2 m on poses 2, 5 and 7 (1.5 m on pose 9: on floor).

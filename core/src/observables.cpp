@@ -261,6 +261,28 @@ std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, d
     return count;
 }
 
+bool GaitStep(const StepObservation& o, double max_speed_mps) {
+    return !o.stationary && !o.repaired && !o.tread && o.length_m > 0.0 &&
+           o.length_m <= max_speed_mps * std::max(o.dt_s, 0.0);
+}
+
+double MedianGaitStep(const std::vector<StepObservation>& obs, double max_speed_mps) {
+    std::vector<double> lengths;
+    for (std::size_t i = 1; i < obs.size(); ++i) {
+        if (GaitStep(obs[i], max_speed_mps)) lengths.push_back(obs[i].length_m);
+    }
+    if (lengths.empty()) return 0.0;
+    auto mid = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+    std::nth_element(lengths.begin(), mid, lengths.end());
+    return *mid;
+}
+
+void ReadAtGait(StepObservation& o, double median_m, double exponent, double max_speed_mps) {
+    if (exponent == 1.0 || !(median_m > 0.0) || !GaitStep(o, max_speed_mps)) return;
+    o.observed_length_m = o.length_m;
+    o.length_m = std::pow(median_m, 1.0 - exponent) * std::pow(o.length_m, exponent);
+}
+
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m) {
     DRIFTCORR_CHECK(!floor_heights_m.empty(), "no floor");
     return *std::min_element(

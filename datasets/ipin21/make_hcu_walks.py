@@ -8,7 +8,7 @@ network of a floor, changes floor 1-3 times by stairs or by lift where the plans
 (they are not part of this repository).
 
     /usr/bin/python3 datasets/ipin21/make_hcu_walks.py <hcu scenario dir> <out dir> \
-        [--seeds A-B] [--lift-share X] [--lift-poses-hz R]
+        [--seeds A-B] [--lift-share X] [--lift-poses-hz R] [--gait-sd S]
 
 writes <out dir>/walk_<seed>/ (scenario.yaml, estimate.tum, ground_truth.tum, the map layers) for
 every seed in A..B (default 1-10) and one summary line per walk. Same seed, same bytes (Python's
@@ -17,7 +17,12 @@ random.Random is a specified Mersenne Twister; only the math library's last bits
 The walk (ground truth), in the scenario's local ENU frame (origin and heights of its anchor):
 - on a floor, the shortest path along the walkway network between random nodes (vertices of the
   walkway lines merged within 0.3 m; a line end within 1.5 m of another line's vertex joins it);
-  one pose a step, a walker's step 0.60-0.78 m at 1.6-2.0 steps/s;
+  one pose a step, a walker's step 0.60-0.78 m at 1.6-2.0 steps/s, varied by its gait: a factor
+  exp(g), g an AR(1) process from step to step with coefficient 0.92 and standard deviation
+  --gait-sd S (default 0.09; the surveyed level steps of the real walks: log sd 0.05 on Eight,
+  0.13 on Zero2four, autocorrelation 0.68 / 0.60 at five steps, 0.33 / 0.54 at ten), a leg
+  taking as many steps as come nearest to its length, stretched together to end where it does.
+  --gait-sd 0: the steps of a leg alike;
 - stairs: a stair polygon of one floor joins it to the floor above or below (the map's rule) when
   both walkway networks come within 4 m of it and the floors are at most 7 m apart; the walker
   goes from the nearest walkway node into the polygon and climbs along its long axis, there and
@@ -33,11 +38,13 @@ The walk (ground truth), in the scenario's local ENU frame (origin and heights o
 The estimate is pedestrian dead reckoning with the error kinds of the two real walks of the same
 phone in this building (measured against their ground truth; Zero2four: datasets/ipin21/
 make_zero2four.py, Eight: ../shared/datasets/hcu_eight):
-- step length: the walker's steps divided by a scale drawn uniformly in [0.95, 1.45] (Eight's
-  steps are 1.05x longer than the estimate's, Zero2four's 1.40x) and by a slowly varying factor
-  exp(u), u an AR(1) process from step to step with coefficient 0.9 and standard deviation 0.10,
-  with 4 % white noise: the log ratio of surveyed to PDR step length on the real walks' level
-  steps has a standard deviation of 0.11 (Eight) and 0.13 (Zero2four) and an autocorrelation of
+- step length: the walker's steps, following half of its gait's log factor on level steps (the
+  slope of the PDR's log step on the surveyed one is 0.87 on Eight and 0.17 on Zero2four),
+  divided by a scale drawn uniformly in [0.95, 1.45] (Eight's steps are 1.05x longer than the
+  estimate's, Zero2four's 1.40x) and by a slowly varying factor exp(u), u an AR(1) process from
+  step to step with coefficient 0.9 and a standard deviation that keeps the log ratio's at 0.10
+  with the gait's unfollowed half (0.089 at the default gait, 0.10 without it), with 4 % white
+  noise: the log ratio of surveyed to PDR step length on the real walks' level steps has a standard deviation of 0.11 (Eight) and 0.13 (Zero2four) and an autocorrelation of
   0.77 / 0.70 at one step, 0.35 / 0.39 at five and 0.17 / 0.20 at twelve (the PDR's step length
   drifts with the gait: Eight's first 40 steps lengthen from 0.50 to 0.85 m while the surveyed
   ones stay 0.67-0.73 m); on stairs the PDR step length is that of a level step (it does not know
@@ -71,6 +78,11 @@ MAX_STAIR_RISE_M = 7.0
 STEP_LOG_AR = 0.9
 STEP_LOG_SD = 0.10
 STEP_WHITE = 0.04
+# The walker's gait (module docstring): a log factor on its step, AR(1) from step to step, and the
+# share of it the PDR's step length follows.
+GAIT_AR = 0.92
+GAIT_SD = 0.09
+PDR_FOLLOWS_GAIT = 0.5
 STAIR_TREAD_M, STAIR_RISE_M = 0.29, 0.17
 SIM_DT_S = 0.05       # barometer simulation step
 
@@ -243,10 +255,13 @@ def connectors(floors):
 class Walker:
     """Turns a plan (legs on floors, stairs, lifts) into timed samples of the true motion."""
 
-    def __init__(self, rng, lift_poses_hz=0.0):
+    def __init__(self, rng, lift_poses_hz=0.0, gait_rng=None, gait_sd=0.0):
         self.rng = rng
         self.lift_poses_hz = lift_poses_hz
         self.step_m = rng.uniform(0.60, 0.78)
+        # the gait's log factor on a level step (its own generator: gait_sd 0 draws nothing)
+        self.gait_rng, self.gait_sd = gait_rng, gait_sd
+        self.gait = gait_rng.gauss(0.0, gait_sd) if gait_sd > 0.0 else 0.0
         self.rate_hz = rng.uniform(1.6, 2.0)
         self.t = 0.0
         # (t, x, y, z, kind): kind "start", "step", or "wait" / "ride" / "cabin" in a lift (no
@@ -263,9 +278,11 @@ class Walker:
             return
         step = length / max(1, round(abs(dz_total) / STAIR_RISE_M)) if tread else self.step_m
         n = max(1, round(length / step))
+        ends = [length * k / n for k in range(1, n + 1)]
+        if not tread and self.gait_sd > 0.0:
+            ends = self.gait_steps(length)
         seg, acc = 0, 0.0
-        for k in range(1, n + 1):
-            s = length * k / n
+        for k, s in enumerate(ends, 1):
             while seg < len(points) - 2 and acc + math.dist(points[seg], points[seg + 1]) < s:
                 acc += math.dist(points[seg], points[seg + 1])
                 seg += 1
@@ -274,7 +291,22 @@ class Walker:
             jitter = self.rng.gauss(0.0, 0.03)
             self.t += (1.0 + jitter) / (self.rate_hz * (0.85 if tread else 1.0))
             self.samples.append((self.t, a[0] + r * (b[0] - a[0]), a[1] + r * (b[1] - a[1]),
-                                 z + dz_total * k / n, "step"))
+                                 z + dz_total * k / len(ends), "step"))
+
+    def gait_steps(self, length):
+        """Where the steps along `length` end: each step_m times the gait's factor, as many as
+        come nearest to `length`, stretched together to end there."""
+        steps = []
+        while not steps or sum(steps) + 0.5 * steps[-1] < length:
+            self.gait = (GAIT_AR * self.gait + math.sqrt(1.0 - GAIT_AR ** 2) * self.gait_sd
+                         * self.gait_rng.gauss(0.0, 1.0))
+            steps.append(self.step_m * math.exp(self.gait))
+        stretch, ends, acc = length / sum(steps), [], 0.0
+        for step in steps:
+            acc += step * stretch
+            ends.append(acc)
+        ends[-1] = length
+        return ends
 
     def ride(self, z_from, z_to, poses_hz=0.0):
         """Waits at the door, rides, steps out; with poses_hz > 0 also a pose every 1 / poses_hz
@@ -337,10 +369,10 @@ def change_floor(w, floors, here, node, link):
     return exit_node
 
 
-def plan_walk(rng, floors, links, lift_share, lift_poses_hz):
+def plan_walk(rng, floors, links, lift_share, lift_poses_hz, gait_rng, gait_sd):
     """Legs along the walkway networks, 1-3 floor changes, 80-200 m on the floors, and at least
     20 m after the last floor change."""
-    w = Walker(rng, lift_poses_hz)
+    w = Walker(rng, lift_poses_hz, gait_rng, gait_sd)
     here = rng.choice(sorted({c[1] for c in links}))
     node = rng.choice(sorted(floors[here].alive))
     x, y = floors[here].nodes[node]
@@ -378,9 +410,13 @@ def plan_walk(rng, floors, links, lift_share, lift_poses_hz):
 class Pdr:
     """Pedestrian dead reckoning errors (module docstring)."""
 
-    def __init__(self, rng, level_step_m):
+    def __init__(self, rng, level_step_m, gait_sd=0.0):
         self.rng = rng
         self.level_step_m = level_step_m
+        # the share of the walker's gait the step length follows, and its own error's sd: the log
+        # ratio of true to PDR step keeps STEP_LOG_SD whatever the gait
+        self.follows = PDR_FOLLOWS_GAIT if gait_sd > 0.0 else 1.0
+        self.own_sd = math.sqrt(STEP_LOG_SD ** 2 - ((1.0 - self.follows) * gait_sd) ** 2)
         self.scale = rng.uniform(0.95, 1.45)
         self.heading_err = math.radians(rng.gauss(0.0, 6.0))
         self.bias = math.radians(rng.gauss(0.0, 0.04))
@@ -389,7 +425,7 @@ class Pdr:
         self.gain = rng.uniform(0.75, 1.1)
         self.baro_rw = 0.01
         # the step model's slowly varying error: log factor, AR(1) from step to step
-        self.step_log = rng.gauss(0.0, STEP_LOG_SD)
+        self.step_log = rng.gauss(0.0, self.own_sd)
 
     def run(self, samples):
         rng = self.rng
@@ -418,9 +454,12 @@ class Pdr:
             yaw = math.atan2(dy, dx) if length > 1e-6 else (prev_yaw or 0.0)
             prev_yaw = yaw
             if kind == "step":
-                level_step = length if abs(zb - za) < 1e-6 else self.level_step_m
+                level_step = self.level_step_m
+                if abs(zb - za) < 1e-6:  # a level step: the share of the gait the PDR follows
+                    level_step = (length if self.follows == 1.0 else
+                                  self.level_step_m * (length / self.level_step_m) ** self.follows)
                 self.step_log = (STEP_LOG_AR * self.step_log + math.sqrt(1.0 - STEP_LOG_AR ** 2)
-                                 * STEP_LOG_SD * rng.gauss(0.0, 1.0))
+                                 * self.own_sd * rng.gauss(0.0, 1.0))
                 measured = (level_step / (self.scale * math.exp(self.step_log))
                             * (1.0 + rng.gauss(0.0, STEP_WHITE)))
                 heading = yaw + heading_err + math.radians(rng.gauss(0.0, 1.0))
@@ -496,7 +535,7 @@ def parse_args(argv):
     if len(argv) < 3:
         print(__doc__, file=sys.stderr)
         sys.exit(2)
-    seeds, lift_share, lift_poses_hz = (1, 10), 0.5, 0.0
+    seeds, lift_share, lift_poses_hz, gait_sd = (1, 10), 0.5, 0.0, GAIT_SD
     rest = argv[3:]
     while rest:
         key = rest.pop(0)
@@ -511,13 +550,15 @@ def parse_args(argv):
             lift_share = number_in(key, val, 0.0, 1.0)
         elif key == "--lift-poses-hz":
             lift_poses_hz = number_in(key, val, 0.0, 100.0)
+        elif key == "--gait-sd":
+            gait_sd = number_in(key, val, 0.0, 0.99 * STEP_LOG_SD / (1.0 - PDR_FOLLOWS_GAIT))
         else:
             fail(f"unknown option or bad value: {key} {val}")
-    return argv[1], argv[2], seeds, lift_share, lift_poses_hz
+    return argv[1], argv[2], seeds, lift_share, lift_poses_hz, gait_sd
 
 
 def main(argv):
-    src, out, seeds, lift_share, lift_poses_hz = parse_args(argv)
+    src, out, seeds, lift_share, lift_poses_hz, gait_sd = parse_args(argv)
     crs, e0, n0, _, layers = read_scenario(src)
     floors = [Floor(z, v["walkways"], v["floorplan"], crs, e0, n0)
               for z, v in sorted(layers.items())]
@@ -526,8 +567,9 @@ def main(argv):
         fail(f"{src}: no stairs or lift joins two floors' walkway networks")
     for seed in range(seeds[0], seeds[1] + 1):
         rng = random.Random(seed)
-        walker, used = plan_walk(rng, floors, links, lift_share, lift_poses_hz)
-        est, est_yaws = Pdr(rng, walker.step_m).run(walker.samples)
+        walker, used = plan_walk(rng, floors, links, lift_share, lift_poses_hz,
+                                 random.Random(f"gait {seed}"), gait_sd)
+        est, est_yaws = Pdr(rng, walker.step_m, gait_sd).run(walker.samples)
         folder = os.path.join(out, f"walk_{seed}")
         write_walk(folder, seed, crs, e0, n0, floors, walker.samples, est, est_yaws, used)
         s = walker.samples

@@ -256,6 +256,13 @@ TrajectoryState BatchState(std::vector<StepObservation> obs, std::vector<PoseSta
             MarkStairTreads(s.obs, m.tread_m, m.tread_window_s, m.tread_rate_mps, m.ride_gap_s);
         }
     }
+    const ModelConfig& m = cfg.model;
+    if (m.step_length_exponent != 1.0) {
+        const double median_m = MedianGaitStep(s.obs, m.max_speed_mps);
+        for (StepObservation& o : s.obs) {
+            ReadAtGait(o, median_m, m.step_length_exponent, m.max_speed_mps);
+        }
+    }
     s.scale_segment = ScaleSegments(s.obs, cfg.model.scale_segment_m);
     s.scales.assign(s.scale_segment.back() + 1, 1.0);
     s.bias_segment = BiasSegments(s.obs, cfg.model.heading_bias_segment_s);

@@ -21,7 +21,7 @@ struct StepObservation {
     /// A stair tread (MarkStairTreads): length_m holds the tread's run, which the step-length
     /// scale does not scale, observed_length_m what the odometry said.
     bool tread = false;
-    double observed_length_m = 0.0;  ///< [m], set when repaired or a tread
+    double observed_length_m = 0.0;  ///< [m], set when repaired, a tread or read at the gait
 };
 
 /// The horizontal length a step moves at step-length scale `scale`: a tread's run is its own.
@@ -95,6 +95,24 @@ std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double 
 /// into the ride first (MoveRideLag), or it reads as a climb on the steps out of the cabin.
 std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, double window_s,
                             double min_rate_mps, double gap_s);
+
+/// A step whose length a pedestrian step model reads with its gait error (ReadAtGait): moving,
+/// neither repaired nor a tread, and no faster than max_speed_mps (a faster one is a
+/// discontinuity of the estimate).
+bool GaitStep(const StepObservation& o, double max_speed_mps);
+
+/// The median length of obs's GaitSteps [m]; 0 when there is none.
+/// obs as ComputeObservations returns it (obs[0] unused).
+double MedianGaitStep(const std::vector<StepObservation>& obs, double max_speed_mps);
+
+/// A pedestrian step model's length errs with the gait far more than a walker's steps vary:
+/// on the real Eight walk (../shared/datasets/hcu_eight) the surveyed level steps vary by 5 %
+/// (log sd) and the PDR's by 12 %, and the log of a PDR step explains little of the surveyed
+/// one's (regression slope 0.16). A GaitStep's length becomes
+/// median_m^(1 - exponent) * length^exponent (observed_length_m keeps the odometry's): exponent
+/// 1 reads it as it is, 0 as the median step. Nothing happens to another step, or when
+/// median_m <= 0.
+void ReadAtGait(StepObservation& o, double median_m, double exponent, double max_speed_mps);
 
 /// The one of floor_heights_m nearest to up_m. Precondition: floor_heights_m not empty.
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m);

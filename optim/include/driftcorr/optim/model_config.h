@@ -17,6 +17,11 @@ struct ModelConfig {
     // Step length: sigma = step_sigma_m + step_sigma_rel * L.
     double step_sigma_m = 0.02;       ///< [m]
     double step_sigma_rel = 0.01;     ///< [-] share of the step length
+    /// A pedestrian step model's lengths are read about their median: a moving step of length L
+    /// is observed as median^(1 - step_length_exponent) * L^step_length_exponent (core
+    /// ReadAtGait; the batch takes the median over the whole estimate, online the steps so
+    /// far). 1: as the odometry read them (metric odometry, whose step lengths are its speed).
+    double step_length_exponent = 1.0;
     // Sideways motion against the observed step direction: sigma = lateral_sigma_m + rel * L.
     double lateral_sigma_m = 0.02;    ///< [m]
     double lateral_sigma_rel = 0.02;  ///< [-]
@@ -135,6 +140,8 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "step length sigma = step_sigma_m + step_sigma_rel * L"},
     {"step_sigma_rel", Field<&ModelConfig::step_sigma_rel>(), kNonNegative,
      "step length sigma, share of the step length"},
+    {"step_length_exponent", Field<&ModelConfig::step_length_exponent>(), kShare,
+     "a step's length read as median^(1 - e) * L^e; 1: as read, 0: the median step (PDR)"},
     {"lateral_sigma_m", Field<&ModelConfig::lateral_sigma_m>(), kPositive,
      "sideways motion sigma = lateral_sigma_m + lateral_sigma_rel * L"},
     {"lateral_sigma_rel", Field<&ModelConfig::lateral_sigma_rel>(), kNonNegative,
