@@ -39,16 +39,17 @@ The estimate is pedestrian dead reckoning with the error kinds of the two real w
 phone in this building (measured against their ground truth; Zero2four: datasets/ipin21/
 make_zero2four.py, Eight: ../shared/datasets/hcu_eight):
 - step length: the walker's steps, following half of its gait's log factor on level steps (the
-  slope of the PDR's log step on the surveyed one is 0.87 on Eight and 0.17 on Zero2four),
-  divided by a scale drawn uniformly in [0.95, 1.45] (Eight's steps are 1.05x longer than the
-  estimate's, Zero2four's 1.40x) and by a slowly varying factor exp(u), u an AR(1) process from
-  step to step with coefficient 0.9 and a standard deviation that keeps the log ratio's at 0.10
-  with the gait's unfollowed half (0.089 at the default gait, 0.10 without it), with 4 % white
-  noise: the log ratio of surveyed to PDR step length on the real walks' level steps has a standard deviation of 0.11 (Eight) and 0.13 (Zero2four) and an autocorrelation of
-  0.77 / 0.70 at one step, 0.35 / 0.39 at five and 0.17 / 0.20 at twelve (the PDR's step length
-  drifts with the gait: Eight's first 40 steps lengthen from 0.50 to 0.85 m while the surveyed
-  ones stay 0.67-0.73 m); on stairs the PDR step length is that of a level step (it does not know
-  the step is a tread);
+  slope of the PDR's log step on the surveyed one is 0.86 on Eight and 0.17 on Zero2four:
+  step_error_stats.py), divided by a scale drawn uniformly in [0.95, 1.45] (Eight's steps are 1.05x
+  longer than the estimate's, Zero2four's 1.40x) and by a slowly varying factor exp(u), u an AR(1)
+  process from step to step with coefficient 0.9 and a standard deviation that keeps the log
+  ratio's at 0.10 with the gait's unfollowed half (0.089 at the default gait, 0.10 without it),
+  with 4 % white noise: the log ratio of surveyed to PDR step length on the real walks' level steps
+  has a standard deviation of 0.11 (Eight) and 0.13 (Zero2four) and an autocorrelation of 0.77 /
+  0.70 at one step, 0.35 / 0.39 at five and 0.17 / 0.20 at twelve (the PDR's step length drifts
+  with the gait: Eight's first 40 steps lengthen from 0.50 to 0.85 m while the surveyed ones stay
+  0.67-0.73 m); on stairs the PDR step length is that of a level step (it does not know the step is
+  a tread);
 - heading: an initial error N(0, 6 deg) (Eight -4, Zero2four -11 deg), a heading-rate bias
   N(0, 0.04 deg/s) that random-walks with 0.005 deg/s per sqrt(s) (Eight drifts by about
   -0.08 deg/s), 1.0 deg white noise a step, and a jump N(0, 12 deg) during a lift ride (Zero2four's

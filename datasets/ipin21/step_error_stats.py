@@ -7,8 +7,11 @@ For each scenario directory (estimate.tum and ground_truth.tum, one pose a step,
 ../shared/datasets/hcu_eight, make_zero2four.py's output and make_hcu_walks.py's walks) prints,
 over the level steps (ground truth rises less than 0.05 m; both steps 0.2-2 m long), the log
 ratio of true to estimated step length: its mean (as a scale), its standard deviation and its
-autocorrelation at lags of 1 to 40 steps (a step without a ratio is skipped in the pairs). These
-are the figures make_hcu_walks.py's step model reproduces. Python standard library only; exit
+autocorrelation at lags of 1 to 40 steps (a step without a ratio is skipped in the pairs); and
+the standard deviation of the log true and of the log estimated step, and the regression slopes
+of each on the other (how much of a walker's step the estimate's tells, and how much of it the
+estimate follows). These are the figures
+make_hcu_walks.py's step model reproduces. Python standard library only; exit
 code 2 on a missing or unreadable file.
 """
 import math
@@ -27,15 +30,31 @@ def read_tum(path):
     return rows
 
 
-def log_ratios(est, gt):
-    """Per step: log(true / estimated length), None where the step is not a level one."""
+def level_steps(est, gt):
+    """Per step: (log true length, log estimated length), None where the step is not a level
+    one."""
     out = []
     for i in range(1, min(len(est), len(gt))):
         de = math.hypot(est[i][1] - est[i - 1][1], est[i][2] - est[i - 1][2])
         dg = math.hypot(gt[i][1] - gt[i - 1][1], gt[i][2] - gt[i - 1][2])
         level = abs(gt[i][3] - gt[i - 1][3]) <= 0.05
-        out.append(math.log(dg / de) if level and 0.2 <= de <= 2.0 and 0.2 <= dg <= 2.0 else None)
+        ok = level and 0.2 <= de <= 2.0 and 0.2 <= dg <= 2.0
+        out.append((math.log(dg), math.log(de)) if ok else None)
     return out
+
+
+def spread(pairs):
+    """Standard deviations of the log true and log estimated steps, the slope of the first on the
+    second and of the second on the first."""
+    n = len(pairs)
+    mt = sum(t for t, _ in pairs) / n
+    me = sum(e for _, e in pairs) / n
+    vt = sum((t - mt) ** 2 for t, _ in pairs) / n
+    ve = sum((e - me) ** 2 for _, e in pairs) / n
+    cov = sum((t - mt) * (e - me) for t, e in pairs) / n
+    nan = float("nan")
+    return (math.sqrt(vt), math.sqrt(ve), cov / ve if ve > 0.0 else nan,
+            cov / vt if vt > 0.0 else nan)
 
 
 def main(argv):
@@ -49,7 +68,8 @@ def main(argv):
         except (OSError, ValueError) as e:
             print(f"{d}: {e}", file=sys.stderr)
             return 2
-        r = log_ratios(est, gt)
+        steps = level_steps(est, gt)
+        r = [None if p is None else p[0] - p[1] for p in steps]
         vals = [x for x in r if x is not None]
         if len(vals) < 2:
             print(f"{d}: fewer than two level steps")
@@ -64,6 +84,9 @@ def main(argv):
                 acf.append(f"{lag}:{sum(pairs) / len(pairs) / var:.2f}")
         print(f"{d}: {len(vals)} level steps of {len(r)}, scale {math.exp(mean):.3f}, "
               f"log ratio sd {math.sqrt(var):.3f}, autocorrelation {' '.join(acf)}")
+        sd_true, sd_est, true_on_est, est_on_true = spread([p for p in steps if p is not None])
+        print(f"  log step sd: true {sd_true:.3f}, estimated {sd_est:.3f}; slope of the true on "
+              f"the estimated {true_on_est:.2f}, of the estimated on the true {est_on_true:.2f}")
     return 0
 
 
