@@ -256,9 +256,10 @@ TEST(EndToEndIndoor, PdrStepsReadAboutTheirMedianKeepTheWalkOnTrack) {
     EXPECT_NE(median.verdict.level, VerdictLevel::kFailed);
 }
 
-// The pedestrian defaults with the PDR's step lengths as read (step_length_exponent 1). Read
-// about their median (the default), walks 18, 3, 5 and 40 no longer need what the tests below
-// exercise with them: they end on the right floor, and their starts in one basin, either way.
+// The pedestrian defaults with the PDR's step lengths as read (step_length_exponent 1), in which
+// walks 18, 3, 5 and 40 show what the tests below need. Read about their median (the default),
+// walks 18, 3 and 40 end on the right floor with or without the part a test exercises, and walk
+// 5's starts part by less than its test asks.
 pipeline::PipelineConfig StepsAsRead() {
     pipeline::PipelineConfig c;
     c.indoor_corrector.model.step_length_exponent = 1.0;

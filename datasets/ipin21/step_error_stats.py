@@ -10,7 +10,9 @@ ratio of true to estimated step length: its mean (as a scale), its standard devi
 autocorrelation at lags of 1 to 40 steps (a step without a ratio is skipped in the pairs); and
 the standard deviation of the log true and of the log estimated step, and the regression slopes
 of each on the other (how much of a walker's step the estimate's tells, and how much of it the
-estimate follows). These are the figures
+estimate follows); and the along-track error of spans of 40 steps (every third step starts one)
+at the walk's one best scale, RMS, with the estimate's step lengths as read and read about their
+median at exponent 0.25 (driftcorr's indoor_model.step_length_exponent). These are the figures
 make_hcu_walks.py's step model reproduces. Python standard library only; exit
 code 2 on a missing or unreadable file.
 """
@@ -57,6 +59,24 @@ def spread(pairs):
             cov / vt if vt > 0.0 else nan)
 
 
+def span_errors(est, gt, exponent, span=40):
+    """RMS of (true path - scale * estimated path) over spans of `span` steps, every third step
+    starting one, the estimate's steps of 0.2-2 m read as median^(1 - exponent) * L^exponent and
+    scale the ratio of the whole true path to the whole read one."""
+    n = min(len(est), len(gt))
+    dg = [math.dist(gt[i][1:3], gt[i - 1][1:3]) for i in range(1, n)]
+    de = [math.dist(est[i][1:3], est[i - 1][1:3]) for i in range(1, n)]
+    moving = sorted(x for x in de if 0.2 <= x <= 2.0)
+    if not moving or len(dg) <= span:
+        return float("nan")
+    median = moving[len(moving) // 2]
+    read = [median ** (1.0 - exponent) * x ** exponent if 0.2 <= x <= 2.0 else x for x in de]
+    scale = sum(dg) / sum(read)
+    errs = [sum(dg[i:i + span]) - scale * sum(read[i:i + span])
+            for i in range(0, len(dg) - span, 3)]
+    return math.sqrt(sum(e * e for e in errs) / len(errs))
+
+
 def main(argv):
     if len(argv) < 2:
         print(__doc__.strip().splitlines()[2].strip(), file=sys.stderr)
@@ -87,6 +107,8 @@ def main(argv):
         sd_true, sd_est, true_on_est, est_on_true = spread([p for p in steps if p is not None])
         print(f"  log step sd: true {sd_true:.3f}, estimated {sd_est:.3f}; slope of the true on "
               f"the estimated {true_on_est:.2f}, of the estimated on the true {est_on_true:.2f}")
+        print(f"  along-track error of 40-step spans: {span_errors(est, gt, 1.0):.2f} m as read, "
+              f"{span_errors(est, gt, 0.25):.2f} m read about the median")
     return 0
 
 
