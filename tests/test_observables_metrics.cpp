@@ -435,6 +435,23 @@ TEST(ReadAtGait, MovingStepsAreReadAboutTheirMedianTheRestAsRead) {
     EXPECT_EQ(MedianGaitStep(stops, max_speed_mps), 0.0);
 }
 
+// After every value, the running median is the element at index size / 2 of the values sorted
+// (ties and an even count included), as MedianGaitStep takes it.
+TEST(RunningMedian, IsTheUpperMedianOfTheValuesSoFar) {
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> pick(0, 20);  // small range: many ties
+    RunningMedian running;
+    std::vector<double> values;
+    for (int k = 0; k < 500; ++k) {
+        const double v = 0.05 * pick(rng);
+        running.Add(v);
+        values.push_back(v);
+        std::vector<double> sorted = values;
+        std::sort(sorted.begin(), sorted.end());
+        ASSERT_EQ(running.Median(), sorted[sorted.size() / 2]) << "after " << values.size();
+    }
+}
+
 TEST(Metrics, TenPoseExampleWithKnownErrors) {
     // Ground truth along East every 10 m; the estimate is off by e_i metres in the direction
     // (0.6, 0.8), and its height is off by 2 m on poses 2, 5 and 7 (1.5 m on pose 9: on floor).

@@ -263,7 +263,23 @@ std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, d
 
 bool GaitStep(const StepObservation& o, double max_speed_mps) {
     return !o.stationary && !o.repaired && !o.tread && o.length_m > 0.0 &&
-           o.length_m <= max_speed_mps * std::max(o.dt_s, 0.0);
+           !IsJump(o, max_speed_mps);
+}
+
+void RunningMedian::Add(double value) {
+    // upper_ holds ceil(n / 2) values, each at least every one of lower_.
+    if (!upper_.empty() && value < upper_.top()) {
+        lower_.push(value);
+    } else {
+        upper_.push(value);
+    }
+    if (lower_.size() > upper_.size()) {
+        upper_.push(lower_.top());
+        lower_.pop();
+    } else if (upper_.size() > lower_.size() + 1) {
+        lower_.push(upper_.top());
+        upper_.pop();
+    }
 }
 
 double MedianGaitStep(const std::vector<StepObservation>& obs, double max_speed_mps) {

@@ -187,10 +187,8 @@ void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& s
     StepObservation o = step;
     const ModelConfig& m = cfg_.model;
     if (m.step_length_exponent != 1.0 && GaitStep(o, m.max_speed_mps)) {  // about the steps so far
-        gait_lengths_.insert(
-            std::upper_bound(gait_lengths_.begin(), gait_lengths_.end(), o.length_m), o.length_m);
-        ReadAtGait(o, gait_lengths_[gait_lengths_.size() / 2], m.step_length_exponent,
-                   m.max_speed_mps);
+        gait_median_.Add(o.length_m);
+        ReadAtGait(o, gait_median_.Median(), m.step_length_exponent, m.max_speed_mps);
     }
     AppendStep(state_, initial, o, dist_.back(), elapsed_s_, m);
     elapsed_s_ += std::max(o.dt_s, 0.0);

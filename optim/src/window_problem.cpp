@@ -169,8 +169,7 @@ int WindowProblem::BiasVar(int segment) const {
 }
 
 bool WindowProblem::IsJump(std::size_t i) const {
-    const StepObservation& o = state_.obs[i];
-    return o.length_m > cfg_.max_speed_mps * std::max(o.dt_s, 1e-9);
+    return driftcorr::IsJump(state_.obs[i], cfg_.max_speed_mps);
 }
 
 bool WindowProblem::HasSpeedTerm(std::size_t i) const {

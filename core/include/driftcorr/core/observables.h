@@ -1,7 +1,10 @@
 #pragma once
 // What a drifting trajectory measures well, per step i (from pose i-1 to pose i): the step length,
 // the step's direction relative to the heading, the heading change and the height change.
+#include <algorithm>
 #include <cstdint>
+#include <functional>
+#include <queue>
 #include <vector>
 
 #include "driftcorr/core/types.h"
@@ -96,10 +99,28 @@ std::size_t MoveRideLag(std::vector<StepObservation>& obs, double min_s, double 
 std::size_t MarkStairTreads(std::vector<StepObservation>& obs, double tread_m, double window_s,
                             double min_rate_mps, double gap_s);
 
+/// A step faster than max_speed_mps: a discontinuity of the estimate, not motion (the model
+/// neither scales it nor gives it a speed term).
+inline bool IsJump(const StepObservation& o, double max_speed_mps) {
+    return o.length_m > max_speed_mps * std::max(o.dt_s, 1e-9);
+}
+
 /// A step whose length a pedestrian step model reads with its gait error (ReadAtGait): moving,
-/// neither repaired nor a tread, and no faster than max_speed_mps (a faster one is a
-/// discontinuity of the estimate).
+/// neither repaired nor a tread, and no jump.
 bool GaitStep(const StepObservation& o, double max_speed_mps);
+
+/// The median of the values added so far, the upper one of an even count (the element at index
+/// size / 2 of them sorted, as MedianGaitStep takes it), in O(log n) per value.
+class RunningMedian {
+public:
+    void Add(double value);
+    /// Precondition: a value was added.
+    double Median() const { return upper_.top(); }
+
+private:
+    std::priority_queue<double> lower_;                                       ///< the smaller half
+    std::priority_queue<double, std::vector<double>, std::greater<>> upper_;  ///< the rest
+};
 
 /// The median length of obs's GaitSteps [m]; 0 when there is none.
 /// obs as ComputeObservations returns it (obs[0] unused).

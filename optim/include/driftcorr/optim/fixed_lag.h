@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "driftcorr/core/cost_terms.h"
+#include "driftcorr/core/observables.h"
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/window_problem.h"
@@ -128,9 +129,9 @@ private:
     double scored_prior_mean_;                   ///< the scale prior's mean in Nll()
     std::vector<double> dist_;                   ///< path length from pose 0 [m]
     double elapsed_s_ = 0.0;                     ///< time of the appended steps [s]
-    /// The odometry's lengths of the GaitSteps so far, ascending
+    /// The median of the odometry's lengths of the GaitSteps so far
     /// (ModelConfig::step_length_exponent).
-    std::vector<double> gait_lengths_;
+    RunningMedian gait_median_;
     std::size_t solved_end_ = 0;                 ///< last pose of the last solve
     std::size_t window_first_ = 1;               ///< first pose of the last solved window
     std::optional<PosePriorTerm> window_prior_;  ///< its prior on pose window_first_ - 1
