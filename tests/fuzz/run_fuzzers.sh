@@ -32,7 +32,7 @@ declare -A DICTS=([tum]=numbers [kitti]=numbers [scenario_yaml]=scenario_yaml [o
 
 cmake -S "$REPO" -B "$BUILD_DIR" -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
     -DBUILD_FUZZERS=ON -DBUILD_PYTHON=OFF \
-    -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer -g -O1" \
+    -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer -gline-tables-only -O1" \
     >/dev/null
 cmake --build "$BUILD_DIR" -j2 --target driftcorr_fuzzers
 
