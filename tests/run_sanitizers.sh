@@ -14,6 +14,12 @@ set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD_DIR="${1:-$REPO/build-asan}"
 JOBS="${JOBS:-2}"
+for tool in clang-14 clang++-14 llvm-symbolizer; do
+    command -v "$tool" >/dev/null || {
+        echo "run_sanitizers.sh: $tool not found; install clang-14 libclang-rt-14-dev llvm-14" >&2
+        exit 1
+    }
+done
 
 start=$(date +%s)
 # BUILD_PYTHON=OFF: an ASan-instrumented extension module cannot be loaded into the (uninstrumented)
