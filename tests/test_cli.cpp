@@ -844,13 +844,15 @@ std::vector<BadInputCase> BadInputCases() {
          },
          kExitBadInput,
          {R"(missing/corrected\.tum: -o: folder '.*missing' does not exist)"}},
-        {"OutputIsAFolder",
+        // (-o naming a folder with one scenario writes <name>.tum into it, as with several.)
+        {"CovarianceIsAFolder",
          [](const CaseDirs& c) {
              return std::vector<std::string>{"correct", c.scenario.string(), "-o",
+                                             c.output.string(), "--covariance",
                                              c.out_dir.string()};
          },
          kExitBadInput,
-         {R"(: -o: is a folder)"}},
+         {R"(: --covariance: is a folder)"}},
         // The GeoJSON path is bad: the corrected trajectory must not be written either.
         {"GeoJsonFolderMissing",
          [](const CaseDirs& c) {

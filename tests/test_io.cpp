@@ -2,6 +2,7 @@
 // Every bad-input case writes its own small file and checks that the InputError names the file
 // and the line or key.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <filesystem>
@@ -643,6 +644,30 @@ TEST(AtomicFile, DoesNotClobberExistingFileUntilCommit) {
     }
     EXPECT_EQ(ReadText(path), "new");
     EXPECT_EQ(CountFiles(dir), 1u);
+}
+
+TEST(AtomicFile, FollowsASymbolicLinkAndKeepsIt) {
+    const fs::path dir = TestDir();
+    WriteText(dir / "target.txt", "old");
+    fs::create_symlink(dir / "target.txt", dir / "link.txt");
+    WriteFileAtomically((dir / "link.txt").string(), "new");
+    EXPECT_TRUE(fs::is_symlink(dir / "link.txt"));
+    EXPECT_EQ(ReadText(dir / "target.txt"), "new");
+    EXPECT_EQ(CountFiles(dir), 2u);
+}
+
+TEST(AtomicFile, ResolvesWhatMustNotBeReplaced) {
+    const fs::path dir = TestDir();
+    EXPECT_EQ(ResolveOutput("/dev/null").kind, OutputTarget::Kind::kInPlace);
+    EXPECT_EQ(ResolveOutput("-").kind, OutputTarget::Kind::kDescriptor);
+    EXPECT_EQ(ResolveOutput((dir / "new.txt").string()).kind, OutputTarget::Kind::kFile);
+    EXPECT_THROW(ResolveOutput(dir.string()), OutputError);  // a folder
+    fs::create_symlink(dir / "missing.txt", dir / "dangling.txt");
+    EXPECT_THROW(ResolveOutput((dir / "dangling.txt").string()), OutputError);
+    WriteFileAtomically("/dev/null", "into the device, in place");
+    struct stat st {};
+    ASSERT_EQ(::stat("/dev/null", &st), 0);
+    EXPECT_TRUE(S_ISCHR(st.st_mode));
 }
 
 TEST(AtomicFile, UnwritableFolderThrowsNamingPath) {

@@ -17,6 +17,7 @@
 
 #include "commands.h"
 #include "driftcorr/core/errors.h"
+#include "driftcorr/mapping/atomic_file.h"
 
 namespace driftcorr::cli {
 
@@ -60,17 +61,69 @@ int RunReportingErrors(const char* who, const std::function<int()>& work) {
 
 void CheckOutputPath(const std::string& path, const std::string& option) {
     namespace fs = std::filesystem;
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) {
-        throw InputError(path, 0, option, "is a folder, expected an output file path");
-    }
-    const fs::path parent = fs::path(path).parent_path();
+    const OutputTarget target = [&] {
+        try {
+            return ResolveOutput(path);
+        } catch (const OutputError& e) {
+            throw OutputError(path, option, e.message());
+        }
+    }();
+    if (target.kind != OutputTarget::Kind::kFile) return;  // written in place: nothing to create
+    const fs::path parent = fs::path(target.path).parent_path();
     const std::string dir = parent.empty() ? "." : parent.string();
+    std::error_code ec;
     if (!fs::is_directory(dir, ec)) {
         throw InputError(path, 0, option, "folder '" + dir + "' does not exist");
     }
     if (::access(dir.c_str(), W_OK) != 0) {
         throw InputError(path, 0, option, "folder '" + dir + "' is not writable");
+    }
+}
+
+namespace {
+
+/// Whether a and b name the same file: the same inode when both exist, else the same path once
+/// "..", "." and symbolic links of the existing part are resolved.
+bool SameFile(const std::string& a, const std::string& b) {
+    namespace fs = std::filesystem;
+    std::error_code ec_a, ec_b;
+    const bool a_exists = fs::exists(a, ec_a), b_exists = fs::exists(b, ec_b);
+    if (a_exists && b_exists) {
+        std::error_code ec;
+        return fs::equivalent(a, b, ec);
+    }
+    if (a_exists != b_exists) return false;
+    std::error_code ec;
+    const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
+    const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+    return !ec && ca == cb;
+}
+
+}  // namespace
+
+void CheckOutputsAgainstInputs(const std::vector<NamedOutput>& outputs,
+                               const std::vector<io::InputFile>& inputs) {
+    std::vector<std::pair<const NamedOutput*, bool>> files;  // output, is a (future) file
+    for (const NamedOutput& out : outputs) {
+        if (out.path.empty()) continue;
+        const OutputTarget target = ResolveOutput(out.path);  // throws for what it refuses
+        for (const io::InputFile& in : inputs) {
+            if (!in.path.empty() && SameFile(out.path, in.path)) {
+                throw OutputError(out.path, out.option,
+                                  "is " + in.what + " (" + in.path +
+                                      "): writing it would destroy an input; choose another path");
+            }
+        }
+        files.push_back({&out, target.kind == OutputTarget::Kind::kFile});
+    }
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        for (std::size_t j = 0; j < i; ++j) {
+            if (files[i].second && files[j].second &&
+                SameFile(files[i].first->path, files[j].first->path)) {
+                throw OutputError(files[i].first->path, files[i].first->option,
+                                  "is the same file as " + files[j].first->option);
+            }
+        }
     }
 }
 

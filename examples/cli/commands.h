@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/io/scenario.h"
+
 namespace driftcorr::cli {
 
 constexpr int kExitOk = 0, kExitUsage = 1, kExitBadInput = 2, kExitSolver = 3, kExitInternal = 4;
@@ -40,6 +42,20 @@ int RunReportingErrors(const char* who, const std::function<int()>& work);
 /// Throws InputError (exit 2) unless `path` can be created as an output file: not a folder, in
 /// an existing writable folder. Checked before any work is done, so nothing is lost to a typo.
 void CheckOutputPath(const std::string& path, const std::string& option);
+
+/// An output file of one run and the option that named it ("-o", "--geojson").
+struct NamedOutput {
+    std::string option;
+    std::string path;
+};
+
+/// Throws OutputError (exit 2) naming the option when an output is one of `inputs` (the same
+/// file however it is spelled: "..", a symbolic link, a hard link), when two outputs that are
+/// files would be the same file, or when an output is refused by ResolveOutput (a folder, a block
+/// device, a socket, a link to nothing). Called before any work, so that no input is overwritten
+/// and no work is lost to a typo. Outputs that are devices, FIFOs or "-" may be shared.
+void CheckOutputsAgainstInputs(const std::vector<NamedOutput>& outputs,
+                               const std::vector<io::InputFile>& inputs);
 
 /// One scenario path of a manifest, with where it was named (for messages).
 struct ManifestEntry {

@@ -48,7 +48,9 @@ const char* kCorrectUsage =
     "\n"
     "Corrects the scenario's drifting estimate against its map and writes the corrected\n"
     "trajectory as TUM (t x y z qx qy qz qw: space-separated, no header, the format evo reads)\n"
-    "in the estimate's own frame and timestamps.\n"
+    "in the estimate's own frame and timestamps; -o - writes it to standard output (the summary\n"
+    "then goes to stderr). No output may be one of the run's inputs; a symbolic link is followed\n"
+    "and the file it names replaced; a device or FIFO is written in place.\n"
     "--geojson also writes estimate and corrected track (and ground truth) as WGS84 GeoJSON\n"
     "LineStrings; properties.coordinateProperties.times holds each vertex's timestamp [s].\n"
     "--solver paper runs the paper's epoch-wise gradient descent (a reference) instead.\n"
@@ -62,7 +64,8 @@ const char* kCorrectUsage =
     "  (.tum, .csv; a .csv with the EuRoC header is EuRoC) unless given; kitti needs --rate-hz.\n"
     "  TUM may hold positions only (t x y z); CSV has a header (README: Trajectory formats).\n"
     "  Without orientations, or with --heading motion, the heading is the direction of motion.\n"
-    "Several scenarios (or --manifest, one scenario path a line): -o is a folder that gets\n"
+    "Several scenarios (or --manifest, one scenario path a line, or -o naming a folder): -o is\n"
+    "a folder that gets\n"
     "<name>.tum per scenario (<name>: the scenario's folder, or its .yaml without extension);\n"
     "-j N corrects N at a time (one process each); one line per scenario; a failing one does not\n"
     "stop the others.\n"
@@ -82,7 +85,14 @@ struct Args {
     std::string osm, anchor, crs, frame, format, rate_hz, heading;
     bool quiet = false;
 
-    bool Batch() const { return inputs.size() > 1 || !manifest.empty(); }
+    /// Several scenarios, or one with -o naming a folder (an existing one, or a path ending in
+    /// '/'): the same command then works whatever number of scenarios a glob matched.
+    bool Batch() const {
+        std::error_code ec;
+        const bool folder = !output.empty() && (output.back() == '/' ||
+                                                std::filesystem::is_directory(output, ec));
+        return inputs.size() > 1 || !manifest.empty() || (folder && osm.empty());
+    }
 };
 
 std::string CheckChoices(const Args& a) {
@@ -109,6 +119,7 @@ std::string CheckModes(const Args& a) {
     if (a.output.empty()) {
         return a.Batch() ? "missing -o <folder>" : "missing -o <corrected.tum>";
     }
+    if (a.Batch() && a.output == "-") return "several scenarios need -o <folder>, not -";
     if (a.Batch() && !a.osm.empty()) {
         return "--osm corrects one trajectory file; several scenarios need scenario files";
     }
@@ -157,92 +168,92 @@ ProgressCallback MakeProgress(bool quiet) {
     };
 }
 
-void PrintMetricsRow(const char* label, const ErrorMetrics& m, bool floors) {
-    std::printf("  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
+void PrintMetricsRow(std::FILE* out, const char* label, const ErrorMetrics& m, bool floors) {
+    std::fprintf(out, "  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
                 label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
-    if (floors) std::printf("   right floor %5.1f %%", 100.0 * m.floor_accuracy);
-    std::printf("\n");
+    if (floors) std::fprintf(out, "   right floor %5.1f %%", 100.0 * m.floor_accuracy);
+    std::fprintf(out, "\n");
 }
 
 // How the start fits the map: the estimated start, or the given one and the best other heading.
-void PrintAnchorFit(const pipeline::CorrectionRun& run) {
+void PrintAnchorFit(std::FILE* out, const pipeline::CorrectionRun& run) {
     using driftcorr::RadToDeg;
     const AnchorFitResult& f = *run.anchor_fit;
     const auto& a = run.scenario.anchor;
     const bool estimated = !a.yaw_deg || a.position_search_m > 0.0;
-    std::printf("anchor     %s yaw %.2f deg, start (%.1f, %.1f) m: the first %.0f m lie RMS %.2f m "
+    std::fprintf(out, "anchor     %s yaw %.2f deg, start (%.1f, %.1f) m: the first %.0f m lie RMS %.2f m "
                 "from the map (%.0f %% beyond reach)", estimated ? "estimated" : "given",
                 RadToDeg(run.anchor.yaw_rad), run.anchor.origin_en.x(), run.anchor.origin_en.y(),
                 f.lead_path_m, estimated ? f.best.rms_m : f.given.rms_m,
                 100.0 * (estimated ? f.best.off_share : f.given.off_share));
     if (!estimated && (f.best.dyaw_rad != 0.0 || f.best.offset_en.norm() > 0.0)) {
-        std::printf("; best other start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
+        std::fprintf(out, "; best other start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
                     RadToDeg(f.best.dyaw_rad), f.best.offset_en.x(), f.best.offset_en.y(),
                     f.best.rms_m);
     }
     if (f.runner_up) {
-        std::printf("; next distinct start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
+        std::fprintf(out, "; next distinct start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
                     RadToDeg(f.runner_up->dyaw_rad), f.runner_up->offset_en.x(),
                     f.runner_up->offset_en.y(), f.runner_up->rms_m);
     }
-    std::printf("\n");
+    std::fprintf(out, "\n");
 }
 
 // The start scales of the correction, the NLL each reached and how far each one's correction lies
 // from the kept one, when there were several.
-void PrintStarts(const CorrectionResult& r) {
+void PrintStarts(std::FILE* out, const CorrectionResult& r) {
     if (r.start_scales.size() < 2) return;
-    std::printf("starts     scale");
+    std::fprintf(out, "starts     scale");
     for (std::size_t k = 0; k < r.start_scales.size(); ++k) {
-        std::printf("%s %.2f", k ? " /" : "", r.start_scales[k]);
+        std::fprintf(out, "%s %.2f", k ? " /" : "", r.start_scales[k]);
     }
-    std::printf(": NLL");
+    std::fprintf(out, ": NLL");
     for (std::size_t k = 0; k < r.start_nll.size(); ++k) {
         if (std::isnan(r.start_nll[k])) {
-            std::printf("%s failed", k ? " /" : "");
+            std::fprintf(out, "%s failed", k ? " /" : "");
         } else {
-            std::printf("%s %.1f", k ? " /" : "", r.start_nll[k]);
+            std::fprintf(out, "%s %.1f", k ? " /" : "", r.start_nll[k]);
         }
     }
-    std::printf(", kept %.2f; RMS to the kept one", r.start_scales[r.start_chosen]);
+    std::fprintf(out, ", kept %.2f; RMS to the kept one", r.start_scales[r.start_chosen]);
     for (std::size_t k = 0; k < r.start_rms_m.size(); ++k) {
         if (std::isnan(r.start_rms_m[k])) {
-            std::printf("%s -", k ? " /" : "");
+            std::fprintf(out, "%s -", k ? " /" : "");
         } else {
-            std::printf("%s %.2f", k ? " /" : "", r.start_rms_m[k]);
+            std::fprintf(out, "%s %.2f", k ? " /" : "", r.start_rms_m[k]);
         }
     }
-    std::printf(" m\n");
+    std::fprintf(out, " m\n");
 }
 
 // One line per floor hypothesis of the batch correction (CorrectionResult::floor_hypotheses).
-void PrintFloorHypotheses(const CorrectionResult& r) {
+void PrintFloorHypotheses(std::FILE* out, const CorrectionResult& r) {
     for (const CorrectionResult::FloorHypothesis& h : r.floor_hypotheses) {
         const bool gains = h.gain_nll != 0.0 || h.against_gain_nll != 0.0;
-        std::printf("floors     the change from %.1f m ending at %.0f s onto %.1f m: NLL ",
+        std::fprintf(out, "floors     the change from %.1f m ending at %.0f s onto %.1f m: NLL ",
                     h.from_m, h.t_s, h.tried_m);
         if (std::isnan(h.nll)) {
-            std::printf("failed");
+            std::fprintf(out, "failed");
         } else {
-            std::printf("%.1f", h.nll);
-            if (gains) std::printf(" + %.1f of the gains", h.gain_nll);
+            std::fprintf(out, "%.1f", h.nll);
+            if (gains) std::fprintf(out, " + %.1f of the gains", h.gain_nll);
         }
-        std::printf(" against %.1f", h.against);
-        if (gains) std::printf(" + %.1f", h.against_gain_nll);
-        std::printf(" on %.1f m, %s\n", h.chosen_m, h.kept ? "kept" : "not kept");
+        std::fprintf(out, " against %.1f", h.against);
+        if (gains) std::fprintf(out, " + %.1f", h.against_gain_nll);
+        std::fprintf(out, " on %.1f m, %s\n", h.chosen_m, h.kept ? "kept" : "not kept");
     }
 }
 
-void PrintVerdict(const Verdict& v) {
-    std::printf("verdict    %s", ToString(v.level).c_str());
-    std::printf(" (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
+void PrintVerdict(std::FILE* out, const Verdict& v) {
+    std::fprintf(out, "verdict    %s", ToString(v.level).c_str());
+    std::fprintf(out, " (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
                 v.scale_min, v.scale_max, v.input_jumps, 100.0 * v.off_map_share);
-    for (const std::string& r : v.reasons) std::printf("  %s\n", r.c_str());
+    for (const std::string& r : v.reasons) std::fprintf(out, "  %s\n", r.c_str());
 }
 
-void PrintHeading(const pipeline::CorrectionRun& run) {
+void PrintHeading(std::FILE* out, const pipeline::CorrectionRun& run) {
     if (!run.heading_from_motion) return;
-    std::printf("heading    from the direction of motion (%s)\n",
+    std::fprintf(out, "heading    from the direction of motion (%s)\n",
                 run.estimate_frame.HasOrientation()
                     ? "heading: motion; the orientations are turned by the heading correction"
                     : "the estimate has no orientation; each written orientation is the corrected "
@@ -256,37 +267,37 @@ double PeakMemoryMb() {
     return double(usage.ru_maxrss) / 1024.0;
 }
 
-void PrintSummary(const pipeline::CorrectionRun& run, const std::string& out,
+void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std::string& written,
                   pipeline::Solver solver) {
     const auto& r = run.result;
     const bool indoor = run.scenario.mode == io::ScenarioMode::kIndoor3d;
     const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
-    std::printf("scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
+    std::fprintf(out, "scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
                 io::ToString(run.scenario.mode).c_str(), run.estimate.size());
-    PrintHeading(run);
-    std::printf(indoor ? "map        %zu walkways on the walk's floor, %.1f km, field %zu cells\n"
+    PrintHeading(out, run);
+    std::fprintf(out, indoor ? "map        %zu walkways on the walk's floor, %.1f km, field %zu cells\n"
                        : "map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
                 run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
     if (solver == pipeline::Solver::kPaper) {
-        std::printf("solver     paper: %s (%s)\n", ToString(r.status).c_str(),
+        std::fprintf(out, "solver     paper: %s (%s)\n", ToString(r.status).c_str(),
                     r.message.c_str());
     } else {
-        std::printf("solver     %s (%s); %zu windows, %d solver iterations, %zu poses on hard corridor,"
+        std::fprintf(out, "solver     %s (%s); %zu windows, %d solver iterations, %zu poses on hard corridor,"
                     " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
-        PrintStarts(r);
-        PrintFloorHypotheses(r);
+        PrintStarts(out, r);
+        PrintFloorHypotheses(out, r);
     }
-    std::printf("time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
+    std::fprintf(out, "time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
                 " incremental %.3f, refine %.3f); peak memory %.0f MB\n", total, run.timings.load_s,
                 run.timings.map_s, run.timings.solve_s,
                 run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
                 r.refine_s, PeakMemoryMb());
-    if (run.anchor_fit) PrintAnchorFit(run);
-    if (run.before) PrintMetricsRow("estimate", *run.before, indoor);
-    if (run.after) PrintMetricsRow("corrected", *run.after, indoor);
-    PrintVerdict(run.verdict);
-    if (!out.empty()) std::printf("wrote      %s\n", out.c_str());
+    if (run.anchor_fit) PrintAnchorFit(out, run);
+    if (run.before) PrintMetricsRow(out, "estimate", *run.before, indoor);
+    if (run.after) PrintMetricsRow(out, "corrected", *run.after, indoor);
+    PrintVerdict(out, run.verdict);
+    if (!written.empty()) std::fprintf(out, "wrote      %s\n", written == "-" ? "standard output" : written.c_str());
 }
 
 std::vector<GeoPoint> ToGeo(const pipeline::WorldFrame& w,
@@ -303,7 +314,7 @@ void WriteCovariance(const std::string& path, const pipeline::CorrectionRun& run
         throw std::runtime_error(path + ": no covariance: " + cov.message);
     }
     AtomicFile file(path);
-    std::ofstream& out = file.stream();
+    std::ostream& out = file.stream();
     out << "# t var_e_m2 cov_en_m2 var_n_m2 var_up_m2 var_yaw_rad2 flags"
            " (flags: 1 off the map, 2 input jump, 4 implausible scale, 8 height change denied)\n";
     char line[256];
@@ -457,15 +468,17 @@ struct OutputPaths {
     std::string tum, geojson, covariance;  ///< empty: not written
 };
 
-void CheckOutputs(const OutputPaths& out) {
+/// Every output checked before any work: creatable, not an input of the run, not each other.
+void CheckOutputs(const OutputPaths& out, const Args& a, const io::Scenario& scenario) {
     CheckOutputPath(out.tum, "-o");
     if (!out.covariance.empty()) CheckOutputPath(out.covariance, "--covariance");
-    if (out.geojson.empty()) return;
-    CheckOutputPath(out.geojson, "--geojson");
-    std::error_code ec;
-    if (out.geojson == out.tum || std::filesystem::equivalent(out.geojson, out.tum, ec)) {
-        throw InputError(out.geojson, 0, "--geojson", "is the same file as -o");
-    }
+    if (!out.geojson.empty()) CheckOutputPath(out.geojson, "--geojson");
+    std::vector<io::InputFile> inputs = io::InputFiles(scenario);
+    if (!a.config.empty()) inputs.push_back({"the --config file", a.config});
+    if (!a.manifest.empty()) inputs.push_back({"the --manifest file", a.manifest});
+    CheckOutputsAgainstInputs({{"-o", out.tum}, {"--geojson", out.geojson},
+                               {"--covariance", out.covariance}},
+                              inputs);
 }
 
 /// Per-vertex timestamps [s] as GeoJSON's coordinateProperties (the togeojson convention).
@@ -531,15 +544,21 @@ pipeline::PipelineConfig LoadConfig(const Args& a) {
 
 int RunSingle(const Args& a) {
     const OutputPaths out{a.output, a.geojson, a.covariance};
-    CheckOutputs(out);
+    io::Scenario scenario =
+        a.osm.empty() ? io::LoadScenario(a.inputs.front()) : ScenarioFromOptions(a);
+    CheckOutputs(out, a, scenario);
     const pipeline::PipelineConfig cfg = LoadConfig(a);
     pipeline::CorrectionRun run =
-        a.osm.empty() ? pipeline::RunCorrection(a.inputs.front(), cfg, MakeProgress(a.quiet))
-                      : pipeline::RunCorrection(ScenarioFromOptions(a), cfg, MakeProgress(a.quiet));
+        pipeline::RunCorrection(std::move(scenario), cfg, MakeProgress(a.quiet));
     for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     for (const std::string& w : run.result.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     const Written written = WriteOutputs(run, a.on_failure, out);
-    PrintSummary(run, written == Written::kNothing ? "" : a.output, cfg.solver);
+    // With -o - (or /dev/stdout) the trajectory has standard output; the summary goes to stderr.
+    std::FILE* report = ResolveOutput(a.output).kind == OutputTarget::Kind::kDescriptor &&
+                                a.output != "/dev/stderr"
+                            ? stderr
+                            : stdout;
+    PrintSummary(report, run, written == Written::kNothing ? "" : a.output, cfg.solver);
     const bool failed = run.verdict.level == VerdictLevel::kFailed;
     if (written == Written::kNothing) {
         std::fprintf(stderr, "driftcorr: the correction failed (%s); nothing written\n",
@@ -616,7 +635,9 @@ ProcessOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& c
                           join(a.covariance, item.name + ".cov.txt")};
     ProcessOutcome o;
     try {
-        const pipeline::CorrectionRun run = pipeline::RunCorrection(item.path, cfg);
+        io::Scenario scenario = io::LoadScenario(item.path);
+        CheckOutputs(out, a, scenario);
+        const pipeline::CorrectionRun run = pipeline::RunCorrection(std::move(scenario), cfg);
         const Written written = WriteOutputs(run, a.on_failure, out);
         const bool failed = run.verdict.level == VerdictLevel::kFailed;
         o.code = failed || written == Written::kNothing ? kExitSolver : kExitOk;

@@ -2,6 +2,8 @@
 //
 // Exit codes: 0 success, 1 usage error, 2 bad input (file, line, key named), 3 the solver did not
 // produce a usable correction (nothing written), 4 internal error.
+#include <csignal>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 
@@ -20,6 +22,7 @@ const char* kAbout =
     "            (driftcorr eval -h)\n"
     "  params    every params.yaml key at its default, with its allowed values\n"
     "  map       the walkable surface of a raw 3D map of a building (driftcorr map -h)\n"
+    "driftcorr --version prints the version.\n"
     "\n";
 const char* kOtherUsage =
     "       driftcorr eval <scenario dirs...> [-o report_dir] [--config params.yaml] [--quiet]\n"
@@ -46,16 +49,38 @@ void PrintUsage(std::FILE* out) {
 
 }  // namespace
 
+/// Flushes standard output and says whether everything printed there arrived (a full disk or a
+/// closed pipe behind it loses the summary and the verdict: that is an error, not a success).
+int CheckStandardOutput(int code) {
+    errno = 0;
+    const bool flushed = std::fflush(stdout) == 0;
+    const int err = errno;
+    if (flushed && !std::ferror(stdout)) return code;
+    std::fprintf(stderr, "driftcorr: standard output: write failed (%s): what was printed there "
+                 "(the summary, the verdict, the poses) is lost\n",
+                 err ? std::strerror(err) : "an earlier write failed");
+    return code == driftcorr::cli::kExitOk ? driftcorr::cli::kExitBadInput : code;
+}
+
 int main(int argc, char** argv) {
+    // A file-size limit (ulimit -f) makes write() fail with EFBIG, reported with the file's name,
+    // instead of killing the process by SIGXFSZ with nothing said.
+    std::signal(SIGXFSZ, SIG_IGN);
+    if (argc >= 2 && std::strcmp(argv[1], "--version") == 0) {
+        std::printf("driftcorr %s\n", DRIFTCORR_VERSION);
+        return CheckStandardOutput(driftcorr::cli::kExitOk);
+    }
     if (argc >= 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
                       std::strcmp(argv[1], "help") == 0)) {
         std::fputs(kAbout, stdout);
         PrintUsage(stdout);
-        return driftcorr::cli::kExitOk;
+        return CheckStandardOutput(driftcorr::cli::kExitOk);
     }
     if (argc >= 2) {
         for (const Command& c : kCommands) {
-            if (std::strcmp(argv[1], c.name) == 0) return c.run(argc - 1, argv + 1);
+            if (std::strcmp(argv[1], c.name) == 0) {
+                return CheckStandardOutput(c.run(argc - 1, argv + 1));
+            }
         }
     }
     std::fprintf(

@@ -149,6 +149,7 @@ std::string FloorPicture(const WalkableSurface& s, const std::vector<int>& level
 int Extract(const std::string& input, const std::string& output, WalkableSurfaceConfig cfg,
             bool resolution_given) {
     CheckOutputPath(output, "-o");
+    CheckOutputsAgainstInputs({{"-o", output}}, {{"the raw map", input}});
     const std::string ext = std::filesystem::path(output).extension().string();
     if (ext != ".pcd" && ext != ".ply") {
         throw InputError(output, 0, "-o", "the surface is written as .pcd or .ply");

@@ -1,6 +1,11 @@
 // `driftcorr stream`: corrects poses read from standard input one line at a time and writes each
 // corrected pose to standard output as soon as it is computed (flushed per line).
+#include <pthread.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -58,8 +63,11 @@ const char* kStreamUsage =
     "--sync solves inside the pose loop (deterministic; slower per pose).\n"
     "The causal outputs are then compared with the smoothed trajectory: when the two lie farther\n"
     "apart than the input lies from the smoothed trajectory, both are reported as failed.\n"
-    "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config), 3 smoothing failed, the verdict\n"
-    "failed or the causal outputs failed (everything was still written), 4 internal.\n";
+    "SIGINT or SIGTERM ends the input: the stream finishes with the poses read (summary,\n"
+    "--smoothed-out, verdict) and exits with 130 or 143.\n"
+    "Exit codes: 0 ok, 1 usage, 2 bad input (scenario/config) or standard output not writable\n"
+    "(the stream stops), 3 smoothing failed, the verdict failed or the causal outputs failed\n"
+    "(everything was still written), 4 internal, 130 / 143 stopped by SIGINT / SIGTERM.\n";
 
 struct StreamArgs {
     std::string scenario, config, smoothed_out, max_lag;
@@ -141,6 +149,10 @@ public:
         if (line.kind == io::TumLine::Kind::kSkip) return;
         if (!complete) return Skip(number, "input ended mid-line (no newline); line ignored");
         if (line.kind == io::TumLine::Kind::kError) return Skip(number, line.error);
+        if (const std::string unit = io::ImplausibleTimestamp(line.t_s); !unit.empty()) {
+            // Not one bad line but the whole input's unit: every later line would be wrong too.
+            throw InputError("standard input", number, "", unit);
+        }
         const FrameAxes axes = setup_.scenario.frame;
         const PlanarPose in =
             pipeline::ToPlanarPose(line.t_s, line.p_frame, line.q_frame_body, axes, setup_.anchor);
@@ -160,8 +172,12 @@ public:
             out.pop_back();
             out += status;
         }
-        std::fputs(out.c_str(), stdout);
-        std::fflush(stdout);
+        if (std::fputs(out.c_str(), stdout) < 0 || std::fflush(stdout) != 0) {
+            throw OutputError("standard output", "",
+                              "write failed (" + std::string(std::strerror(errno)) +
+                                  ") at input line " + std::to_string(number) +
+                                  "; the stream stopped");
+        }
         // Read to written: a back-pressure wait comes before the pose is taken (as if the line
         // had been read later), so it is not part of the pose's latency; it is reported apart.
         latency_s_.push_back(std::chrono::duration<double>(Clock::now() - arrived).count() -
@@ -307,11 +323,38 @@ private:
     std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]
 };
 
+// SIGINT / SIGTERM end the input: the reading thread is interrupted (the signal is passed on to
+// it when another thread caught it) and standard input closed, so that the stream finishes as at
+// the end of its input (summary, smoothed output, verdict) and exits with 128 + the signal.
+volatile std::sig_atomic_t g_stop_signal = 0;
+pthread_t g_reader;
+
+extern "C" void OnStopSignal(int sig) {
+    const int saved = errno;
+    g_stop_signal = sig;
+    if (!pthread_equal(pthread_self(), g_reader)) {
+        pthread_kill(g_reader, sig);
+    } else {
+        ::close(STDIN_FILENO);  // a read that starts after this returns at once
+    }
+    errno = saved;
+}
+
+void CatchStopSignals() {
+    g_reader = pthread_self();
+    struct sigaction action {};
+    action.sa_handler = OnStopSignal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = 0;  // no SA_RESTART: the blocked read returns EINTR
+    sigaction(SIGINT, &action, nullptr);
+    sigaction(SIGTERM, &action, nullptr);
+}
+
 void ReadStdin(StreamSession& session) {
     std::string text;
     long number = 0;
     Clock::time_point waiting_since = Clock::now();
-    while (std::getline(std::cin, text)) {
+    while (g_stop_signal == 0 && std::getline(std::cin, text)) {
         ++number;
         const Clock::time_point arrived = Clock::now();
         const double waited_s =
@@ -330,7 +373,7 @@ void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
                          "(correct takes positions only, the heading from the motion)");
     }
     const auto t0 = std::chrono::steady_clock::now();
-    for (std::size_t i = 0; i < est.size(); ++i) {
+    for (std::size_t i = 0; i < est.size() && g_stop_signal == 0; ++i) {
         if (rate_hz > 0.0) {
             std::this_thread::sleep_until(t0 + std::chrono::duration<double>(double(i) / rate_hz));
         }
@@ -342,10 +385,16 @@ void Replay(const io::Scenario& sc, double rate_hz, StreamSession& session) {
 
 int RunStream(const StreamArgs& a) {
     const auto start = Clock::now();
-    if (!a.smoothed_out.empty()) CheckOutputPath(a.smoothed_out, "--smoothed-out");
+    io::Scenario scenario = io::LoadScenario(a.scenario);
+    if (!a.smoothed_out.empty()) {
+        CheckOutputPath(a.smoothed_out, "--smoothed-out");
+        std::vector<io::InputFile> inputs = io::InputFiles(scenario);
+        if (!a.config.empty()) inputs.push_back({"the --config file", a.config});
+        CheckOutputsAgainstInputs({{"--smoothed-out", a.smoothed_out}}, inputs);
+    }
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
-    const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(a.scenario, cfg);
+    const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(std::move(scenario), cfg);
     OnlineConfig online = cfg.online;
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = a.sync;
@@ -357,11 +406,18 @@ int RunStream(const StreamArgs& a) {
         std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",
                      std::chrono::duration<double>(Clock::now() - start).count());
     }
+    CatchStopSignals();
     if (a.replay)
         Replay(setup.scenario, a.rate_hz, session);
     else
         ReadStdin(session);
-    return session.Finish(a.smoothed_out, a.quiet);
+    const int stop = g_stop_signal;
+    if (stop != 0) {
+        std::fprintf(stderr, "driftcorr stream: %s: input stopped; finishing with the poses read\n",
+                     stop == SIGINT ? "SIGINT" : "SIGTERM");
+    }
+    const int code = session.Finish(a.smoothed_out, a.quiet);
+    return stop != 0 ? 128 + stop : code;
 }
 
 }  // namespace

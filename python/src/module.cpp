@@ -16,6 +16,7 @@
 
 #include <chrono>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -190,18 +191,25 @@ public:
         const PlanarPose planar =
             pipeline::ToPlanarPose(in.t_s, in.p_frame, in.q_frame_body, axes, setup_->anchor);
         PushResult r;
+        std::pair<Eigen::Vector3d, Eigen::Quaterniond> out;
         {
             py::gil_scoped_release release;
+            // Pushes from several threads take turns: checking a pose against the last one,
+            // taking it and recording it are one step (the GIL is released during the solve).
+            const std::lock_guard<std::mutex> lock(mutex_);
             // Synchronous mode solves inside Push; the threaded mode's Push is O(1).
             r = corrector_->Push(planar);
+            if (r.Accepted()) {
+                out = pipeline::FromPlanarPose(r.corrected, planar, in.p_frame, in.q_frame_body,
+                                               axes, setup_->anchor);
+                Record(in, planar, r.corrected);
+            }
         }
         if (r.status == PushStatus::kRejectedFinished) {
             throw std::runtime_error("pose: the stream is finished (finish() was called)");
         }
         if (!r.Accepted()) throw py::value_error("pose: " + r.message);
-        const auto [p, q] = pipeline::FromPlanarPose(r.corrected, planar, in.p_frame,
-                                                     in.q_frame_body, axes, setup_->anchor);
-        Record(in, planar, r.corrected);
+        const auto& [p, q] = out;
         py::dict d;
         d["index"] = r.index;
         d["pose"] = FramePoseToArray(in.t_s, p, q);
@@ -213,13 +221,16 @@ public:
     }
 
     py::dict Finish() {
-        if (finished_) throw std::runtime_error("finish() was already called");
-        finished_ = true;
         CorrectionResult result;
+        bool again = false;
         {
             py::gil_scoped_release release;
-            result = corrector_->Finish();
+            const std::lock_guard<std::mutex> lock(mutex_);
+            again = finished_;
+            finished_ = true;
+            if (!again) result = corrector_->Finish();
         }
+        if (again) throw std::runtime_error("finish() was already called");
         const bool usable = Usable(result.status);
         py::dict d;
         d["status"] = driftcorr::ToString(result.status);
@@ -249,7 +260,11 @@ public:
         return d;
     }
 
-    std::size_t size() const { return corrector_->size(); }
+    std::size_t size() {
+        py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> lock(mutex_);
+        return corrector_->size();
+    }
 
 private:
     void Record(const FramePose& in, const PlanarPose& planar, const PlanarPose& corrected) {
@@ -270,6 +285,7 @@ private:
     ModelConfig model_;
     VerdictConfig verdict_config_;
     bool synchronous_;
+    std::mutex mutex_;  ///< one Push, Finish or size at a time (Python threads may call them)
     bool finished_ = false;
     Trajectory accepted_;
     PlanarTrajectory reference_;

@@ -52,3 +52,42 @@ def test_threaded_stream_finishes(synthetic_short):
     assert [p.index for p in out] == list(range(800))
     result = stream.finish()
     assert result.usable and result.corrected.shape == (800, 8)
+
+
+def test_stream_pushed_from_two_threads_takes_each_pose_once(synthetic_short):
+    """Two threads push the same poses: each pose is taken once (the other thread's copy is
+    refused as not newer), indices are unique and in the order of the timestamps, and finish()
+    holds exactly the poses taken."""
+    import threading
+
+    sc = driftcorr.load_scenario(synthetic_short)
+    rows = sc.estimate[:600]
+    stream = driftcorr.Stream(synthetic_short)  # threaded: push is quick, the race window wide
+    taken, refused = [], []
+    lock = threading.Lock()
+
+    def pusher():
+        for row in rows:
+            try:
+                out = stream.push(row)
+            except ValueError as e:
+                with lock:
+                    refused.append(str(e))
+                continue
+            with lock:
+                taken.append((out.index, row[0]))
+
+    threads = [threading.Thread(target=pusher) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(taken) <= len(rows), "a pose was taken twice"
+    indices = sorted(i for i, _ in taken)
+    assert indices == list(range(len(taken))), "duplicate or missing indices"
+    by_index = [t for _, t in sorted(taken)]
+    assert all(b > a for a, b in zip(by_index, by_index[1:])), "indices not in timestamp order"
+    assert len(taken) + len(refused) == 2 * len(rows)
+    result = stream.finish()
+    assert result.poses == len(taken)
+    assert np.all(np.diff(result.corrected[:, 0]) > 0)

@@ -61,7 +61,7 @@ std::string Geometry(const std::vector<GeoPoint>& points) {
 void WriteGeoJsonTracks(const std::string& path, const std::vector<GeoTrack>& tracks) {
     CheckFinite(path, tracks);
     AtomicFile file(path);
-    std::ofstream& out = file.stream();
+    std::ostream& out = file.stream();
     out << "{\"type\":\"FeatureCollection\",\"features\":[\n";
     for (std::size_t i = 0; i < tracks.size(); ++i) {
         out << "{\"type\":\"Feature\",\"properties\":{\"name\":" << JsonString(tracks[i].name);

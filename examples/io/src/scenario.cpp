@@ -463,4 +463,21 @@ std::string ToString(MapFormat format) {
     return "unknown";
 }
 
+std::vector<InputFile> InputFiles(const Scenario& scenario) {
+    std::vector<InputFile> files;
+    if (!scenario.yaml_path.empty() && scenario.yaml_path.front() != '<') {
+        files.push_back({"the scenario file", scenario.yaml_path});
+    }
+    const auto add_source = [&files](const std::string& what, const TrajectorySource& src) {
+        files.push_back({what, src.path});
+        if (src.times_path) files.push_back({what + "'s times", *src.times_path});
+    };
+    add_source("the estimate", scenario.estimate);
+    if (scenario.ground_truth) add_source("the ground truth", *scenario.ground_truth);
+    for (std::size_t i = 0; i < scenario.map.size(); ++i) {
+        files.push_back({"map layer " + std::to_string(i + 1), scenario.map[i].path});
+    }
+    return files;
+}
+
 }  // namespace driftcorr::io

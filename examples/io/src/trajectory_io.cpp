@@ -98,6 +98,9 @@ void ParseNumbers(const DataLines& lines, std::size_t n, const std::string& path
 }
 
 void CheckIncreasing(const std::vector<double>& t_s, double t, const std::string& path, long line) {
+    if (const std::string unit = ImplausibleTimestamp(t); !unit.empty()) {
+        throw InputError(path, line, "", unit);
+    }
     if (!t_s.empty() && !(t > t_s.back())) {
         char msg[160];
         std::snprintf(msg, sizeof(msg), "timestamp %.9g does not increase (previous %.9g)", t,
@@ -465,7 +468,7 @@ void CheckWritable(const std::string& path, const Trajectory& traj) {
 void WriteTum(const std::string& path, const Trajectory& traj) {
     CheckWritable(path, traj);
     AtomicFile file(path);
-    std::ofstream& out = file.stream();
+    std::ostream& out = file.stream();
     char buf[256];
     for (std::size_t i = 0; i < traj.size(); ++i) {
         const Eigen::Quaterniond q =

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 
 #include "parse_number.h"
 
@@ -16,6 +17,19 @@ TumLine Error(std::string message) {
 }
 
 }  // namespace
+
+std::string ImplausibleTimestamp(double t_s) {
+    const double a = std::abs(t_s);
+    if (a < 1e10) return "";
+    const char* unit = a < 1e13 ? "milliseconds" : a < 1e16 ? "microseconds" : "nanoseconds";
+    const char* divisor = a < 1e13 ? "1e3" : a < 1e16 ? "1e6" : "1e9";
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "timestamp %.6g looks like %s (as seconds it is past the year 2286): "
+                  "timestamps are seconds; divide them by %s",
+                  t_s, unit, divisor);
+    return buf;
+}
 
 TumLine ParseTumLine(std::string_view line) {
     line = internal::Trim(line);

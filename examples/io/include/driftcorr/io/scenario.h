@@ -80,6 +80,16 @@ struct Scenario {
 /// the map readers do).
 Scenario LoadScenario(const std::string& path);
 
+/// A file a run reads, with what it is for messages ("the estimate", "map layer 2").
+struct InputFile {
+    std::string what;
+    std::string path;
+};
+
+/// Every file a correction of `scenario` reads: scenario.yaml (unless built in memory), the
+/// estimate and the ground truth with their times files, and each map layer.
+std::vector<InputFile> InputFiles(const Scenario& scenario);
+
 std::string ToString(ScenarioMode mode);
 std::string ToString(MapFormat format);
 std::string ToString(TrajectoryFormat format);

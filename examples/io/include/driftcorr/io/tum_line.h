@@ -20,6 +20,12 @@ struct TumLine {
 /// number, NaN/inf, a zero-norm quaternion. Same rules as ReadTum, per line.
 TumLine ParseTumLine(std::string_view line);
 
+/// Timestamps are seconds. Empty when |t_s| is below 1e10 s (the year 2286 as Unix time);
+/// otherwise what it most likely is, for a message: "looks like nanoseconds (1.6e+18 s is past
+/// the year 2286): timestamps are seconds; divide by 1e9". Milliseconds (up to 1e13),
+/// microseconds (up to 1e16) and nanoseconds (beyond) are told apart by magnitude.
+std::string ImplausibleTimestamp(double t_s);
+
 /// Formats a pose as WriteTum does (timestamps and positions with 6 decimals, the quaternion with
 /// 9: the characters printf's %.6f and %.9f give), with a trailing newline.
 std::string FormatTumLine(double t_s, const Eigen::Vector3d& p, const Eigen::Quaterniond& q);
