@@ -128,6 +128,54 @@ INSTANTIATE_TEST_SUITE_P(
                       KittiCase{"kitti00_orb2_longruidong", 5.42, 0.0, true}),
     [](const auto& p) { return std::string(p.param.folder); });
 
+// Do no harm: an input the map cannot tell wrong comes back as it was. On the generator's map the
+// ground truth drives 1.5 m right of the centre line, so a correction of the true trajectory lands
+// about 1.9 m from it (its ATE); the true trajectory lies inside the correction's 95 % region at
+// most poses, and is kept. The same drive with its drift is corrected.
+TEST(DoNoHarm, AnInputTheMapCannotTellWrongIsKept) {
+    const std::string dir = Generate("do_no_harm", "--seed 1 --duration-s 120");
+    fs::copy_file(dir + "/ground_truth.tum", dir + "/estimate.tum",
+                  fs::copy_options::overwrite_existing);
+    const pipeline::CorrectionRun run = pipeline::RunCorrection(dir, pipeline::PipelineConfig{});
+    ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
+    ASSERT_TRUE(run.before && run.after);
+    EXPECT_TRUE(run.result.input_kept)
+        << run.result.agreement_inside << " of " << run.result.agreement_poses << " inside";
+    EXPECT_EQ(run.after->ate_m, run.before->ate_m);
+    EXPECT_LT(run.after->ate_m, 1e-3);
+
+    pipeline::PipelineConfig off;
+    off.corrector.keep_agreeing_input = false;
+    const pipeline::CorrectionRun moved = pipeline::RunCorrection(dir, off);
+    ASSERT_TRUE(moved.after);
+    EXPECT_FALSE(moved.result.input_kept);
+    EXPECT_GT(moved.after->ate_m, 1.0) << "the correction must move the input for the test to mean "
+                                          "anything";
+    EXPECT_EQ(moved.result.agreement_inside, run.result.agreement_inside);
+}
+
+TEST(DoNoHarm, ADriftingInputIsCorrected) {
+    const std::string dir = Generate("do_no_harm_drift", "--seed 1 --duration-s 120");
+    const pipeline::CorrectionRun run = pipeline::RunCorrection(dir, pipeline::PipelineConfig{});
+    ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
+    ASSERT_TRUE(run.before && run.after);
+    EXPECT_FALSE(run.result.input_kept);
+    EXPECT_GT(run.result.agreement_poses, 1000u);
+    EXPECT_LT(double(run.result.agreement_inside), 0.5 * double(run.result.agreement_poses));
+    EXPECT_LT(run.after->ate_m, 0.5 * run.before->ate_m);
+}
+
+// The accurate LiDAR odometry of KITTI 07 (0.57 m ATE) comes back as it was.
+TEST(DoNoHarm, AccurateLidarOdometryComesBackAsItWas) {
+    const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_imls_aloam_fork";
+    if (!fs::exists(dir + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << dir;
+    const pipeline::CorrectionRun run = pipeline::RunCorrection(dir, pipeline::PipelineConfig{});
+    ASSERT_TRUE(run.before && run.after);
+    EXPECT_TRUE(run.result.input_kept);
+    EXPECT_LE(run.after->ate_m, run.before->ate_m + 0.3);
+    EXPECT_EQ(run.verdict.level, VerdictLevel::kOk);
+}
+
 // The same input gives the same bits: kitti05 cvo's final solve needs Ipopt, whose result hangs
 // on MUMPS's fill-reducing ordering. With METIS (MUMPS's automatic choice) the two runs below
 // differed in all 2760 poses, three tries out of three.

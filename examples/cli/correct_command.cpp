@@ -294,6 +294,15 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                 run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
                 r.refine_s, PeakMemoryMb());
     if (run.anchor_fit) PrintAnchorFit(out, run);
+    if (r.agreement_poses > 0) {
+        std::fprintf(out,
+                     "input      inside the correction's 95 %% region at %.1f %% of %zu poses "
+                     "(%s %.1f %%): %s\n",
+                     100.0 * double(r.agreement_inside) / double(r.agreement_poses),
+                     r.agreement_poses, r.input_kept ? "at least" : "below",
+                     100.0 * r.agreement_threshold,
+                     r.input_kept ? "the map cannot tell it wrong; written unchanged" : "corrected");
+    }
     if (run.before) PrintMetricsRow(out, "estimate", *run.before, indoor);
     if (run.after) PrintMetricsRow(out, "corrected", *run.after, indoor);
     PrintVerdict(out, run.verdict);
@@ -533,12 +542,6 @@ pipeline::PipelineConfig LoadConfig(const Args& a) {
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
     cfg.solver = a.solver == "paper" ? pipeline::Solver::kPaper : pipeline::Solver::kDriftcorr;
-    // The per-pose covariance feeds --covariance and the GeoJSON's sigmas only: without either,
-    // it is not computed (about a tenth of the correction stage on a KITTI drive).
-    if (a.covariance.empty() && a.geojson.empty()) {
-        cfg.corrector.compute_covariance = false;
-        cfg.indoor_corrector.compute_covariance = false;
-    }
     return cfg;
 }
 

@@ -374,10 +374,64 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     return std::move(*best);
 }
 
+namespace {
+
+// The 95 % quantiles of the chi-square distribution with 2 degrees of freedom (-2 ln 0.05), of
+// the standard normal (two-sided) and the one-sided 95 % quantile of the standard normal.
+constexpr double kChi2TwoDof95 = 5.991464547107979;
+constexpr double kNormal95 = 1.959963984540054;
+constexpr double kNormalOneSided95 = 1.6448536269514722;
+constexpr double kRegionLevel = 0.95;
+
+// The least share of poses inside the 95 % region that does not reject "the input is as likely
+// as the truth" (a one-sided binomial test at 5 %, normal approximation): the poses are not
+// independent, the map's error holding along a street, so the sample is the path's number of
+// map-offset correlation lengths (CovarianceConfig::map_offset_correlation_m), at least one.
+double AgreementThreshold(const PlanarTrajectory& estimate, const CorrectorConfig& cfg) {
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < estimate.size(); ++i) {
+        path_m += (estimate.p_en[i] - estimate.p_en[i - 1]).norm();
+    }
+    const double n = std::max(1.0, path_m / cfg.covariance.map_offset_correlation_m);
+    return kRegionLevel - kNormalOneSided95 * std::sqrt(kRegionLevel * (1.0 - kRegionLevel) / n);
+}
+
+// Do no harm: counts the poses whose input lies inside the correction's 95 % region and keeps
+// the input unless they are significantly fewer than the region's own share. Pose 0 (the known
+// start) and poses without a positive-definite covariance are not counted.
+void KeepAgreeingInput(const PlanarTrajectory& estimate, const CorrectorConfig& cfg,
+                       CorrectionResult& result) {
+    if (!Usable(result.status) || result.covariance.status != CovarianceStatus::kOk) return;
+    const std::vector<PoseCovariance>& cov = result.covariance.poses;
+    const PlanarTrajectory& c = result.corrected;
+    for (std::size_t i = 1; i < cov.size() && i < estimate.size() && i < c.size(); ++i) {
+        const Eigen::Matrix2d& s = cov[i].xy_m2;
+        if (!(s(0, 0) > 0.0 && s.determinant() > 0.0)) continue;
+        const Eigen::Vector2d d = estimate.p_en[i] - c.p_en[i];
+        bool inside = d.dot(s.inverse() * d) <= kChi2TwoDof95;
+        if (cov[i].z_m2 > 0.0 && i < estimate.up_m.size() && i < c.up_m.size()) {
+            inside = inside && std::abs(estimate.up_m[i] - c.up_m[i]) <=
+                                   kNormal95 * std::sqrt(cov[i].z_m2);
+        }
+        ++result.agreement_poses;
+        result.agreement_inside += inside ? 1 : 0;
+    }
+    result.agreement_threshold = AgreementThreshold(estimate, cfg);
+    if (!cfg.keep_agreeing_input || result.agreement_poses == 0) return;
+    const double share = double(result.agreement_inside) / double(result.agreement_poses);
+    if (share < result.agreement_threshold) return;
+    result.input_kept = true;
+    result.corrected = estimate;
+    result.scale_min = result.scale_max = 1.0;
+}
+
+}  // namespace
+
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
     CorrectionResult result;
     CorrectFromStarts(estimate, field, cfg, result, progress);
+    KeepAgreeingInput(estimate, cfg, result);
     DiagnoseCorrection(estimate, field, cfg, result);
     return result;
 }

@@ -72,6 +72,18 @@ struct CorrectionResult {
     /// config.compute_covariance and the correction is usable.
     CovarianceResult covariance;
     double covariance_s = 0.0;  ///< wall time of the covariance [s]
+    /// How the input lies in the correction's uncertainty (CorrectorConfig::keep_agreeing_input,
+    /// corrector.h): of the poses with a covariance, how many have the input inside the
+    /// correction's 95 % region (horizontally, and within the 95 % interval of the height where
+    /// the covariance has one). 0 of 0 when it was not computed.
+    std::size_t agreement_poses = 0, agreement_inside = 0;
+    /// The least share inside that keeps the input: 95 % less the one-sided 5 % margin of a
+    /// binomial share over the path's number of independent stretches (corrector.cpp).
+    double agreement_threshold = 0.0;
+    /// The input itself was kept: `corrected` is the estimate as handed in, since the share of
+    /// its poses inside the correction's 95 % region is not significantly below 95 % (the map
+    /// cannot tell it wrong).
+    bool input_kept = false;
     /// Degenerate input or outcome worth a user's attention, one sentence each (the map covers
     /// none or little of the drive, the estimate does not move, the scale hit its bound, steps
     /// treated as discontinuities). The correction may still be usable.

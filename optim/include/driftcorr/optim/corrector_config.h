@@ -79,6 +79,11 @@ struct CorrectorConfig {
     /// 15-20 ms, about 2 % of the correction.
     bool compute_covariance = true;
     CovarianceConfig covariance;
+    /// Do no harm: when the share of the input's poses inside the correction's own 95 % region
+    /// (its covariance) is not significantly below 95 % (one-sided, 5 %, over the path's number
+    /// of map-offset correlation lengths), what the map says cannot tell the input wrong, and the
+    /// input itself is the result (CorrectionResult::input_kept). Needs compute_covariance.
+    bool keep_agreeing_input = true;
 
     /// The first value kCorrectorParams or a rule between its values does not allow (model and
     /// covariance are not looked at).
@@ -131,6 +136,9 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
     {"refine_max_cpu_time_s",
      Field<&CorrectorConfig::refine_ipopt, &IpoptOptions::max_cpu_time_s>(), kPositive,
      "Ipopt time limit of the final solve"},
+    {"keep_agreeing_input", Field<&CorrectorConfig::keep_agreeing_input>(), kNoRange,
+     "the input is the result when its share of poses inside the correction's 95 % region is "
+     "not significantly below 95 % (needs compute_covariance)"},
     {"compute_covariance", Field<&CorrectorConfig::compute_covariance>(), kNoRange,
      "per-pose covariance of the corrected trajectory"},
 };
