@@ -312,6 +312,37 @@ TEST_F(CliOutputs, SigtermEndsTheStreamWithItsSummaryAndExit143) {
     }
 }
 
+TEST_F(CliOutputs, UnboundedOrMalformedInputsAreRefusedNamingTheFile) {
+    const std::string out = (dir_ / "out" / "c.tum").string();
+    struct Case {
+        std::string config;    ///< --config, or "" for none
+        std::string expected;  ///< in the message
+    };
+    fs::create_directories(dir_ / "config_folder");
+    WriteFile(dir_ / "nested.yaml", "model: " + std::string(100000, '[') + "\n");
+    WriteFile(dir_ / "two.yaml", "model: {map_weight: 0.8}\n---\nmodel: {map_weight: 0.1}\n");
+    WriteFile(dir_ / "big.yaml", "# " + std::string(5u << 20, 'x') + "\n");
+    const std::vector<Case> cases = {
+        {(dir_ / "config_folder").string(), "config_folder: is a folder, not a file"},
+        {(dir_ / "nested.yaml").string(), "nested too deeply"},
+        {(dir_ / "two.yaml").string(), "two.yaml:2: a second YAML document"},
+        {(dir_ / "big.yaml").string(), "big.yaml:1: line longer than 1 MiB"},
+    };
+    for (const Case& c : cases) {
+        const Shell r = Correct({"-o", out, "--config", c.config});
+        EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+        EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+    }
+    // An estimate that never ends is refused at its first 64 KiB line, not read into memory.
+    fs::remove(scenario_ / "estimate.tum");
+    fs::create_symlink("/dev/zero", scenario_ / "estimate.tum");
+    const Shell r = Correct({"-o", out});
+    EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+    EXPECT_NE(r.err.find("estimate.tum:1: line longer than 64 KiB"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(CliVersion, PrintsTheVersion) {
     const fs::path dir = driftcorr::test::FreshProcessDir("test_cli_version");
     const Shell r = RunShell(Quote(kCli) + " --version", dir);

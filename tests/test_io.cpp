@@ -15,6 +15,7 @@
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/scenario.h"
+#include "driftcorr/io/text_file.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/atomic_file.h"
 
@@ -604,6 +605,34 @@ TEST(RealScenarioDetails, Kitti00UsesTimesFileAndHcuUsesCrsAnchor) {
     ASSERT_EQ(hcu.map.size(), 6u);
     EXPECT_EQ(hcu.map[1].role, LayerRole::kFloorplan);
     EXPECT_EQ(hcu.map[5].floor_z_m, 19.6);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bounded text files
+
+TEST(TextFile, SecondYamlDocumentIsFoundWithItsLine) {
+    EXPECT_EQ(SecondYamlDocumentLine("a: 1\nb: 2\n"), std::nullopt);
+    EXPECT_EQ(SecondYamlDocumentLine("---\na: 1\n...\n"), std::nullopt);
+    EXPECT_EQ(SecondYamlDocumentLine("# c\n---\na: 1\n"), std::nullopt);
+    EXPECT_EQ(SecondYamlDocumentLine("a: 1\n---\nb: 2\n"), 2);
+    EXPECT_EQ(SecondYamlDocumentLine("---\na: 1\n--- \nb: 2\n"), 3);
+    EXPECT_EQ(SecondYamlDocumentLine("a: 1\n...\nb: 2\n"), 3);
+    EXPECT_EQ(SecondYamlDocumentLine("a: \"---\"\nb: ---x\n"), std::nullopt);
+}
+
+TEST(TextFile, ReadsWithinItsBoundsAndNamesTheLineBeyond) {
+    const fs::path dir = TestDir();
+    WriteText(dir / "ok.txt", "one\ntwo\n");
+    EXPECT_EQ(ReadTextFile((dir / "ok.txt").string(), {100, 10, "a test file"}), "one\ntwo\n");
+    WriteText(dir / "long.txt", "one\n" + std::string(11, 'x') + "\n");
+    try {
+        ReadTextFile((dir / "long.txt").string(), {100, 10, "a test file"});
+        ADD_FAILURE() << "no exception";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.line(), 2);
+    }
+    EXPECT_THROW(ReadTextFile((dir / "ok.txt").string(), {5, 10, "a test file"}), InputError);
+    EXPECT_THROW(ReadTextFile(dir.string(), {100, 10, "a test file"}), InputError);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,4 +1,5 @@
 #include "driftcorr/io/scenario.h"
+#include "driftcorr/io/text_file.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -186,16 +187,15 @@ std::string ResolveYamlPath(const std::string& path) {
 }
 
 YAML::Node ParseYamlFile(const std::string& file) {
-    std::error_code ec;
-    if (fs::is_directory(file, ec)) throw InputError(file, 0, "", "is a folder, not a file");
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(file, 0, "", "cannot open file");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw InputError(file, 0, "", "read error");
+    const std::string text = ReadTextFile(file, kScenarioLimits);
+    if (const std::optional<long> line = SecondYamlDocumentLine(text)) {
+        throw InputError(file, *line, "", "a second YAML document ('---'); the file holds one");
+    }
     try {
         return YAML::Load(text);
     } catch (const YAML::Exception& e) {
-        throw InputError(file, e.mark.line >= 0 ? e.mark.line + 1 : 0, "", "YAML error: " + e.msg);
+        throw InputError(file, e.mark.line >= 0 ? e.mark.line + 1 : 0, "",
+                         "YAML error: " + YamlParserMessage(e.msg));
     }
 }
 

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/io/text_file.h"
 #include "driftcorr/io/tum_line.h"
 #include "driftcorr/mapping/atomic_file.h"
 #include "parse_number.h"
@@ -23,17 +24,7 @@
 namespace driftcorr::io {
 namespace {
 
-std::string ReadWholeFile(const std::string& path) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) {
-        throw InputError(path, 0, "", "is a folder, expected a trajectory file");
-    }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, 0, "", "cannot open file");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw InputError(path, 0, "", "read error");
-    return text;
-}
+std::string ReadWholeFile(const std::string& path) { return ReadTextFile(path, kTrajectoryLimits); }
 
 /// Walks the data lines of a text buffer, skipping blank lines and lines starting with '#'.
 /// The last line needs no newline.

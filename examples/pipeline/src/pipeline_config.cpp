@@ -4,10 +4,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/io/text_file.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace driftcorr::pipeline {
@@ -214,13 +218,20 @@ std::string ParameterReference(const PipelineConfig& config) {
 
 PipelineConfig LoadPipelineConfig(const std::string& path) {
     Reader r{path, {}};
+    std::error_code ec;
+    if (!std::filesystem::is_directory(path, ec) && !std::ifstream(path)) {
+        throw InputError(path, 0, "", "cannot open the parameter file");
+    }
+    const std::string text = io::ReadTextFile(path, io::kParameterLimits);
+    if (const std::optional<long> line = io::SecondYamlDocumentLine(text)) {
+        throw InputError(path, *line, "", "a second YAML document ('---'); the file holds one");
+    }
     YAML::Node root;
     try {
-        root = YAML::LoadFile(path);
-    } catch (const YAML::BadFile&) {
-        throw InputError(path, 0, "", "cannot open the parameter file");
+        root = YAML::Load(text);
     } catch (const YAML::ParserException& e) {
-        throw InputError(path, e.mark.line + 1, "", "YAML syntax error: " + e.msg);
+        throw InputError(path, e.mark.line + 1, "",
+                         "YAML syntax error: " + io::YamlParserMessage(e.msg));
     }
     try {
         return ParseConfig(r, root);
