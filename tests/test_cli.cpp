@@ -1095,6 +1095,15 @@ protected:
     }
 };
 
+TEST_F(CliOnFailure, EvalExitsThreeWhenTheVerdictFailed) {
+    const CaseDirs c = WrongAnchor("EvalVerdictFailed");
+    const RunResult r = RunProgram(
+        kCli, {"eval", c.scenario.string(), "--methods", "estimate,driftcorr", "--quiet"},
+        c.out_dir.parent_path());
+    EXPECT_EQ(r.exit_code, kExitSolver) << r.err;
+    EXPECT_NE(r.err.find("verdict is failed on 1 of 1"), std::string::npos) << r.err;
+}
+
 TEST_F(CliOnFailure, RefuseWritesNothing) {
     const CaseDirs c = WrongAnchor("OnFailureRefuse");
     const RunResult r = RunProgram(kCli, Correct(c), c.out_dir.parent_path());

@@ -303,7 +303,11 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                      100.0 * r.agreement_threshold,
                      r.input_kept ? "the map cannot tell it wrong; written unchanged" : "corrected");
     }
-    if (run.before) PrintMetricsRow(out, "estimate", *run.before, indoor);
+    if (run.before) {
+        std::fprintf(out, "errors     against the ground truth, horizontal (East, North; the height "
+                          "is not counted), no re-alignment:\n");
+        PrintMetricsRow(out, "estimate", *run.before, indoor);
+    }
     if (run.after) PrintMetricsRow(out, "corrected", *run.after, indoor);
     PrintVerdict(out, run.verdict);
     if (!written.empty()) std::fprintf(out, "wrote      %s\n", written == "-" ? "standard output" : written.c_str());

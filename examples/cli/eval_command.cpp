@@ -3,8 +3,8 @@
 // a table on stdout, a report folder on request.
 //
 // Exit codes: 0 every scenario and method ran, 1 usage error, 2 at least one scenario (or a
-// method on it) failed (the others still ran and are reported), 4 internal error (the report
-// could not be written).
+// method on it) failed (the others still ran and are reported), 3 every one ran but driftcorr's
+// verdict is failed on at least one, 4 internal error (the report could not be written).
 #include <unistd.h>
 
 #include <algorithm>
@@ -36,7 +36,8 @@ const char* kEvalUsage =
     "driftcorr, online (default: all four).\n"
     "-o also writes report_dir/summary.md, results.json, <scenario>_map.svg and\n"
     "<scenario>_error.svg. A scenario that fails is reported and does not stop the others.\n"
-    "Exit codes: 0 all ran, 1 usage, 2 at least one scenario or method failed, 4 internal.\n";
+    "Exit codes: 0 all ran, 1 usage, 2 at least one scenario or method failed, 3 all ran but\n"
+    "driftcorr's verdict is failed on at least one, 4 internal.\n";
 
 // "estimate,paper,driftcorr,online": eval::DefaultMethods() by name.
 std::string DefaultMethodList() {
@@ -172,7 +173,22 @@ int RunEvalCommand(int argc, char** argv) {
                          [](const eval::ScenarioEvaluation& e) { return e.AnyFailed(); })),
                      evals.size());
     }
-    return any_failed ? kExitFailed : kExitOk;
+    if (any_failed) return kExitFailed;
+    // As `correct` does: a verdict `failed` is a result the program cannot vouch for.
+    const auto verdict_failed = [](const eval::ScenarioEvaluation& e) {
+        return std::any_of(e.methods.begin(), e.methods.end(), [](const eval::MethodResult& m) {
+            return m.method == eval::Method::kDriftcorr && m.verdict &&
+                   m.verdict->level == VerdictLevel::kFailed;
+        });
+    };
+    const std::size_t judged_failed =
+        static_cast<std::size_t>(std::count_if(evals.begin(), evals.end(), verdict_failed));
+    if (judged_failed > 0) {
+        std::fprintf(stderr, "driftcorr: driftcorr's verdict is failed on %zu of %zu scenario(s)\n",
+                     judged_failed, evals.size());
+        return kExitSolver;
+    }
+    return kExitOk;
 }
 
 }  // namespace driftcorr::cli
