@@ -165,6 +165,35 @@ TEST(DoNoHarm, ADriftingInputIsCorrected) {
     EXPECT_LT(run.after->ate_m, 0.5 * run.before->ate_m);
 }
 
+// The heading-rate bias as a freedom decided per input: kept where the odometry's heading
+// drifts (the generator's heading-rate bias random walk), left out where it does not; the result
+// is then the correction without it, to the bit.
+TEST(DecidedFreedoms, TheHeadingBiasIsKeptOnlyWhereTheHeadingDrifts) {
+    pipeline::PipelineConfig decide;
+    decide.corrector.decide_heading_bias = true;
+    const std::string drifting =
+        Generate("bias_drifting", "--seed 3 --duration-s 300 --heading-bias-deg-per-sqrt-s 0.05");
+    const pipeline::CorrectionRun a = pipeline::RunCorrection(drifting, decide);
+    ASSERT_TRUE(a.result.heading_bias.has_value());
+    EXPECT_TRUE(a.result.heading_bias->kept)
+        << a.result.heading_bias->nll_with << " + " << a.result.heading_bias->price << " vs "
+        << a.result.heading_bias->nll_without;
+
+    const std::string steady =
+        Generate("bias_steady", "--seed 3 --duration-s 300 --heading-bias-deg-per-sqrt-s 0");
+    const pipeline::CorrectionRun b = pipeline::RunCorrection(steady, decide);
+    ASSERT_TRUE(b.result.heading_bias.has_value());
+    EXPECT_FALSE(b.result.heading_bias->kept)
+        << b.result.heading_bias->nll_with << " + " << b.result.heading_bias->price << " vs "
+        << b.result.heading_bias->nll_without;
+    pipeline::PipelineConfig off;
+    off.corrector.model.heading_bias_segment_s = 0.0;
+    const pipeline::CorrectionRun c = pipeline::RunCorrection(steady, off);
+    ASSERT_TRUE(b.after && c.after);
+    EXPECT_EQ(b.after->ate_m, c.after->ate_m);
+    EXPECT_FALSE(c.result.heading_bias.has_value());
+}
+
 // The accurate LiDAR odometry of KITTI 07 (0.57 m ATE) comes back as it was.
 TEST(DoNoHarm, AccurateLidarOdometryComesBackAsItWas) {
     const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_imls_aloam_fork";

@@ -286,6 +286,13 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                     " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
         PrintStarts(out, r);
+        if (r.heading_bias) {
+            std::fprintf(out,
+                         "freedoms   heading-rate bias %s: NLL %.1f with it, %.1f without, price "
+                         "of its unknowns %.1f\n",
+                         r.heading_bias->kept ? "kept" : "left out", r.heading_bias->nll_with,
+                         r.heading_bias->nll_without, r.heading_bias->price);
+        }
         PrintFloorHypotheses(out, r);
     }
     std::fprintf(out, "time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"

@@ -425,12 +425,45 @@ void KeepAgreeingInput(const PlanarTrajectory& estimate, const CorrectorConfig& 
     result.scale_min = result.scale_max = 1.0;
 }
 
+// The heading-rate bias is a freedom of the model, kept only where the data support it: the
+// correction is run again without it, and the bias stays when its NLL is lower by more than the
+// Bayesian information criterion's price of its unknowns, k / 2 ln n (k bias segments, n poses).
+void DecideHeadingBias(const PlanarTrajectory& estimate, const TraversableField* field,
+                       const CorrectorConfig& cfg, CorrectionResult& result) {
+    const double segment_s = cfg.model.heading_bias_segment_s;
+    if (!cfg.decide_heading_bias || segment_s <= 0.0 || !Usable(result.status) ||
+        estimate.size() < 2) {
+        return;
+    }
+    CorrectorConfig off = cfg;
+    off.model.heading_bias_segment_s = 0.0;
+    CorrectionResult without;
+    CorrectFromStarts(estimate, field, off, without, {});
+    const double duration_s = estimate.t_s.back() - estimate.t_s.front();
+    const double k = std::floor(duration_s / segment_s) + 1.0;
+    HeadingBiasDecision d;
+    d.nll_with = result.nll;
+    d.nll_without = Usable(without.status) ? without.nll : std::numeric_limits<double>::quiet_NaN();
+    d.price = 0.5 * k * std::log(double(estimate.size()));
+    d.kept = !Usable(without.status) || d.nll_with + d.price < d.nll_without;
+    // The statistics count both corrections (as CorrectionResult's do over start scales).
+    const CorrectionResult& other = d.kept ? without : result;
+    const std::size_t windows = other.windows;
+    const int iterations = other.iterations;
+    const double incremental_s = other.incremental_s, refine_s = other.refine_s;
+    if (!d.kept) result = std::move(without);
+    result.windows += windows, result.iterations += iterations;
+    result.incremental_s += incremental_s, result.refine_s += refine_s;
+    result.heading_bias = d;
+}
+
 }  // namespace
 
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
     CorrectionResult result;
     CorrectFromStarts(estimate, field, cfg, result, progress);
+    DecideHeadingBias(estimate, field, cfg, result);
     KeepAgreeingInput(estimate, cfg, result);
     DiagnoseCorrection(estimate, field, cfg, result);
     return result;

@@ -3,6 +3,7 @@
 // optim/corrector.h; the paper's baseline, optim/paper_solver.h), and how it reports progress.
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,13 @@ struct CorrectionProgress {
     std::size_t poses_total = 0;
 };
 using ProgressCallback = std::function<void(const CorrectionProgress&)>;
+
+/// Whether the heading-rate bias was kept (CorrectorConfig::decide_heading_bias): the NLL of the
+/// correction with and without it and the price of its unknowns, k / 2 ln n.
+struct HeadingBiasDecision {
+    double nll_with = 0.0, nll_without = 0.0, price = 0.0;
+    bool kept = true;
+};
 
 struct CorrectionResult {
     SolveStatus status = SolveStatus::kFailed;
@@ -84,6 +92,8 @@ struct CorrectionResult {
     /// its poses inside the correction's 95 % region is not significantly below 95 % (the map
     /// cannot tell it wrong).
     bool input_kept = false;
+    /// Set when the heading-rate bias was decided on (corrector.cpp DecideHeadingBias).
+    std::optional<HeadingBiasDecision> heading_bias;
     /// Degenerate input or outcome worth a user's attention, one sentence each (the map covers
     /// none or little of the drive, the estimate does not move, the scale hit its bound, steps
     /// treated as discontinuities). The correction may still be usable.
