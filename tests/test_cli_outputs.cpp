@@ -343,6 +343,20 @@ TEST_F(CliOutputs, UnboundedOrMalformedInputsAreRefusedNamingTheFile) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(CliOutputs, AWayWithAMissingNodeIsSplitAndSaidSo) {
+    // The first way of the generated map gets a reference to a node the file does not hold.
+    std::string map = ReadFile(scenario_ / "map.osm");
+    const std::size_t at = map.find("<nd ref=");
+    ASSERT_NE(at, std::string::npos);
+    map.insert(at, "<nd ref=\"987654321\"/>\n    ");
+    WriteFile(scenario_ / "map.osm", map);
+    const Shell r = Correct({"-o", (dir_ / "out" / "c.tum").string()});
+    EXPECT_EQ(r.exit_code, kExitOk) << r.err;
+    EXPECT_NE(r.err.find("warning: map: 1 node reference(s) of highway ways have no <node>"),
+              std::string::npos)
+        << r.err;
+}
+
 TEST(CliVersion, PrintsTheVersion) {
     const fs::path dir = driftcorr::test::FreshProcessDir("test_cli_version");
     const Shell r = RunShell(Quote(kCli) + " --version", dir);

@@ -169,24 +169,31 @@ TEST(OsmReader, NodeTaggedHighwayFeaturesAreNotWays) {
     EXPECT_EQ(roads.report.nodes_total, 3u);
 }
 
-TEST(OsmReader, MissingNodeRefsAreCountedAndShortWaysDropped) {
+TEST(OsmReader, MissingNodeRefsSplitTheWayAndShortPiecesAreDropped) {
     const std::string path = WriteTempFile("missing_refs.osm", Osm(R"(
   <node id="1" lat="48.1" lon="8.1"/>
   <node id="2" lat="48.2" lon="8.2"/>
-  <way id="10"><nd ref="1"/><nd ref="99"/><nd ref="2"/><tag k="highway" v="primary"/></way>
+  <node id="3" lat="48.3" lon="8.3"/>
+  <node id="4" lat="48.4" lon="8.4"/>
+  <way id="10"><nd ref="1"/><nd ref="2"/><nd ref="99"/><nd ref="3"/><nd ref="4"/><tag k="highway" v="primary"/></way>
   <way id="11"><nd ref="1"/><nd ref="98"/><tag k="highway" v="primary"/></way>
   <way id="12"><nd ref="97"/><nd ref="96"/><tag k="building" v="yes"/></way>
+  <way id="13"><nd ref="1"/><nd ref="95"/><nd ref="4"/><tag k="highway" v="primary"/></way>
 )"));
     const OsmRoads roads = ReadOsmRoads(path);
-    ASSERT_EQ(roads.ways.size(), 1u);
+    // Way 10 becomes 1-2 and 3-4: no road is drawn from 2 to 3, where the file has no node.
+    ASSERT_EQ(roads.ways.size(), 2u);
     EXPECT_EQ(roads.ways[0].id, 10);
+    EXPECT_EQ(roads.ways[1].id, 10);
     ASSERT_EQ(roads.ways[0].nodes.size(), 2u);
-    EXPECT_DOUBLE_EQ(roads.ways[0].nodes[0].lat_deg, 48.1);
+    ASSERT_EQ(roads.ways[1].nodes.size(), 2u);
     EXPECT_DOUBLE_EQ(roads.ways[0].nodes[1].lat_deg, 48.2);
-    EXPECT_EQ(roads.report.ways_total, 3u);
-    EXPECT_EQ(roads.report.ways_highway, 1u);
-    EXPECT_EQ(roads.report.missing_node_refs, 2u);  // 99 and 98; refs of non-highway ways ignored
-    EXPECT_EQ(roads.report.ways_too_short, 1u);     // way 11 keeps a single node
+    EXPECT_DOUBLE_EQ(roads.ways[1].nodes[0].lat_deg, 48.3);
+    EXPECT_EQ(roads.report.ways_total, 4u);
+    EXPECT_EQ(roads.report.ways_highway, 2u);
+    EXPECT_EQ(roads.report.missing_node_refs, 3u);  // 99, 98, 95; refs of non-highway ways ignored
+    EXPECT_EQ(roads.report.ways_split, 1u);
+    EXPECT_EQ(roads.report.ways_too_short, 2u);  // 11 and 13 keep single nodes only
 }
 
 TEST(OsmReader, ResolvesNodesListedAfterTheirWays) {

@@ -62,20 +62,28 @@ OsmRoads ResolveWays(std::vector<RawWay>& highway_ways, const NodeIndex& nodes,
         way.width_m = raw.width_m;
         way.lanes = raw.lanes;
         way.is_area = raw.is_area;
-        way.nodes.reserve(raw.refs.size());
+        // A node the file does not hold (an extract cut at its edge) ends the piece before it:
+        // the way is split there, not joined across the gap by a road that may not exist.
+        std::vector<std::vector<GeoPoint>> pieces(1);
         for (const std::int64_t ref : raw.refs) {
             const auto it = nodes.find(ref);
             if (it == nodes.end()) {
                 ++roads.report.missing_node_refs;
+                if (!pieces.back().empty()) pieces.emplace_back();
                 continue;
             }
-            way.nodes.push_back(GeoPoint{it->second.lat_deg, it->second.lon_deg, 0.0});
+            pieces.back().push_back(GeoPoint{it->second.lat_deg, it->second.lon_deg, 0.0});
         }
-        if (way.nodes.size() < 2) {
-            ++roads.report.ways_too_short;
-            continue;
+        std::size_t kept = 0;
+        for (std::vector<GeoPoint>& piece : pieces) {
+            if (piece.size() < 2) continue;
+            OsmWay part = way;
+            part.nodes = std::move(piece);
+            roads.ways.push_back(std::move(part));
+            ++kept;
         }
-        roads.ways.push_back(std::move(way));
+        if (kept == 0) ++roads.report.ways_too_short;
+        if (kept > 1) roads.report.ways_split += kept - 1;
     }
     roads.report.ways_highway = roads.ways.size();
     return roads;

@@ -284,6 +284,7 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
                              const RoadClassConfig& config) {
     const auto table = config.Table();
     RoadNetwork net;
+    net.missing_node_refs = osm.report.missing_node_refs;
     for (const OsmWay& way : osm.ways) {
         if (way.is_area) { ++net.ways_area; continue; }
         auto it = table.find(way.highway);

@@ -53,6 +53,7 @@ RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world, const Roa
         }
         net.ways_excluded_by_class += part.ways_excluded_by_class;
         net.ways_area += part.ways_area;
+        net.missing_node_refs += part.missing_node_refs;
         for (auto& r : part.roads) net.roads.push_back(std::move(r));
     }
     return net;
@@ -495,6 +496,12 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor, WalkHeights(ps.estimate, config.indoor_field));
     if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
+    if (ps.network.missing_node_refs > 0) {
+        ps.scenario.warnings.push_back(
+            "map: " + std::to_string(ps.network.missing_node_refs) +
+            " node reference(s) of highway ways have no <node> in the file (an extract cut at "
+            "its edge?): those ways are split there, not joined across the gap");
+    }
     const bool beside = when == AnchorCheck::kBesideCorrectionIfAllowed &&
                         SecondThreadAllowed(MapThreads(sc, config));
     if (!ps.anchor_fit && !beside) ps.anchor_fit = CheckAnchor(ps, config);

@@ -20,9 +20,11 @@ struct OsmWay {
 struct OsmReadReport {
     std::size_t nodes_total = 0;        ///< <node> elements with valid coordinates
     std::size_t ways_total = 0;         ///< all <way> elements
-    std::size_t ways_highway = 0;       ///< ways with a highway tag, returned
-    std::size_t missing_node_refs = 0;  ///< <nd ref> (in highway ways) with no <node>, dropped
-    std::size_t ways_too_short = 0;     ///< highway ways with < 2 resolved nodes, dropped
+    std::size_t ways_highway = 0;       ///< highway ways returned (a split way counts per piece)
+    /// <nd ref> (in highway ways) with no <node>: the way is split there (not joined across)
+    std::size_t missing_node_refs = 0;
+    std::size_t ways_split = 0;       ///< extra pieces made by those splits (`ways` holds each)
+    std::size_t ways_too_short = 0;   ///< highway ways with no piece of >= 2 resolved nodes, dropped
 };
 
 struct OsmRoads {

@@ -56,6 +56,9 @@ struct RoadNetwork {
     std::vector<RoadPolyline> roads;
     std::size_t ways_excluded_by_class = 0;  ///< highway ways not in the profile
     std::size_t ways_area = 0;               ///< area=yes ways, skipped
+    /// Node references of highway ways the map file does not resolve (OsmReadReport): the ways
+    /// are split there.
+    std::size_t missing_node_refs = 0;
 
     Eigen::AlignedBox2d Bounds() const;
     double TotalLengthM() const;
