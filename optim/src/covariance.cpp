@@ -184,8 +184,25 @@ Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s,
 // that keep each pose's own block in the factor's pattern.
 SparseMatrix AssembleLower(const std::vector<LinearisedTerm>& terms, const Ordering& o,
                            const WindowProblem& p, const TrajectoryState& s) {
+    // Assembled in chunks of at most kChunk entries, each added to the sum: the entries of all
+    // terms at once (about 36 per term) would hold several kilobytes a pose at the peak.
+    constexpr std::size_t kChunk = std::size_t(1) << 20;
+    SparseMatrix h(o.size, o.size);
     std::vector<Eigen::Triplet<double, int>> triplets;
-    triplets.reserve(terms.size() * 10 + s.poses.size() * 10);
+    triplets.reserve(kChunk + kMaxBlockVars * kMaxBlockVars);
+    const auto flush = [&] {
+        SparseMatrix part(o.size, o.size);
+        part.setFromTriplets(triplets.begin(), triplets.end());
+        h = h.nonZeros() == 0 ? part : SparseMatrix(h + part);
+        triplets.clear();
+    };
+    for (std::size_t i = 1; i < s.poses.size(); ++i) {  // every pose's own block in the pattern
+        const int first = o.of_var[p.PoseVar(i, 0)], last = o.of_var[p.PoseVar(i, 3)];
+        for (int r = first; r <= last; ++r) {
+            for (int c = first; c <= r; ++c) triplets.emplace_back(r, c, 0.0);
+        }
+        if (triplets.size() >= kChunk) flush();
+    }
     for (const LinearisedTerm& t : terms) {
         if (!(t.information > 0.0)) continue;
         for (int a = 0; a < t.size; ++a) {
@@ -197,15 +214,9 @@ SparseMatrix AssembleLower(const std::vector<LinearisedTerm>& terms, const Order
                 triplets.emplace_back(ra, rb, t.information * t.jacobian[a] * t.jacobian[b]);
             }
         }
+        if (triplets.size() >= kChunk) flush();
     }
-    for (std::size_t i = 1; i < s.poses.size(); ++i) {
-        const int first = o.of_var[p.PoseVar(i, 0)], last = o.of_var[p.PoseVar(i, 3)];
-        for (int r = first; r <= last; ++r) {
-            for (int c = first; c <= r; ++c) triplets.emplace_back(r, c, 0.0);
-        }
-    }
-    SparseMatrix h(o.size, o.size);
-    h.setFromTriplets(triplets.begin(), triplets.end());
+    if (!triplets.empty()) flush();
     return h;
 }
 
