@@ -2,8 +2,8 @@
 //
 // Exit codes: 0 success, 1 usage error, 2 bad input (file, line, key named), 3 the solver did not
 // produce a usable correction (nothing written), 4 internal error.
-#include <csignal>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 
