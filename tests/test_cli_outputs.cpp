@@ -357,6 +357,22 @@ TEST_F(CliOutputs, AWayWithAMissingNodeIsSplitAndSaidSo) {
         << r.err;
 }
 
+TEST_F(CliOutputs, VerdictThresholdsAreParameters) {
+    // The generated drive accelerates and brakes gently: a platform held to 0.01 m/s^2 makes
+    // every change of speed an input jump, and the same correction degraded; a misspelt key is
+    // refused by name.
+    WriteFile(dir_ / "narrow.yaml", "verdict: {max_accel_mps2: 0.01}\n");
+    const Shell r = Correct({"-o", (dir_ / "out" / "c.tum").string(), "--config",
+                             (dir_ / "narrow.yaml").string()});
+    EXPECT_EQ(r.exit_code, kExitOk) << r.err;
+    EXPECT_NE(r.out.find("verdict    degraded"), std::string::npos) << r.out;
+    WriteFile(dir_ / "typo.yaml", "verdict: {scale_plausible_mni: 0.9}\n");
+    const Shell t = Correct({"-o", (dir_ / "out" / "d.tum").string(), "--config",
+                             (dir_ / "typo.yaml").string()});
+    EXPECT_EQ(t.exit_code, kExitBadInput) << t.err;
+    EXPECT_NE(t.err.find("verdict.scale_plausible_mni"), std::string::npos) << t.err;
+}
+
 TEST(CliVersion, PrintsTheVersion) {
     const fs::path dir = driftcorr::test::FreshProcessDir("test_cli_version");
     const Shell r = RunShell(Quote(kCli) + " --version", dir);

@@ -48,7 +48,7 @@ struct PipelineConfig {
     /// The anchor check and `yaw_deg: auto` (not read from the file; reach_m is the mode's
     /// map_giveup_m).
     AnchorFitConfig anchor_fit;
-    /// The verdict's thresholds (optim/verdict.h; not read from the file).
+    /// The verdict's thresholds (optim/verdict.h; params.yaml section `verdict`).
     VerdictConfig verdict;
 
     /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field.
@@ -80,12 +80,14 @@ void ForEachParamSection(Pipeline&& config, F&& f) {
       "indoor3d point-cloud / OctoMap maps (mapping/include/driftcorr/mapping/surface_field.h)");
     f("online", kOnlineParams, config.online,
       "driftcorr stream, eval's online method (optim/include/driftcorr/optim/online_corrector.h)");
+    f("verdict", kVerdictParams, config.verdict,
+      "the verdict's thresholds, every mode (optim/include/driftcorr/optim/verdict.h)");
 }
 
 /// Reads a params.yaml (sections `model`, `corrector`, `paper`, `roads`, `field`, `indoor_model`,
-/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`; their keys are the rows of the
-/// parameter tables, e.g. kModelParams). Unknown keys are errors (a misspelt parameter must not be
-/// ignored). Throws InputError naming the file, the line and the key as written
+/// `indoor_corrector`, `indoor_field`, `surface_field`, `online`, `verdict`; their keys are the
+/// rows of the parameter tables, e.g. kModelParams). Unknown keys are errors (a misspelt parameter
+/// must not be ignored). Throws InputError naming the file, the line and the key as written
 /// ("params.yaml:3: indoor_field.resolution_m: must be > 0 (got -1)"), one bad key at a time.
 PipelineConfig LoadPipelineConfig(const std::string& path);
 
