@@ -26,16 +26,8 @@ namespace fs = std::filesystem;
 const std::string kCli = DRIFTCORR_BINARY_DIR "/examples/driftcorr";
 constexpr int kExitOk = 0, kExitBadInput = 2;
 
-std::string ReadFile(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-void WriteFile(const fs::path& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << text;
-    if (!out) throw std::runtime_error("test setup: cannot write " + path.string());
-}
+using driftcorr::test::ReadFile;
+using driftcorr::test::WriteFile;
 
 std::string Quote(const std::string& s) {
     std::string out = "'";

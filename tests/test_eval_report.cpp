@@ -22,15 +22,8 @@ namespace fs = std::filesystem;
 
 const std::string kGenerator = DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_road_scenario";
 
-std::string ReadFile(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-void WriteFile(const fs::path& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << text;
-}
+using driftcorr::test::ReadFile;
+using driftcorr::test::WriteFile;
 
 class EvalReport : public ::testing::Test {
 protected:

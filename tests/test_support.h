@@ -5,6 +5,9 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <string>
 
 namespace driftcorr::test {
@@ -22,6 +25,19 @@ inline std::filesystem::path FreshProcessDir(const std::string& prefix) {
 inline std::string RoadGeneratorCommand(const std::filesystem::path& dir, const std::string& args) {
     return std::string(DRIFTCORR_BINARY_DIR) + "/datasets/driftcorr_make_road_scenario \"" +
            dir.string() + "\" " + args + " > /dev/null";
+}
+
+/// The whole content of `path` ("" when it cannot be read).
+inline std::string ReadFile(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// Writes `text` to `path`, replacing it; throws std::runtime_error when it cannot.
+inline void WriteFile(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) throw std::runtime_error("test setup: cannot write " + path.string());
 }
 
 /// `root`/`name`, emptied (not created).
