@@ -65,8 +65,8 @@ const char* kCorrectUsage =
     "  TUM may hold positions only (t x y z); CSV has a header (README: Trajectory formats).\n"
     "  Without orientations, or with --heading motion, the heading is the direction of motion.\n"
     "Several scenarios (or --manifest, one scenario path a line, or -o naming a folder): -o is\n"
-    "a folder that gets\n"
-    "<name>.tum per scenario (<name>: the scenario's folder, or its .yaml without extension);\n"
+    "a folder that gets <name>.tum per scenario (<name>: the scenario's folder, or its .yaml\n"
+    "without extension);\n"
     "-j N corrects N at a time (one process each); one line per scenario; a failing one does not\n"
     "stop the others.\n"
     "Every run ends with a verdict, judged without ground truth: ok, degraded (written, with the\n"
@@ -244,6 +244,27 @@ void PrintFloorHypotheses(std::FILE* out, const CorrectionResult& r) {
     }
 }
 
+// The model freedoms decided for this input (CorrectorConfig::decide_heading_bias).
+void PrintFreedoms(std::FILE* out, const CorrectionResult& r) {
+    if (!r.heading_bias) return;
+    std::fprintf(out,
+                 "freedoms   heading-rate bias %s: NLL %.1f with it, %.1f without, price of its "
+                 "unknowns %.1f\n",
+                 r.heading_bias->kept ? "kept" : "left out", r.heading_bias->nll_with,
+                 r.heading_bias->nll_without, r.heading_bias->price);
+}
+
+// How the input lies in the correction's uncertainty, and whether it was kept.
+void PrintAgreement(std::FILE* out, const CorrectionResult& r) {
+    if (r.agreement_poses == 0) return;
+    std::fprintf(out,
+                 "input      inside the correction's 95 %% region at %.1f %% of %zu poses "
+                 "(%s %.1f %%): %s\n",
+                 100.0 * double(r.agreement_inside) / double(r.agreement_poses), r.agreement_poses,
+                 r.input_kept ? "at least" : "below", 100.0 * r.agreement_threshold,
+                 r.input_kept ? "the map cannot tell it wrong; written unchanged" : "corrected");
+}
+
 void PrintVerdict(std::FILE* out, const Verdict& v) {
     std::fprintf(out, "verdict    %s", ToString(v.level).c_str());
     std::fprintf(out, " (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
@@ -286,13 +307,7 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                     " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
                     r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
         PrintStarts(out, r);
-        if (r.heading_bias) {
-            std::fprintf(out,
-                         "freedoms   heading-rate bias %s: NLL %.1f with it, %.1f without, price "
-                         "of its unknowns %.1f\n",
-                         r.heading_bias->kept ? "kept" : "left out", r.heading_bias->nll_with,
-                         r.heading_bias->nll_without, r.heading_bias->price);
-        }
+        PrintFreedoms(out, r);
         PrintFloorHypotheses(out, r);
     }
     std::fprintf(out, "time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
@@ -301,15 +316,7 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                 run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
                 r.refine_s, PeakMemoryMb());
     if (run.anchor_fit) PrintAnchorFit(out, run);
-    if (r.agreement_poses > 0) {
-        std::fprintf(out,
-                     "input      inside the correction's 95 %% region at %.1f %% of %zu poses "
-                     "(%s %.1f %%): %s\n",
-                     100.0 * double(r.agreement_inside) / double(r.agreement_poses),
-                     r.agreement_poses, r.input_kept ? "at least" : "below",
-                     100.0 * r.agreement_threshold,
-                     r.input_kept ? "the map cannot tell it wrong; written unchanged" : "corrected");
-    }
+    PrintAgreement(out, r);
     if (run.before) {
         std::fprintf(out, "errors     against the ground truth, horizontal (East, North; the height "
                           "is not counted), no re-alignment:\n");
