@@ -98,6 +98,24 @@ TEST_F(GeoJsonReaderTest, ReadsLinesPolygonsHolesAndCountsSkips) {
     EXPECT_NE(layer.report.Summary().find("null geometry: 1"), std::string::npos);
 }
 
+// A coordinate that is not a number is an error in the file naming the feature, not a geometry
+// dropped in silence (a corridor missing from the map would then be blamed on the anchor).
+TEST_F(GeoJsonReaderTest, ANonNumericCoordinateIsBadInputNamingTheFeature) {
+    const std::string features =
+        PolygonFeature("\"Corridor\"", Square(0, 0, 10, 10)) + ",\n" +
+        R"({"type": "Feature", "properties": {"Type": "Corridor"}, "geometry": {"type": "Polygon",
+            "coordinates": [[[0, 0], ["10", 0], [10, 10], [0, 0]]]}})";
+    const std::string path = Write("non_numeric.geojson", Collection(kCrs32632, features));
+    try {
+        (void)ReadGeoJson(path);
+        FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("features[1].geometry.coordinates"), std::string::npos) << what;
+        EXPECT_NE(what.find("not a number (\"10\")"), std::string::npos) << what;
+    }
+}
+
 TEST_F(GeoJsonReaderTest, BadInputNamesTheFile) {
     auto expect_error = [](const std::string& path, const std::string& fragment) {
         try {

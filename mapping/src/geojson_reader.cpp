@@ -20,9 +20,19 @@ long LineOfByte(const std::string& text, std::size_t byte) {
     return 1 + static_cast<long>(std::count(text.begin(), text.begin() + end, '\n'));
 }
 
-// A position array [x, y] or [x, y, z] -> (x, y); false if not two finite numbers.
+// A coordinate that is not a number (a quoted or null value): an error in the file, not a
+// degenerate geometry to skip. `value` is the JSON text of the coordinate.
+struct NonNumericCoordinate {
+    std::string value;
+};
+
+// A position array [x, y] or [x, y, z] -> (x, y); false if not two finite numbers. Throws
+// NonNumericCoordinate when x or y is present but not a number.
 bool ReadPosition(const Json& j, Eigen::Vector2d& out) {
-    if (!j.is_array() || j.size() < 2 || !j[0].is_number() || !j[1].is_number()) return false;
+    if (!j.is_array() || j.size() < 2) return false;
+    for (int k = 0; k < 2; ++k) {
+        if (!j[k].is_number()) throw NonNumericCoordinate{j[k].dump()};
+    }
     out = Eigen::Vector2d(j[0].get<double>(), j[1].get<double>());
     return std::isfinite(out.x()) && std::isfinite(out.y());
 }
@@ -182,8 +192,13 @@ GeoJsonLayer ParseGeoJsonUnchecked(const std::string& text, const std::string& p
     }
     layer.report.features = features->size();
     for (std::size_t i = 0; i < features->size(); ++i) {
-        const std::string reason = AddFeature((*features)[i], i, layer);
-        if (!reason.empty()) ++layer.report.skipped[reason];
+        try {
+            const std::string reason = AddFeature((*features)[i], i, layer);
+            if (!reason.empty()) ++layer.report.skipped[reason];
+        } catch (const NonNumericCoordinate& bad) {
+            throw InputError(path, 0, "features[" + std::to_string(i) + "].geometry.coordinates",
+                             "a coordinate is not a number (" + bad.value.substr(0, 40) + ")");
+        }
     }
     return layer;
 }
