@@ -194,6 +194,102 @@ TEST(DecidedFreedoms, TheHeadingBiasIsKeptOnlyWhereTheHeadingDrifts) {
     EXPECT_FALSE(c.result.heading_bias.has_value());
 }
 
+// KITTI 07's accurate LiDAR odometry with the street it drives along the longest removed from the
+// map (the stress generator's road_removed): the correction pulls the drive onto other streets
+// and explains the data worse than the input itself does, so the input comes back as it was,
+// degraded with that reason.
+TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
+    const std::string real = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_imls_aloam_fork";
+    if (!fs::exists(real + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << real;
+    const std::string out = TmpDir("road_removed");
+    const std::string command = std::string("\"") + DRIFTCORR_BINARY_DIR +
+                                "/datasets/driftcorr_make_stress_variants\" \"" + real + "\" \"" +
+                                out + "\" > \"" + out + ".log\" 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    const pipeline::CorrectionRun run =
+        pipeline::RunCorrection(out + "/road_removed", pipeline::PipelineConfig{});
+    ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
+    ASSERT_TRUE(run.before && run.after);
+    EXPECT_TRUE(run.result.input_nll_lower)
+        << run.result.input_nll << " against " << run.result.nll;
+    EXPECT_TRUE(run.result.input_kept);
+    EXPECT_EQ(run.after->ate_m, run.before->ate_m);
+    EXPECT_EQ(run.verdict.level, VerdictLevel::kDegraded);
+    EXPECT_TRUE(std::any_of(run.verdict.reasons.begin(), run.verdict.reasons.end(),
+                            [](const std::string& r) {
+                                return r.find("worse than the input") != std::string::npos;
+                            }));
+
+    pipeline::PipelineConfig off;
+    off.corrector.keep_agreeing_input = false;
+    const pipeline::CorrectionRun moved = pipeline::RunCorrection(out + "/road_removed", off);
+    ASSERT_TRUE(moved.after);
+    EXPECT_GT(moved.after->ate_m, run.before->ate_m + 1.0)
+        << "the correction must be worse than the input for the test to mean anything";
+}
+
+// Rewrites the TUM estimate in `dir` with its steps stretched by `first` over the first half of
+// the poses and by `second` after: an odometry whose scale changes during the drive.
+void ChangeScaleHalfway(const std::string& dir, double first, double second) {
+    std::istringstream in(test::ReadFile(dir + "/estimate.tum"));
+    std::vector<std::vector<double>> rows;
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream fields(line);
+        std::vector<double> row(8);
+        for (double& v : row) fields >> v;
+        if (fields) rows.push_back(row);
+    }
+    ASSERT_GT(rows.size(), 10u);
+    std::ostringstream out;
+    out.precision(10);
+    double x = rows[0][1], y = rows[0][2];
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        if (i > 0) {
+            const double k = i < rows.size() / 2 ? first : second;
+            x += k * (rows[i][1] - rows[i - 1][1]);
+            y += k * (rows[i][2] - rows[i - 1][2]);
+        }
+        out << rows[i][0] << ' ' << x << ' ' << y;
+        for (int c = 3; c < 8; ++c) out << ' ' << rows[i][c];
+        out << '\n';
+    }
+    test::WriteFile(dir + "/estimate.tum", out.str());
+}
+
+// One scale for a drive whose odometry keeps its scale, the walk where the scale changes; each
+// as good as the other choice forced.
+TEST(DecidedFreedoms, TheScaleWalkIsKeptOnlyWhereTheScaleChanges) {
+    pipeline::PipelineConfig decide;
+    decide.corrector.decide_scale_walk = true;
+    pipeline::PipelineConfig one = decide;  // the walk's segments longer than the drive
+    one.corrector.decide_scale_walk = false;
+    one.corrector.model.scale_segment_m = 1e6;
+    pipeline::PipelineConfig walk = decide;
+    walk.corrector.decide_scale_walk = false;
+
+    const std::string args = "--seed 3 --duration-s 300 --heading-bias-deg-per-sqrt-s 0";
+    const std::string steady = Generate("walk_steady", args + " --scale-error 0.97");
+    const pipeline::CorrectionRun a = pipeline::RunCorrection(steady, decide);
+    ASSERT_TRUE(a.result.scale_walk.has_value() && a.after);
+    EXPECT_EQ(a.result.scale_walk->kept, ScaleWalkDecision::Kept::kOneScale)
+        << a.result.scale_walk->nll_one_scale << " vs " << a.result.scale_walk->nll_refined
+        << " + " << a.result.scale_walk->price_refined;
+    const pipeline::CorrectionRun a_walk = pipeline::RunCorrection(steady, walk);
+    ASSERT_TRUE(a_walk.after);
+    EXPECT_LE(a.after->ate_m, 1.05 * a_walk.after->ate_m + 0.1);
+
+    const std::string changing = Generate("walk_changing", args + " --scale-error 1.0");
+    ChangeScaleHalfway(changing, 0.92, 1.08);
+    const pipeline::CorrectionRun b = pipeline::RunCorrection(changing, decide);
+    ASSERT_TRUE(b.result.scale_walk.has_value() && b.after);
+    EXPECT_NE(b.result.scale_walk->kept, ScaleWalkDecision::Kept::kOneScale)
+        << b.result.scale_walk->nll_one_scale << " vs " << b.result.scale_walk->nll_refined
+        << " + " << b.result.scale_walk->price_refined;
+    const pipeline::CorrectionRun b_one = pipeline::RunCorrection(changing, one);
+    ASSERT_TRUE(b_one.after);
+    EXPECT_LE(b.after->ate_m, 1.05 * b_one.after->ate_m + 0.1);
+}
+
 // The accurate LiDAR odometry of KITTI 07 (0.57 m ATE) comes back as it was.
 TEST(DoNoHarm, AccurateLidarOdometryComesBackAsItWas) {
     const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_imls_aloam_fork";

@@ -246,23 +246,46 @@ void PrintFloorHypotheses(std::FILE* out, const CorrectionResult& r) {
 
 // The model freedoms decided for this input (CorrectorConfig::decide_heading_bias).
 void PrintFreedoms(std::FILE* out, const CorrectionResult& r) {
+    const char* label = "freedoms  ";
+    if (r.scale_walk) {
+        const ScaleWalkDecision& d = *r.scale_walk;
+        const char* kept = d.kept == ScaleWalkDecision::Kept::kOneScale ? "left out (one scale)"
+                           : d.kept == ScaleWalkDecision::Kept::kRefined
+                               ? "kept (one scale's correction refined with it)"
+                               : "kept (corrected with it)";
+        std::fprintf(out,
+                     "%s scale walk %s: NLL + price %.1f + %.1f with one scale, %.1f + %.1f "
+                     "refined with the walk, %.1f + %.1f corrected with it\n",
+                     label, kept, d.nll_one_scale, d.price_one_scale, d.nll_refined,
+                     d.price_refined, d.nll_walk, d.price_walk);
+        label = "          ";
+    }
     if (!r.heading_bias) return;
     std::fprintf(out,
-                 "freedoms   heading-rate bias %s: NLL %.1f with it, %.1f without, price of its "
+                 "%s heading-rate bias %s: NLL %.1f with it, %.1f without, price of its "
                  "unknowns %.1f\n",
-                 r.heading_bias->kept ? "kept" : "left out", r.heading_bias->nll_with,
+                 label, r.heading_bias->kept ? "kept" : "left out", r.heading_bias->nll_with,
                  r.heading_bias->nll_without, r.heading_bias->price);
 }
 
 // How the input lies in the correction's uncertainty, and whether it was kept.
 void PrintAgreement(std::FILE* out, const CorrectionResult& r) {
-    if (r.agreement_poses == 0) return;
-    std::fprintf(out,
-                 "input      inside the correction's 95 %% region at %.1f %% of %zu poses "
-                 "(%s %.1f %%): %s\n",
-                 100.0 * double(r.agreement_inside) / double(r.agreement_poses), r.agreement_poses,
-                 r.input_kept ? "at least" : "below", 100.0 * r.agreement_threshold,
-                 r.input_kept ? "the map cannot tell it wrong; written unchanged" : "corrected");
+    if (std::isnan(r.input_nll)) return;
+    const char* label = "input     ";
+    if (r.agreement_poses > 0) {
+        const double share = double(r.agreement_inside) / double(r.agreement_poses);
+        const bool agrees = share >= r.agreement_threshold;
+        std::fprintf(out,
+                     "%s inside the correction's 95 %% region at %.1f %% of %zu poses (%s %.1f "
+                     "%%)%s\n",
+                     label, 100.0 * share, r.agreement_poses, agrees ? "at least" : "below",
+                     100.0 * r.agreement_threshold,
+                     agrees && r.input_kept ? ": the map cannot tell it wrong" : "");
+        label = "          ";
+    }
+    std::fprintf(out, "%s NLL %.1f, the correction's %.1f%s: %s\n", label, r.input_nll,
+                 r.nll, r.input_nll_lower ? " (the input explains the data better)" : "",
+                 r.input_kept ? "written unchanged" : "corrected");
 }
 
 void PrintVerdict(std::FILE* out, const Verdict& v) {

@@ -108,6 +108,42 @@ void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField
     }
 }
 
+namespace {
+
+// The heading-rate bias is a freedom of the model, kept only where the data support it: the
+// final solve of `kept` (a correction without the bias, `result` its outcome) is repeated with
+// the bias's unknowns added (ModelConfig::heading_bias_segment_s, all 0 to start), and the bias
+// stays when the NLL falls by more than the Bayesian information criterion's price of those
+// unknowns, k / 2 ln n (k bias segments, n poses). Replaces `kept` and `result` when it stays;
+// returns the repeated solve's outcome (its counters).
+CorrectionResult DecideHeadingBias(const std::vector<double>& t_s, const TraversableField* field,
+                                   const CorrectorConfig& cfg,
+                                   std::optional<IncrementalCorrector>& kept,
+                                   CorrectionResult& result) {
+    TrajectoryState state = kept->state();
+    state.bias_segment = BiasSegments(state.obs, cfg.model.heading_bias_segment_s);
+    state.biases.assign(state.bias_segment.back() + 1, 0.0);
+    const double k = double(state.biases.size());
+    CorrectorConfig biased = cfg;
+    biased.compute_covariance = false;
+    IncrementalCorrector inc(std::move(state), field, biased, IncrementalCorrector::Corrected{});
+    CorrectionResult with = inc.Finish(t_s);
+    HeadingBiasDecision d;
+    d.nll_with = Usable(with.status) ? with.nll : std::numeric_limits<double>::quiet_NaN();
+    d.nll_without = result.nll;
+    d.price = 0.5 * k * std::log(double(t_s.size()));
+    d.kept = Usable(with.status) && d.nll_with + d.price < d.nll_without;
+    if (d.kept) {
+        CorrectionResult stats = with;
+        kept.emplace(std::move(inc));
+        result = std::move(stats);
+    }
+    result.heading_bias = d;
+    return with;
+}
+
+}  // namespace
+
 // The incremental pass and the refinement live in IncrementalCorrector (shared with the online
 // corrector); the batch case hands it the whole estimate at once, once per start scale.
 IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
@@ -259,6 +295,14 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     DRIFTCORR_CHECK(!cfg.start_scales.empty(), "CorrectFromStarts needs a start scale");
     CorrectorConfig each = cfg;
     each.compute_covariance = false;
+    // The heading-rate bias as a freedom: every correction below runs without it, and the final
+    // solve of the kept one is then repeated with it (DecideHeadingBias).
+    const bool decide_bias = cfg.decide_heading_bias && cfg.model.heading_bias_segment_s > 0.0;
+    if (decide_bias) {
+        each.model.heading_bias_segment_s = 0.0;
+        initial.bias_segment.clear();
+        initial.biases.clear();
+    }
     const bool floor_hypotheses = field && !initial.fix_height &&
                                   !cfg.model.floor_heights_m.empty() &&
                                   !cfg.restart_height_gains.empty();
@@ -350,6 +394,10 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
             }
         }
     }
+    if (decide_bias && Usable(result.status)) {
+        CorrectionResult with = DecideHeadingBias(t_s, field, cfg, best, result);
+        work.iterations += with.iterations, work.refine_s += with.refine_s;
+    }
     result.floor_hypotheses = std::move(tried);
     result.start_chosen = start_chosen;
     result.start_scales = cfg.start_scales;
@@ -396,65 +444,125 @@ double AgreementThreshold(const PlanarTrajectory& estimate, const CorrectorConfi
     return kRegionLevel - kNormalOneSided95 * std::sqrt(kRegionLevel * (1.0 - kRegionLevel) / n);
 }
 
-// Do no harm: counts the poses whose input lies inside the correction's 95 % region and keeps
-// the input unless they are significantly fewer than the region's own share. Pose 0 (the known
-// start) and poses without a positive-definite covariance are not counted.
-void KeepAgreeingInput(const PlanarTrajectory& estimate, const CorrectorConfig& cfg,
-                       CorrectionResult& result) {
-    if (!Usable(result.status) || result.covariance.status != CovarianceStatus::kOk) return;
-    const std::vector<PoseCovariance>& cov = result.covariance.poses;
-    const PlanarTrajectory& c = result.corrected;
-    for (std::size_t i = 1; i < cov.size() && i < estimate.size() && i < c.size(); ++i) {
-        const Eigen::Matrix2d& s = cov[i].xy_m2;
-        if (!(s(0, 0) > 0.0 && s.determinant() > 0.0)) continue;
-        const Eigen::Vector2d d = estimate.p_en[i] - c.p_en[i];
-        bool inside = d.dot(s.inverse() * d) <= kChi2TwoDof95;
-        if (cov[i].z_m2 > 0.0 && i < estimate.up_m.size() && i < c.up_m.size()) {
-            inside = inside && std::abs(estimate.up_m[i] - c.up_m[i]) <=
-                                   kNormal95 * std::sqrt(cov[i].z_m2);
-        }
-        ++result.agreement_poses;
-        result.agreement_inside += inside ? 1 : 0;
-    }
-    result.agreement_threshold = AgreementThreshold(estimate, cfg);
-    if (!cfg.keep_agreeing_input || result.agreement_poses == 0) return;
-    const double share = double(result.agreement_inside) / double(result.agreement_poses);
-    if (share < result.agreement_threshold) return;
+// Keeps the input as the result (CorrectionResult::input_kept).
+void KeepInput(const PlanarTrajectory& estimate, CorrectionResult& result) {
     result.input_kept = true;
     result.corrected = estimate;
     result.scale_min = result.scale_max = 1.0;
 }
 
-// The heading-rate bias is a freedom of the model, kept only where the data support it: the
-// correction is run again without it, and the bias stays when its NLL is lower by more than the
-// Bayesian information criterion's price of its unknowns, k / 2 ln n (k bias segments, n poses).
-void DecideHeadingBias(const PlanarTrajectory& estimate, const TraversableField* field,
+// Do no harm: scores the input by the correction's objective and keeps it when it scores better;
+// counts the poses whose input lies inside the correction's 95 % region and keeps the input
+// unless they are significantly fewer than the region's own share. Pose 0 (the known start) and
+// poses without a positive-definite covariance are not counted.
+void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField* field,
                        const CorrectorConfig& cfg, CorrectionResult& result) {
-    const double segment_s = cfg.model.heading_bias_segment_s;
-    if (!cfg.decide_heading_bias || segment_s <= 0.0 || !Usable(result.status) ||
-        estimate.size() < 2) {
-        return;
+    if (!Usable(result.status)) return;
+    // The input scored as a correction would be: scale 1 and no heading-rate bias, so that its
+    // scale walk, bias and scale prior terms cost nothing whichever segments the model has.
+    TrajectoryState input = InitialState(estimate, cfg, !field || field->planar());
+    result.input_nll = SoftNll(input, field, cfg.model, input.poses.size() - 1);
+    result.input_nll_lower = result.input_nll < result.nll;
+    if (result.covariance.status == CovarianceStatus::kOk) {
+        const std::vector<PoseCovariance>& cov = result.covariance.poses;
+        const PlanarTrajectory& c = result.corrected;
+        for (std::size_t i = 1; i < cov.size() && i < estimate.size() && i < c.size(); ++i) {
+            const Eigen::Matrix2d& s = cov[i].xy_m2;
+            if (!(s(0, 0) > 0.0 && s.determinant() > 0.0)) continue;
+            const Eigen::Vector2d d = estimate.p_en[i] - c.p_en[i];
+            bool inside = d.dot(s.inverse() * d) <= kChi2TwoDof95;
+            if (cov[i].z_m2 > 0.0 && i < estimate.up_m.size() && i < c.up_m.size()) {
+                inside = inside && std::abs(estimate.up_m[i] - c.up_m[i]) <=
+                                       kNormal95 * std::sqrt(cov[i].z_m2);
+            }
+            ++result.agreement_poses;
+            result.agreement_inside += inside ? 1 : 0;
+        }
+        result.agreement_threshold = AgreementThreshold(estimate, cfg);
     }
-    CorrectorConfig off = cfg;
-    off.model.heading_bias_segment_s = 0.0;
-    CorrectionResult without;
-    CorrectFromStarts(estimate, field, off, without, {});
-    const double duration_s = estimate.t_s.back() - estimate.t_s.front();
-    const double k = std::floor(duration_s / segment_s) + 1.0;
-    HeadingBiasDecision d;
-    d.nll_with = result.nll;
-    d.nll_without = Usable(without.status) ? without.nll : std::numeric_limits<double>::quiet_NaN();
-    d.price = 0.5 * k * std::log(double(estimate.size()));
-    d.kept = !Usable(without.status) || d.nll_with + d.price < d.nll_without;
-    // The statistics count both corrections (as CorrectionResult's do over start scales).
-    const CorrectionResult& other = d.kept ? without : result;
-    const std::size_t windows = other.windows;
-    const int iterations = other.iterations;
-    const double incremental_s = other.incremental_s, refine_s = other.refine_s;
-    if (!d.kept) result = std::move(without);
-    result.windows += windows, result.iterations += iterations;
-    result.incremental_s += incremental_s, result.refine_s += refine_s;
-    result.heading_bias = d;
+    if (!cfg.keep_agreeing_input) return;
+    const bool agrees =
+        result.agreement_poses > 0 &&
+        double(result.agreement_inside) / double(result.agreement_poses) >=
+            result.agreement_threshold;
+    if (result.input_nll_lower || agrees) KeepInput(estimate, result);
+}
+
+// The BIC price of a correction's unknowns beyond one scale: (scales - 1 + heading-rate biases
+// kept) / 2 ln n.
+double FreedomPrice(const TrajectoryState& s) {
+    const double k = double(s.scales.size() - 1 + s.biases.size());
+    return 0.5 * k * std::log(double(s.poses.size()));
+}
+
+// Adds `from`'s work counters (windows, restarts, iterations, times) to `to`'s.
+void AddWork(const CorrectionResult& from, CorrectionResult& to) {
+    to.windows += from.windows, to.window_retries += from.window_retries;
+    to.window_restarts += from.window_restarts, to.iterations += from.iterations;
+    to.incremental_s += from.incremental_s, to.refine_s += from.refine_s;
+}
+
+// The scale walk as a freedom (CorrectorConfig::decide_scale_walk): one scale for the whole drive
+// first; its final solve repeated with the walk's segments; when that lowers the NLL by more than
+// the walk's price, the whole correction with the walk. Keeps the lowest NLL plus price, with its
+// covariance; the work counters add up over every solve.
+void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const TraversableField* field,
+                                 const CorrectorConfig& cfg, CorrectionResult& result,
+                                 const ProgressCallback& progress) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    CorrectorConfig one = cfg, walk = cfg;
+    one.compute_covariance = walk.compute_covariance = false;
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < estimate.size(); ++i) {
+        path_m += (estimate.p_en[i] - estimate.p_en[i - 1]).norm();
+    }
+    one.model.scale_segment_m = 2.0 * path_m + 1.0;  // one segment (repaired steps are longer)
+    std::optional<IncrementalCorrector> kept;
+    kept.emplace(CorrectFromStarts(estimate, field, one, result, progress));
+    ScaleWalkDecision d;
+    d.nll_refined = d.nll_walk = d.price_refined = d.price_walk = nan;
+    d.nll_one_scale = Usable(result.status) ? result.nll : nan;
+    d.price_one_scale = FreedomPrice(kept->state());
+    TrajectoryState state = kept->state();
+    state.scale_segment = ScaleSegments(state.obs, cfg.model.scale_segment_m);
+    state.scales.assign(state.scale_segment.back() + 1, state.scales.front());
+    if (Usable(result.status) && state.scales.size() > 1) {
+        const double price = FreedomPrice(state);
+        IncrementalCorrector inc(std::move(state), field, walk, IncrementalCorrector::Corrected{});
+        CorrectionResult refined = inc.Finish(estimate.t_s);
+        CorrectionResult whole;
+        std::optional<IncrementalCorrector> winc;
+        if (Usable(refined.status)) {
+            d.nll_refined = refined.nll, d.price_refined = price;
+            if (refined.nll + price < result.nll + d.price_one_scale) {
+                winc.emplace(CorrectFromStarts(estimate, field, walk, whole, progress));
+                if (Usable(whole.status)) {
+                    d.nll_walk = whole.nll, d.price_walk = FreedomPrice(winc->state());
+                }
+            }
+        }
+        CorrectionResult work;  // every solve's counters
+        AddWork(result, work), AddWork(refined, work), AddWork(whole, work);
+        const double best = result.nll + d.price_one_scale;
+        const double refined_score = Usable(refined.status) ? d.nll_refined + price : best;
+        if (Usable(whole.status) && d.nll_walk + d.price_walk < std::min(best, refined_score)) {
+            d.kept = ScaleWalkDecision::Kept::kWalk;
+            kept = std::move(winc);
+            result = std::move(whole);
+        } else if (refined_score < best) {
+            d.kept = ScaleWalkDecision::Kept::kRefined;
+            kept.emplace(std::move(inc));
+            refined.heading_bias = result.heading_bias;
+            refined.start_scales = result.start_scales, refined.start_nll = result.start_nll;
+            refined.start_rms_m = result.start_rms_m, refined.start_chosen = result.start_chosen;
+            result = std::move(refined);
+        }
+        result.windows = 0, result.window_retries = 0, result.window_restarts = 0;
+        result.iterations = 0, result.incremental_s = 0.0, result.refine_s = 0.0;
+        AddWork(work, result);
+    }
+    result.scale_walk = d;
+    if (Usable(result.status) && cfg.compute_covariance) kept->AddCovariance(result);
 }
 
 }  // namespace
@@ -462,9 +570,16 @@ void DecideHeadingBias(const PlanarTrajectory& estimate, const TraversableField*
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
     CorrectionResult result;
-    CorrectFromStarts(estimate, field, cfg, result, progress);
-    DecideHeadingBias(estimate, field, cfg, result);
-    KeepAgreeingInput(estimate, cfg, result);
+    const bool floor_hypotheses = field && !field->planar() &&
+                                  !cfg.model.floor_heights_m.empty() &&
+                                  !cfg.restart_height_gains.empty();
+    if (cfg.decide_scale_walk && cfg.start_scales.size() == 1 && !floor_hypotheses &&
+        estimate.size() >= 3) {
+        CorrectWithDecidedScaleWalk(estimate, field, cfg, result, progress);
+    } else {
+        CorrectFromStarts(estimate, field, cfg, result, progress);
+    }
+    KeepAgreeingInput(estimate, field, cfg, result);
     DiagnoseCorrection(estimate, field, cfg, result);
     return result;
 }

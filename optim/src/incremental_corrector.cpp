@@ -306,6 +306,12 @@ IncrementalCorrector::IncrementalCorrector(TrajectoryState state, const Traversa
     dist_ = PathPositions(state_.obs);
 }
 
+IncrementalCorrector::IncrementalCorrector(TrajectoryState state, const TraversableField* field,
+                                           const CorrectorConfig& config, Corrected)
+    : IncrementalCorrector(std::move(state), field, config) {
+    done_ = size() - 1;
+}
+
 TrajectoryState StartState(const PoseState& pose0, bool fix_height, const ModelConfig& model) {
     TrajectoryState s;
     s.obs.assign(1, StepObservation{});

@@ -41,8 +41,15 @@ void JudgeSolver(const CorrectionResult& r, Findings& f) {
     if (!Usable(r.status)) {
         f.Failed("the solver produced no usable correction (" + ToString(r.status) + ": " +
                  r.message + ")");
-    } else if (r.refine_report.message.find("without hard constraints") != std::string::npos ||
-               r.message.find("without hard constraints") != std::string::npos) {
+        return;
+    }
+    if (r.input_kept && r.input_nll_lower) {
+        f.Degraded("the correction explains the odometry and the map worse than the input does "
+                   "(NLL " + FormatFixed(r.nll, 1) + " against " + FormatFixed(r.input_nll, 1) +
+                   "): the input is written unchanged, and nothing here vouches for it");
+    }
+    if (r.refine_report.message.find("without hard constraints") != std::string::npos ||
+        r.message.find("without hard constraints") != std::string::npos) {
         f.Failed(
             "the final solve could not keep the drive inside the mapped corridors and was "
             "re-solved without them (" +

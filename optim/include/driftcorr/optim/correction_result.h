@@ -3,6 +3,7 @@
 // optim/corrector.h; the paper's baseline, optim/paper_solver.h), and how it reports progress.
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +26,17 @@ using ProgressCallback = std::function<void(const CorrectionProgress&)>;
 struct HeadingBiasDecision {
     double nll_with = 0.0, nll_without = 0.0, price = 0.0;
     bool kept = true;
+};
+
+/// Whether the step-length scale walk was kept (CorrectorConfig::decide_scale_walk): the NLL and
+/// the price, (k - 1) / 2 ln n for k scale segments over n poses plus the heading-rate bias's when
+/// kept, of the correction with one scale for the whole drive, of its final solve repeated with
+/// the walk's segments, and of the whole correction with the walk (NaN: not run or not usable).
+struct ScaleWalkDecision {
+    double nll_one_scale = 0.0, price_one_scale = 0.0;
+    double nll_refined = 0.0, price_refined = 0.0;
+    double nll_walk = 0.0, price_walk = 0.0;
+    enum class Kept { kOneScale, kRefined, kWalk } kept = Kept::kOneScale;
 };
 
 struct CorrectionResult {
@@ -90,10 +102,18 @@ struct CorrectionResult {
     double agreement_threshold = 0.0;
     /// The input itself was kept: `corrected` is the estimate as handed in, since the share of
     /// its poses inside the correction's 95 % region is not significantly below 95 % (the map
-    /// cannot tell it wrong).
+    /// cannot tell it wrong), or since its NLL is lower than the correction's (input_nll_lower).
     bool input_kept = false;
+    /// The input's NLL under the model (at scale 1, no heading-rate bias): what `nll` would be
+    /// had the correction left the input as it was. NaN when not computed.
+    double input_nll = std::numeric_limits<double>::quiet_NaN();
+    /// input_nll < nll: the correction explains the odometry and the map worse than the input
+    /// does, by the model's own measure (the solve ended in a poorer basin than its start).
+    bool input_nll_lower = false;
     /// Set when the heading-rate bias was decided on (corrector.cpp DecideHeadingBias).
     std::optional<HeadingBiasDecision> heading_bias;
+    /// Set when the scale walk was decided on (corrector.cpp CorrectWithDecidedScaleWalk).
+    std::optional<ScaleWalkDecision> scale_walk;
     /// Degenerate input or outcome worth a user's attention, one sentence each (the map covers
     /// none or little of the drive, the estimate does not move, the scale hit its bound, steps
     /// treated as discontinuities). The correction may still be usable.

@@ -83,12 +83,22 @@ struct CorrectorConfig {
     /// (its covariance) is not significantly below 95 % (one-sided, 5 %, over the path's number
     /// of map-offset correlation lengths), what the map says cannot tell the input wrong, and the
     /// input itself is the result (CorrectionResult::input_kept). Needs compute_covariance.
+    /// The input is also the result when its NLL under the model is lower than the
+    /// correction's (the solve ended in a poorer basin than the one it started from).
     bool keep_agreeing_input = true;
     /// The heading-rate bias (ModelConfig::heading_bias_segment_s) as a freedom decided per
-    /// input: the correction is also run without it, and the bias is kept only when its NLL is
-    /// lower by more than k / 2 ln n (the Bayesian information criterion; k bias unknowns, n
-    /// poses). Time: a second correction (KITTI 00 on one core: 0.49 -> 0.69 s), hence off.
+    /// input: the correction runs without it, its final solve is repeated with the bias's
+    /// unknowns added, and the bias is kept only when that lowers the NLL by more than
+    /// k / 2 ln n (the Bayesian information criterion; k bias unknowns, n poses). false: the
+    /// bias is in every solve when the model has it.
     bool decide_heading_bias = false;
+    /// The step-length scale walk (ModelConfig::scale_segment_m) as a freedom decided per input:
+    /// the drive is first corrected with one scale for all of it; its final solve is repeated
+    /// with the walk's segments, and when that lowers the NLL by more than the walk's price
+    /// ((k - 1) / 2 ln n, k segments, n poses), the whole correction is run again with the walk.
+    /// The lowest NLL plus price of the three is kept. Applies with one start scale and no
+    /// floor hypotheses (else the walk is always in).
+    bool decide_scale_walk = false;
 
     /// The first value kCorrectorParams or a rule between its values does not allow (model and
     /// covariance are not looked at).
@@ -142,11 +152,14 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
      Field<&CorrectorConfig::refine_ipopt, &IpoptOptions::max_cpu_time_s>(), kPositive,
      "Ipopt time limit of the final solve"},
     {"decide_heading_bias", Field<&CorrectorConfig::decide_heading_bias>(), kNoRange,
-     "the heading-rate bias kept only when it lowers the NLL by more than its BIC price (a "
-     "second correction without it)"},
+     "the heading-rate bias kept only when it lowers the NLL by more than its BIC price (its "
+     "final solve repeated with it)"},
+    {"decide_scale_walk", Field<&CorrectorConfig::decide_scale_walk>(), kNoRange,
+     "the scale walk kept only when it lowers the NLL by more than its BIC price (one scale "
+     "for the drive otherwise)"},
     {"keep_agreeing_input", Field<&CorrectorConfig::keep_agreeing_input>(), kNoRange,
      "the input is the result when its share of poses inside the correction's 95 % region is "
-     "not significantly below 95 % (needs compute_covariance)"},
+     "not significantly below 95 % (needs compute_covariance), or when its NLL is lower"},
     {"compute_covariance", Field<&CorrectorConfig::compute_covariance>(), kNoRange,
      "per-pose covariance of the corrected trajectory"},
 };

@@ -36,6 +36,11 @@ public:
     /// (odometry only) and must outlive this object.
     IncrementalCorrector(TrajectoryState state, const TraversableField* field,
                          const CorrectorConfig& config);
+    /// Starts from a whole trajectory that is already corrected (`state` as a correction left
+    /// it, possibly with other unknowns added): done() is the last pose and Finish() refines it.
+    struct Corrected {};
+    IncrementalCorrector(TrajectoryState state, const TraversableField* field,
+                         const CorrectorConfig& config, Corrected);
     /// Starts from a single known pose 0 (the online case); poses are added with Append.
     IncrementalCorrector(const PoseState& pose0, bool fix_height, const TraversableField* field,
                          const CorrectorConfig& config);
