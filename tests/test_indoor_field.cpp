@@ -473,6 +473,48 @@ TEST_F(IndoorLoaderTest, GroupsByFloorAndReprojects) {
               Collection(R"("crs": {"type": "name", "properties": {"name": "EPSG:999999"}})",
                          PolygonFeature("\"Room\"", sq(0, 0, 1, 1))));
     EXPECT_THROW(LoadIndoorMap({{unknown, IndoorLayerRole::kFloorplan, 0.0}}, frame), InputError);
+
+    // A corridor whose outline crosses itself (a bow tie): bad input naming the feature and
+    // where, not a map whose inside is whatever the rasteriser makes of it.
+    std::ostringstream bow;
+    bow.precision(12);
+    bow << "[[" << e0 << "," << n0 << "],[" << e0 + 10 << "," << n0 + 10 << "],[" << e0 + 10
+        << "," << n0 << "],[" << e0 << "," << n0 + 10 << "],[" << e0 << "," << n0 << "]]";
+    const std::string crossed =
+        Write("crossed.geojson",
+              Collection(kCrs32632, PolygonFeature("\"Room\"", sq(20, 0, 30, 10)) + ",\n" +
+                                        PolygonFeature("\"Corridor\"", bow.str())));
+    try {
+        LoadIndoorMap({{crossed, IndoorLayerRole::kFloorplan, 0.0}}, frame);
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("features[1]"), std::string::npos) << what;
+        EXPECT_NE(what.find("Corridor crosses itself at (" + std::to_string(int(e0 + 5))),
+                  std::string::npos)
+            << what;
+    }
+}
+
+TEST(RingSelfCrossing, FindsWhereTwoEdgesCross) {
+    using V = Eigen::Vector2d;
+    const std::vector<V> bow = {V(0, 0), V(2, 2), V(2, 0), V(0, 2), V(0, 0)};
+    const std::optional<V> x = RingSelfCrossing(bow);
+    ASSERT_TRUE(x.has_value());
+    EXPECT_NEAR(x->x(), 1.0, 1e-12);
+    EXPECT_NEAR(x->y(), 1.0, 1e-12);
+    // Open ring (no repeated first point): the same.
+    EXPECT_TRUE(RingSelfCrossing({V(0, 0), V(2, 2), V(2, 0), V(0, 2)}).has_value());
+    // Simple rings, convex and not, closed or open; a vertex touching an edge is not a crossing.
+    EXPECT_FALSE(RingSelfCrossing({V(0, 0), V(2, 0), V(2, 2), V(0, 2), V(0, 0)}).has_value());
+    EXPECT_FALSE(RingSelfCrossing({V(0, 0), V(4, 0), V(4, 4), V(2, 1), V(0, 4)}).has_value());
+    // A vertex on another edge, with a collinear overlap: no proper crossing either.
+    EXPECT_FALSE(RingSelfCrossing({V(0, 0), V(4, 0), V(2, 0), V(2, 3)}).has_value());
+    // Found whatever the edges' order along x: the third edge crosses the first at (1.6, 0).
+    const std::optional<V> y = RingSelfCrossing({V(0, 0), V(4, 0), V(4, 4), V(1, -1)});
+    ASSERT_TRUE(y.has_value());
+    EXPECT_NEAR(y->x(), 1.6, 1e-12);
+    EXPECT_NEAR(y->y(), 0.0, 1e-12);
 }
 
 // ---------------------------------------------------------------- real data

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -116,6 +117,24 @@ IndoorFloor& FloorAt(IndoorMap& map, double z) {
     return map.floors.back();
 }
 
+// The first ring of `p` (outer, then holes) that crosses itself, and where; throws InputError
+// naming the file and the feature.
+void CheckSimple(const GeoJsonLayer& layer, const GeoJsonPolygon& p) {
+    std::vector<const std::vector<Eigen::Vector2d>*> rings = {&p.outer};
+    for (const auto& hole : p.holes) rings.push_back(&hole);
+    for (const auto* ring : rings) {
+        const std::optional<Eigen::Vector2d> x = RingSelfCrossing(*ring);
+        if (!x) continue;
+        std::ostringstream where;
+        where.precision(10);
+        where << "(" << x->x() << ", " << x->y() << ")";
+        throw InputError(layer.path, 0, "features[" + std::to_string(p.feature_index) + "]",
+                         "the polygon" + (p.type ? " of Type " + *p.type : std::string()) +
+                             " crosses itself at " + where.str() +
+                             " (layer coordinates): its inside is not defined; fix its outline");
+    }
+}
+
 void AddFloorPlan(const GeoJsonLayer& layer,
                   const std::function<Eigen::Vector2d(const Eigen::Vector2d&)>& to_en,
                   IndoorFloor& floor, IndoorLayerReport& report) {
@@ -146,7 +165,9 @@ void AddFloorPlan(const GeoJsonLayer& layer,
                 break;
         }
         if (cls != FloorClass::kWall && cls != FloorClass::kIgnore) ++walkable;
-        if (dst) dst->push_back(ToFloorPolygon(p, to_en));
+        if (!dst) continue;
+        CheckSimple(layer, p);
+        dst->push_back(ToFloorPolygon(p, to_en));
     }
     if (walkable == 0) {
         throw InputError(layer.path, 0, "",
@@ -158,6 +179,48 @@ void AddFloorPlan(const GeoJsonLayer& layer,
 }
 
 }  // namespace
+
+std::optional<Eigen::Vector2d> RingSelfCrossing(const std::vector<Eigen::Vector2d>& ring) {
+    std::size_t m = ring.size();
+    if (m > 1 && ring.front() == ring.back()) --m;
+    if (m < 4) return std::nullopt;
+    struct Edge {
+        std::size_t i;
+        double x0, x1;
+    };
+    std::vector<Edge> edges(m);
+    for (std::size_t i = 0; i < m; ++i) {
+        const Eigen::Vector2d& a = ring[i];
+        const Eigen::Vector2d& b = ring[(i + 1) % m];
+        edges[i] = {i, std::min(a.x(), b.x()), std::max(a.x(), b.x())};
+    }
+    std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) { return a.x0 < b.x0; });
+    auto orient = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+        const double v = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+        return (v > 0.0) - (v < 0.0);
+    };
+    for (std::size_t u = 0; u < m; ++u) {
+        const std::size_t i = edges[u].i;
+        const Eigen::Vector2d &a = ring[i], &b = ring[(i + 1) % m];
+        for (std::size_t w = u + 1; w < m && edges[w].x0 <= edges[u].x1; ++w) {
+            const std::size_t j = edges[w].i;
+            const std::size_t d = i > j ? i - j : j - i;
+            if (d == 1 || d == m - 1) continue;  // neighbours share a vertex
+            const Eigen::Vector2d &c = ring[j], &e = ring[(j + 1) % m];
+            if (std::max(c.y(), e.y()) < std::min(a.y(), b.y()) ||
+                std::min(c.y(), e.y()) > std::max(a.y(), b.y())) {
+                continue;
+            }
+            if (orient(a, b, c) * orient(a, b, e) < 0 && orient(c, e, a) * orient(c, e, b) < 0) {
+                const Eigen::Vector2d r = b - a, s = e - c;
+                const double t = ((c - a).x() * s.y() - (c - a).y() * s.x()) /
+                                 (r.x() * s.y() - r.y() * s.x());
+                return Eigen::Vector2d(a + t * r);
+            }
+        }
+    }
+    return std::nullopt;
+}
 
 const char* ToString(FloorClass c) {
     switch (c) {

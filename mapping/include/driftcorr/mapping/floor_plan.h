@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,11 @@ const char* ToString(FloorClass c);
 /// whitespace-insensitive). `known` is set to false for a value not in the table (and for a
 /// missing type); such polygons are kIgnore. The table is documented in floor_plan.cpp.
 FloorClass ClassifyFloorType(const std::string* type, bool* known = nullptr);
+
+/// Where a polygon ring crosses itself: the first point where two of its edges that do not share
+/// a vertex cross (touching and collinear overlaps are not crossings), or nothing. The ring may
+/// repeat its first point at its end. Time about linear in its edges (a sweep over x).
+std::optional<Eigen::Vector2d> RingSelfCrossing(const std::vector<Eigen::Vector2d>& ring);
 
 enum class IndoorLayerRole { kWalkways, kFloorplan };
 
