@@ -1211,6 +1211,30 @@ TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
     ExpectSameNumbers(ReadFile(c.output), ReadFile(via_scenario), 1e-6);
 }
 
+// An anchor with latitude and longitude swapped puts the drive thousands of kilometres from the
+// map: bad input before any solve, naming the likely cause; an anchor 50 km off is bad input too,
+// without that hint.
+TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
+    const CaseDirs c = MakeCase("SwappedAnchor");
+    const std::string estimate = (c.scenario / "estimate.tum").string();
+    const RunResult swapped = RunProgram(
+        kCli, CorrectFile(c, estimate, {"--anchor", "8.39,48.98,0", "--frame", "enu"}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(swapped.out + swapped.err);
+    EXPECT_EQ(swapped.exit_code, kExitBadInput);
+    EXPECT_NE(swapped.err.find("from the nearest road of the map"), std::string::npos);
+    EXPECT_NE(swapped.err.find("lat and lon look swapped"), std::string::npos);
+    EXPECT_EQ(swapped.out.find("solver"), std::string::npos) << "refused before the solve";
+    EXPECT_FALSE(fs::exists(c.output));
+
+    const RunResult far = RunProgram(
+        kCli, CorrectFile(c, estimate, {"--anchor", "48.5,8.39,0", "--frame", "enu"}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(far.out + far.err);
+    EXPECT_EQ(far.exit_code, kExitBadInput);
+    EXPECT_NE(far.err.find("check the anchor and the map file"), std::string::npos);
+}
+
 /// The TUM lines `t x y z qx qy qz qw` of `tum` as positions only, `t x y z`.
 std::string PositionsOnly(const std::string& tum) {
     std::istringstream full(tum);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/errors.h"
 #include "driftcorr/pipeline/pipeline.h"
 #include "test_support.h"
 
@@ -102,13 +103,29 @@ TEST_F(Degenerate, StraightLineThatDisagreesWithTheMap) {
     EXPECT_EQ(run.verdict.level, VerdictLevel::kFailed);
 }
 
+// A map out of any reach of the drive (111 km away for a drive of a few hundred metres) is bad
+// input before the solve; one within its reach that it never comes near is corrected by the
+// odometry alone, with a warning. The generator's map spans lat 48.9755..48.9845.
 TEST_F(Degenerate, MapCoversNoneOfTheDrive) {
+    try {
+        Run("far_map", [](Lines&) {},
+            [](std::string& yaml) {
+                const std::size_t at = yaml.find("lat_deg: 48.98");
+                ASSERT_NE(at, std::string::npos);
+                yaml.replace(at, 14, "lat_deg: 49.98");  // 111 km north of the map
+            });
+        FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("from the nearest road of the map"),
+                  std::string::npos)
+            << e.what();
+    }
     const pipeline::CorrectionRun run = Run(
-        "far_map", [](Lines&) {},
+        "near_map", [](Lines&) {},
         [](std::string& yaml) {
             const std::size_t at = yaml.find("lat_deg: 48.98");
             ASSERT_NE(at, std::string::npos);
-            yaml.replace(at, 14, "lat_deg: 49.98");  // 111 km north of the map
+            yaml.replace(at, 14, "lat_deg: 48.9985");  // 1.6 km north of the map's edge
         });
     ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
     EXPECT_TRUE(HasWarning(run.result, "covers none of the drive"));

@@ -291,6 +291,7 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
         double hw = it != table.end() ? it->second : 0.0;
         if (it == table.end() && config.profile == "all") hw = config.default_half_width_m;
         if (hw <= 0.0) { ++net.ways_excluded_by_class; continue; }
+        for (const GeoPoint& g : way.nodes) net.lon_lat_deg.extend(Eigen::Vector2d(g.lon_deg, g.lat_deg));
         RoadPolyline road{way.id, way.highway, hw, {}};
         road.points_en.reserve(way.nodes.size());
         for (const GeoPoint& g : way.nodes) road.points_en.push_back(to_en(g));

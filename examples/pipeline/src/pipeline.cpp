@@ -54,6 +54,7 @@ RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world, const Roa
         net.ways_excluded_by_class += part.ways_excluded_by_class;
         net.ways_area += part.ways_area;
         net.missing_node_refs += part.missing_node_refs;
+        net.lon_lat_deg.extend(part.lon_lat_deg);
         for (auto& r : part.roads) net.roads.push_back(std::move(r));
     }
     return net;
@@ -396,6 +397,47 @@ void CheckWalkStart(const PreparedScenario& ps) {
                          "(another origin or floor height, or a map whose z points down?)");
 }
 
+// Road mode: the map's roads must lie within the drive's reach. A start farther from every road
+// than the drive could be stretched (the scale's bound times its path) plus the field's margin
+// is a frame error (lat and lon swapped, a map of another place), reported before the solve.
+void CheckRoadsInReach(const PreparedScenario& ps, const PipelineConfig& config) {
+    if (ps.network.roads.empty() || ps.estimate.size() == 0) return;
+    const double gap_m = ps.network.Bounds().exteriorDistance(ps.estimate.p_en[0]);
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < ps.estimate.size(); ++i) {
+        path_m += (ps.estimate.p_en[i] - ps.estimate.p_en[i - 1]).norm();
+    }
+    if (gap_m <= kScaleMax * path_m + config.field.margin_m) return;
+    std::string where = FormatFixed(gap_m / 1000.0, 1) + " km from the nearest road of the map";
+    std::string hint = "check the anchor and the map file";
+    const io::AnchorSpec& a = ps.scenario.anchor;
+    const Eigen::AlignedBox2d& geo = ps.network.lon_lat_deg;
+    if (!geo.isEmpty()) {
+        where += " (its roads span lat " + FormatFixed(geo.min().y(), 4) + ".." +
+                 FormatFixed(geo.max().y(), 4) + ", lon " + FormatFixed(geo.min().x(), 4) + ".." +
+                 FormatFixed(geo.max().x(), 4) + ")";
+        const Eigen::Vector2d centre = geo.center();
+        if (a.lat_deg && a.lon_deg) {
+            // Great-circle distance to the nearest corner or edge of the roads' extent (the
+            // plane's distance is meaningless that far from the anchor).
+            const Eigen::Vector2d anchor(*a.lon_deg, *a.lat_deg);
+            const Eigen::Vector2d near = anchor.cwiseMax(geo.min()).cwiseMin(geo.max());
+            const double p1 = DegToRad(anchor.y()), p2 = DegToRad(near.y());
+            const double h = std::pow(std::sin(0.5 * (p2 - p1)), 2) +
+                             std::cos(p1) * std::cos(p2) *
+                                 std::pow(std::sin(0.5 * DegToRad(near.x() - anchor.x())), 2);
+            const double km = 2.0 * 6371.0 * std::asin(std::min(1.0, std::sqrt(h)));
+            where = FormatFixed(km, 1) + where.substr(where.find(" km"));
+            if (std::abs(*a.lat_deg - centre.x()) < 1.0 && std::abs(*a.lon_deg - centre.y()) < 1.0) {
+                hint = "lat and lon look swapped";
+            }
+        }
+    }
+    throw InputError(ps.scenario.yaml_path, 0, "anchor",
+                     "the drive starts " + where + ", beyond the reach of the " +
+                         FormatFixed(path_m / 1000.0, 1) + " km drive: " + hint);
+}
+
 }  // namespace
 
 namespace {
@@ -495,7 +537,11 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
                                                           AnchorFitFor(sc, config), config.field);
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor, WalkHeights(ps.estimate, config.indoor_field));
-    if (sc.mode == io::ScenarioMode::kIndoor3d) CheckWalkStart(ps);
+    if (sc.mode == io::ScenarioMode::kIndoor3d) {
+        CheckWalkStart(ps);
+    } else {
+        CheckRoadsInReach(ps, config);
+    }
     if (ps.network.missing_node_refs > 0) {
         ps.scenario.warnings.push_back(
             "map: " + std::to_string(ps.network.missing_node_refs) +

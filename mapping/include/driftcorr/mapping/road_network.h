@@ -59,6 +59,9 @@ struct RoadNetwork {
     /// Node references of highway ways the map file does not resolve (OsmReadReport): the ways
     /// are split there.
     std::size_t missing_node_refs = 0;
+    /// (lon, lat) [deg] of the kept roads' nodes as the map file gives them; empty when the
+    /// network was not built from a map with geographic coordinates.
+    Eigen::AlignedBox2d lon_lat_deg;
 
     Eigen::AlignedBox2d Bounds() const;
     double TotalLengthM() const;
