@@ -1235,6 +1235,22 @@ TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
     EXPECT_NE(far.err.find("check the anchor and the map file"), std::string::npos);
 }
 
+// An enu drive read as kitti_camera climbs by its northward travel: bad input before the solve,
+// asking whether the axes are those of the frame.
+TEST_F(CliFormats, AWrongFrameIsBadInputBeforeTheSolve) {
+    const CaseDirs c = MakeCase("WrongFrame");
+    const RunResult r = RunProgram(
+        kCli,
+        CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                    {"--anchor", "48.98,8.39,0", "--frame", "kitti_camera"}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitBadInput);
+    EXPECT_NE(r.err.find("frame: with frame kitti_camera the estimate's height spans"),
+              std::string::npos);
+    EXPECT_FALSE(fs::exists(c.output));
+}
+
 /// The TUM lines `t x y z qx qy qz qw` of `tum` as positions only, `t x y z`.
 std::string PositionsOnly(const std::string& tum) {
     std::istringstream full(tum);

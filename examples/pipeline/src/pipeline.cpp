@@ -397,6 +397,28 @@ void CheckWalkStart(const PreparedScenario& ps) {
                          "(another origin or floor height, or a map whose z points down?)");
 }
 
+// Road mode: a vehicle's height changes far less than its horizontal travel (roads climb a few
+// percent, rarely beyond 12 %). An estimate whose height range exceeds half its horizontal path
+// (and 50 m) has its axes read wrongly: the frame (kitti_camera's z forward read as up, or the
+// other way round), reported before the solve.
+void CheckRoadFrame(const PreparedScenario& ps) {
+    if (ps.estimate.size() < 2) return;
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < ps.estimate.size(); ++i) {
+        path_m += (ps.estimate.p_en[i] - ps.estimate.p_en[i - 1]).norm();
+    }
+    const auto [lo, hi] = std::minmax_element(ps.estimate.up_m.begin(), ps.estimate.up_m.end());
+    const double range_m = *hi - *lo;
+    if (range_m <= std::max(50.0, 0.5 * path_m)) return;
+    throw InputError(ps.scenario.yaml_path, 0, "frame",
+                     "with frame " + std::string(ps.scenario.frame == FrameAxes::kEnu ? "enu" : "kitti_camera") + " the estimate's height " +
+                         "spans " + FormatFixed(range_m, 1) + " m over " +
+                         FormatFixed(path_m, 1) +
+                         " m of horizontal path, steeper than any road: are its axes those of "
+                         "this frame (enu: x East, y North, z up; kitti_camera: x right, y down, "
+                         "z forward)?");
+}
+
 // Road mode: the map's roads must lie within the drive's reach. A start farther from every road
 // than the drive could be stretched (the scale's bound times its path) plus the field's margin
 // is a frame error (lat and lon swapped, a map of another place), reported before the solve.
@@ -540,6 +562,7 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     if (sc.mode == io::ScenarioMode::kIndoor3d) {
         CheckWalkStart(ps);
     } else {
+        CheckRoadFrame(ps);
         CheckRoadsInReach(ps, config);
     }
     if (ps.network.missing_node_refs > 0) {
