@@ -1235,6 +1235,23 @@ TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
     EXPECT_NE(far.err.find("check the anchor and the map file"), std::string::npos);
 }
 
+// A start that does not fit the map (the yaw 40 deg off), given on the command line: the advice
+// names the flag, not the scenario key.
+TEST_F(CliFormats, FailureAdviceNamesTheFlagsTheUserGave) {
+    const CaseDirs c = MakeCase("AdviceInFlags");
+    const RunResult r = RunProgram(
+        kCli,
+        CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                    {"--anchor", "48.98,8.39,40", "--frame", "enu"}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    EXPECT_EQ(r.exit_code, kExitSolver);
+    EXPECT_NE((r.out + r.err).find("check the yaw and the position of --anchor, or give --anchor "
+                         "LAT,LON,auto"),
+              std::string::npos);
+    EXPECT_EQ((r.out + r.err).find("yaw_deg"), std::string::npos);
+}
+
 // An enu drive read as kitti_camera climbs by its northward travel: bad input before the solve,
 // asking whether the axes are those of the frame.
 TEST_F(CliFormats, AWrongFrameIsBadInputBeforeTheSolve) {

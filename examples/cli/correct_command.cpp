@@ -586,6 +586,25 @@ pipeline::PipelineConfig LoadConfig(const Args& a) {
     return cfg;
 }
 
+/// A finding's advice in the terms the user gave: with --osm the anchor is a flag, not a
+/// scenario key.
+std::string InFlagTerms(std::string text, const Args& a) {
+    if (a.osm.empty()) return text;
+    const std::string place = a.crs.empty() ? "LAT,LON" : "EASTING,NORTHING";
+    const std::pair<std::string, std::string> terms[] = {
+        {"anchor.yaw_deg and the position", "the yaw and the position of --anchor"},
+        {"anchor.yaw_deg", "the yaw of --anchor"},
+        {"yaw_deg: auto", "--anchor " + place + ",auto"},
+    };
+    for (const auto& [from, to] : terms) {
+        for (std::size_t at = text.find(from); at != std::string::npos;
+             at = text.find(from, at + to.size())) {
+            text.replace(at, from.size(), to);
+        }
+    }
+    return text;
+}
+
 int RunSingle(const Args& a) {
     const OutputPaths out{a.output, a.geojson, a.covariance};
     io::Scenario scenario =
@@ -594,6 +613,7 @@ int RunSingle(const Args& a) {
     const pipeline::PipelineConfig cfg = LoadConfig(a);
     pipeline::CorrectionRun run =
         pipeline::RunCorrection(std::move(scenario), cfg, MakeProgress(a.quiet));
+    for (std::string& reason : run.verdict.reasons) reason = InFlagTerms(reason, a);
     for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     for (const std::string& w : run.result.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     const Written written = WriteOutputs(run, a.on_failure, out);
