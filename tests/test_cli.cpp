@@ -1235,6 +1235,49 @@ TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
     EXPECT_NE(far.err.find("check the anchor and the map file"), std::string::npos);
 }
 
+// A user's own ground truth beside a trajectory file: the summary gives the same errors as the
+// scenario file that names it; an output naming it is refused as an input.
+TEST_F(CliFormats, GroundTruthOnTheCommandLineGivesTheErrors) {
+    const CaseDirs c = MakeCase("GroundTruthFlag");
+    const std::string gt = (c.scenario / "ground_truth.tum").string();
+    const RunResult via_scenario =
+        RunProgram(kCli, {"correct", c.scenario.string(), "-o", c.output.string()},
+                   c.out_dir.parent_path());
+    ASSERT_EQ(via_scenario.exit_code, kExitOk) << via_scenario.err;
+    const RunResult r = RunProgram(
+        kCli,
+        CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                    {"--anchor", "48.98,8.39,0", "--frame", "enu", "--ground-truth", gt}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    auto ate_line = [](const std::string& out, const std::string& row) {
+        std::size_t at = out.find("\n  " + row + " ");
+        if (at == std::string::npos) return std::string();
+        ++at;
+        return out.substr(at, out.find('\n', at) - at);
+    };
+    ASSERT_FALSE(ate_line(r.out, "estimate").empty());
+    EXPECT_EQ(ate_line(r.out, "estimate"), ate_line(via_scenario.out, "estimate"));
+    EXPECT_EQ(ate_line(r.out, "corrected"), ate_line(via_scenario.out, "corrected"));
+
+    const RunResult overwrite = RunProgram(
+        kCli,
+        {"correct", (c.scenario / "estimate.tum").string(), "--osm",
+         (c.scenario / "map.osm").string(), "-o", gt, "--anchor", "48.98,8.39,0", "--frame", "enu",
+         "--ground-truth", gt},
+        c.out_dir.parent_path());
+    EXPECT_EQ(overwrite.exit_code, kExitBadInput);
+    EXPECT_NE(overwrite.err.find("destroy an input"), std::string::npos) << overwrite.err;
+    EXPECT_EQ(RunProgram(kCli,
+                         CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                                     {"--anchor", "48.98,8.39,0", "--frame", "enu",
+                                      "--ground-truth-times", gt}),
+                         c.out_dir.parent_path())
+                  .exit_code,
+              kExitBadInput);
+}
+
 // A start that does not fit the map (the yaw 40 deg off), given on the command line: the advice
 // names the flag, not the scenario key.
 TEST_F(CliFormats, FailureAdviceNamesTheFlagsTheUserGave) {

@@ -42,7 +42,9 @@ const char* kCorrectUsage =
     "       driftcorr correct <trajectory> --osm <map.osm|map.osm.pbf> -o <corrected.tum>\n"
     "                         --anchor LAT,LON,YAW | --crs EPSG:n --anchor EASTING,NORTHING,YAW\n"
     "                         [--frame enu|kitti_camera] [--format tum|csv|euroc|kitti]\n"
-    "                         [--rate-hz R] [--heading orientation|motion] [options as above]\n"
+    "                         [--rate-hz R | --times FILE] [--heading orientation|motion]\n"
+    "                         [--ground-truth FILE [--ground-truth-times FILE]]\n"
+    "                         [options as above]\n"
     "       driftcorr correct <scenario>... [--manifest FILE] -o <folder> [-j N]\n"
     "                         [--geojson <folder>] [--covariance <folder>] [options as above]\n"
     "\n"
@@ -61,7 +63,10 @@ const char* kCorrectUsage =
     "  --crs) and its yaw [deg, counter-clockwise from East], or `auto` to estimate the yaw\n"
     "  from the map. --frame (required except for EuRoC) names the axes: enu (x, y horizontal,\n"
     "  z up) or kitti_camera (x right, y down, z forward). --format is taken from the name\n"
-    "  (.tum, .csv; a .csv with the EuRoC header is EuRoC) unless given; kitti needs --rate-hz.\n"
+    "  (.tum, .csv; a .csv with the EuRoC header is EuRoC) unless given; kitti needs --rate-hz\n"
+    "  or --times (one time [s] a line, as KITTI's times.txt).\n"
+    "  --ground-truth: the same drive's true poses, in the trajectory's format and frame (and\n"
+    "  rate or --ground-truth-times); the summary then gives the errors.\n"
     "  TUM may hold positions only (t x y z); CSV has a header (README: Trajectory formats).\n"
     "  Without orientations, or with --heading motion, the heading is the direction of motion.\n"
     "Several scenarios (or --manifest, one scenario path a line, or -o naming a folder): -o is\n"
@@ -83,6 +88,9 @@ struct Args {
     std::string jobs = "1";
     /// A trajectory file without a scenario file.
     std::string osm, anchor, crs, frame, format, rate_hz, heading;
+    /// With --osm: the ground truth (same format and frame as the trajectory, the summary's
+    /// errors) and a kitti file's per-line times (instead of --rate-hz), the ground truth's too.
+    std::string ground_truth, times, ground_truth_times;
     bool quiet = false;
 
     /// Several scenarios, or one with -o naming a folder (an existing one, or a path ending in
@@ -114,7 +122,9 @@ std::string CheckChoices(const Args& a) {
 
 std::string CheckModes(const Args& a) {
     const bool file_options = !a.anchor.empty() || !a.crs.empty() || !a.frame.empty() ||
-                              !a.format.empty() || !a.rate_hz.empty() || !a.heading.empty();
+                              !a.format.empty() || !a.rate_hz.empty() || !a.heading.empty() ||
+                              !a.ground_truth.empty() || !a.times.empty() ||
+                              !a.ground_truth_times.empty();
     if (a.inputs.empty() && a.manifest.empty()) return "missing scenario";
     if (a.output.empty()) {
         return a.Batch() ? "missing -o <folder>" : "missing -o <corrected.tum>";
@@ -124,8 +134,9 @@ std::string CheckModes(const Args& a) {
         return "--osm corrects one trajectory file; several scenarios need scenario files";
     }
     if (a.osm.empty() && file_options) {
-        return "--anchor, --crs, --frame, --format, --rate-hz and --heading go with --osm "
-               "(a trajectory without a scenario file)";
+        return "--anchor, --crs, --frame, --format, --rate-hz, --times, --heading, "
+               "--ground-truth and --ground-truth-times go with --osm (a trajectory without a "
+               "scenario file)";
     }
     if (!a.osm.empty() && a.anchor.empty()) return "missing --anchor (with --osm)";
     return "";
@@ -139,7 +150,8 @@ bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
          {"--on-failure", &a.on_failure}, {"--manifest", &a.manifest}, {"-j", &a.jobs},
          {"--jobs", &a.jobs}, {"--osm", &a.osm}, {"--anchor", &a.anchor}, {"--crs", &a.crs},
          {"--frame", &a.frame}, {"--format", &a.format}, {"--rate-hz", &a.rate_hz},
-         {"--heading", &a.heading}}};
+         {"--heading", &a.heading}, {"--ground-truth", &a.ground_truth}, {"--times", &a.times},
+         {"--ground-truth-times", &a.ground_truth_times}}};
     auto positional = [&a](const std::string& arg) -> std::string {
         a.inputs.push_back(arg);
         return "";
@@ -454,9 +466,11 @@ io::AnchorSpec ParseAnchorOption(const Args& a) {
 }
 
 /// The trajectory's format: --format, else what its name (and a CSV's header) says.
-io::TrajectorySource SourceFromOptions(const Args& a) {
+/// The trajectory source of `path` from the file options; `times`: its kitti times file.
+io::TrajectorySource SourceFromOptions(const Args& a, const std::string& path,
+                                       const std::string& times, const char* times_flag) {
     io::TrajectorySource src;
-    src.path = a.inputs.front();
+    src.path = path;
     std::optional<io::TrajectoryFormat> format;
     if (!a.format.empty()) {
         format = io::ParseTrajectoryFormat(a.format);
@@ -479,8 +493,18 @@ io::TrajectorySource SourceFromOptions(const Args& a) {
         }
         src.rate_hz = AnchorNumber(a.rate_hz, "rate");
     }
-    if (src.format == io::TrajectoryFormat::kKitti && !src.rate_hz) {
-        throw InputError(src.path, 0, "--rate-hz", "a kitti trajectory needs --rate-hz");
+    if (!times.empty()) {
+        if (src.format != io::TrajectoryFormat::kKitti) {
+            throw InputError("", 0, times_flag, "only with --format kitti");
+        }
+        if (src.rate_hz) {
+            throw InputError("", 0, times_flag, "give --rate-hz or the times, not both");
+        }
+        src.times_path = times;
+    }
+    if (src.format == io::TrajectoryFormat::kKitti && !src.rate_hz && !src.times_path) {
+        throw InputError(src.path, 0, "--rate-hz",
+                         std::string("a kitti trajectory needs --rate-hz or ") + times_flag);
     }
     src.heading_from_motion = a.heading == "motion";
     return src;
@@ -492,7 +516,13 @@ io::Scenario ScenarioFromOptions(const Args& a) {
     s.dir = std::filesystem::current_path().string();
     s.name = std::filesystem::path(a.inputs.front()).stem().string();
     s.mode = io::ScenarioMode::kRoad2d;
-    s.estimate = SourceFromOptions(a);
+    s.estimate = SourceFromOptions(a, a.inputs.front(), a.times, "--times");
+    if (!a.ground_truth.empty()) {
+        s.ground_truth = SourceFromOptions(a, a.ground_truth, a.ground_truth_times,
+                                           "--ground-truth-times");
+    } else if (!a.ground_truth_times.empty()) {
+        throw InputError("", 0, "--ground-truth-times", "only with --ground-truth");
+    }
     if (!a.frame.empty()) {
         const std::optional<FrameAxes> axes = ParseFrameAxes(a.frame);
         if (!axes) {
