@@ -442,12 +442,21 @@ TEST_P(WindowDerivatives, NewtonReachesIpoptsMinimum) {
     pn.Gradient(x0.data(), g0.data());
     double g0_max = 0.0;
     for (double g : g0) g0_max = std::max(g0_max, std::abs(g));
-    const SolveReport rn = SolveWithNewton(pn, NewtonOptions{});
+    // Each solver reports every iteration it counts (the final solve's progress lines).
+    int newton_calls = 0, ipopt_calls = 0, newton_last = 0, ipopt_last = 0;
+    NewtonOptions newton;
+    newton.on_iteration = [&](int k) { ++newton_calls, newton_last = k; };
+    const SolveReport rn = SolveWithNewton(pn, newton);
     IpoptOptions opt;
     opt.max_iterations = 200;
+    opt.on_iteration = [&](int k) { ++ipopt_calls, ipopt_last = k; };
     const SolveReport ri = SolveWithIpopt(pi, opt);
     ASSERT_TRUE(Usable(rn.status)) << rn.message;
     ASSERT_TRUE(Usable(ri.status)) << ri.message;
+    EXPECT_EQ(newton_calls, rn.iterations);
+    EXPECT_EQ(newton_last, rn.iterations);
+    EXPECT_EQ(ipopt_calls, ri.iterations);
+    EXPECT_EQ(ipopt_last, ri.iterations);
     ASSERT_GT(g0_max, 0.01) << "the window must start away from its minimum";
     EXPECT_LT(rn.objective, f0);
     EXPECT_NEAR(rn.objective, ri.objective, 1e-6 * (1.0 + std::abs(ri.objective)));

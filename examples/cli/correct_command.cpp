@@ -166,7 +166,16 @@ bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
 ProgressCallback MakeProgress(bool quiet) {
     if (quiet) return {};
     const bool tty = ::isatty(STDERR_FILENO);
-    return [tty, last = -1](const CorrectionProgress& p) mutable {
+    using Clock = std::chrono::steady_clock;
+    return [tty, last = -1, said = Clock::now()](const CorrectionProgress& p) mutable {
+        if (p.stage == "refining") {  // the final solve: a line every 2 s while it runs
+            if (Clock::now() - said < std::chrono::seconds(2)) return;
+            said = Clock::now();
+            std::fprintf(stderr, "%s[driftcorr] refine      iteration %d%s", tty ? "\r" : "",
+                         p.iteration, tty ? "" : "\n");
+            return;
+        }
+        if (p.stage == "incremental") said = Clock::now();
         const int pct = int(100.0 * p.poses_done / std::max<std::size_t>(1, p.poses_total));
         if (tty) {
             std::fprintf(stderr, "\r[driftcorr] %-11s %6zu / %zu poses (%3d %%)", p.stage.c_str(),

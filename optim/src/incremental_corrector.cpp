@@ -57,7 +57,8 @@ struct SavedPoses {
 // tolerance (refine_newton_tolerance).
 NewtonOptions NewtonFrom(const IpoptOptions& opt, const CorrectorConfig& cfg, bool refine) {
     const double tolerance = refine ? cfg.refine_newton_tolerance : opt.tolerance;
-    return {opt.max_iterations, tolerance, std::max(opt.acceptable_tolerance, tolerance)};
+    return {opt.max_iterations, tolerance, std::max(opt.acceptable_tolerance, tolerance),
+            opt.on_iteration};
 }
 
 // The largest excess of a flagged pose's corridor distance over corridor_slack_m (0 if none).
@@ -413,8 +414,12 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
     const auto t0 = std::chrono::steady_clock::now();
     const std::size_t n = size();
     if (cfg_.refine) {
-        result.refine_report =
-            SolveWindow(state_, field_, cfg_, cfg_.refine_ipopt, 1, n - 1, result, true);
+        IpoptOptions opt = cfg_.refine_ipopt;
+        int iterations = 0;  // over the Newton and Ipopt solves of the final solve
+        if (progress) {
+            opt.on_iteration = [&](int) { progress({"refining", n, n, ++iterations}); };
+        }
+        result.refine_report = SolveWindow(state_, field_, cfg_, opt, 1, n - 1, result, true);
         if (progress) progress({"refine", n, n});
         result.status = result.refine_report.status;
         result.message = "refine: " + result.refine_report.message;

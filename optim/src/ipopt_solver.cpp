@@ -18,7 +18,8 @@ using Ipopt::Number;
 // Thin TNLP adapter: every callback forwards to the solver-independent WindowProblem.
 class WindowTnlp : public Ipopt::TNLP {
 public:
-    explicit WindowTnlp(WindowProblem& p) : p_(p) {}
+    WindowTnlp(WindowProblem& p, std::function<void(int)> on_iteration)
+        : p_(p), on_iteration_(std::move(on_iteration)) {}
 
     bool get_nlp_info(Index& n, Index& m, Index& nnz_jac, Index& nnz_h,
                       IndexStyleEnum& style) override {
@@ -71,6 +72,12 @@ public:
         }
         return true;
     }
+    bool intermediate_callback(Ipopt::AlgorithmMode, Index iter, Number, Number, Number, Number,
+                               Number, Number, Number, Number, Index, const Ipopt::IpoptData*,
+                               Ipopt::IpoptCalculatedQuantities*) override {
+        if (on_iteration_ && iter > 0) on_iteration_(iter);
+        return true;
+    }
     void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*,
                            const Number*, Index m, const Number* g, const Number*, Number obj,
                            const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
@@ -87,6 +94,7 @@ public:
 
 private:
     WindowProblem& p_;
+    std::function<void(int)> on_iteration_;
 };
 
 SolveStatus MapStatus(Ipopt::ApplicationReturnStatus s) {
@@ -153,7 +161,7 @@ SolveReport SolveWithIpopt(WindowProblem& problem, const IpoptOptions& options) 
         report.message = "Ipopt initialisation failed";
         return report;
     }
-    Ipopt::SmartPtr<WindowTnlp> tnlp = new WindowTnlp(problem);
+    Ipopt::SmartPtr<WindowTnlp> tnlp = new WindowTnlp(problem, options.on_iteration);
     const Ipopt::ApplicationReturnStatus s = app->OptimizeTNLP(Ipopt::GetRawPtr(tnlp));
     report.status = MapStatus(s);
     report.message = StatusName(s);

@@ -197,6 +197,7 @@ SolveReport SolveWithNewton(WindowProblem& problem, const NewtonOptions& options
             break;
         }
         report.iterations = it + 1;
+        if (options.on_iteration) options.on_iteration(it + 1);
         std::vector<double>& values = pattern.matrix.values();
         std::fill(values.begin(), values.end(), 0.0);
         for (std::size_t e = 0; e < hessian.size(); ++e) {

@@ -198,6 +198,7 @@ ScenarioEvaluation EvaluateScenario(
             const std::string stage = ToString(m);
             report(stage, 0.0);
             MethodResult r = RunMethod(m, ps, config.pipeline, [&](const CorrectionProgress& p) {
+                if (p.stage == "refining") return;  // iterations of the final solve
                 report(stage, p.poses_done / std::max(1.0, double(p.poses_total)));
             });
             Measure(r, ps);

@@ -15,9 +15,12 @@
 namespace driftcorr {
 
 struct CorrectionProgress {
-    std::string stage;  ///< "incremental", "refine" or "paper"
+    /// "incremental", "refining" (the final solve runs: after each of its iterations),
+    /// "refine" (it has ended) or "paper"
+    std::string stage;
     std::size_t poses_done = 0;
     std::size_t poses_total = 0;
+    int iteration = 0;  ///< "refining": the final solve's iterations so far
 };
 using ProgressCallback = std::function<void(const CorrectionProgress&)>;
 

@@ -2,6 +2,8 @@
 // Solves a WindowProblem with Ipopt (exact first and second derivatives, MUMPS). Ipopt's types
 // stay inside ipopt_solver.cpp. Safe to call from several threads: the calls take turns, because
 // MUMPS is not thread-safe (a process-wide lock around each solve).
+#include <functional>
+
 #include "driftcorr/optim/solve_status.h"
 #include "driftcorr/optim/window_problem.h"
 
@@ -14,6 +16,8 @@ struct IpoptOptions {
     double acceptable_tolerance = 1e-4;
     double constraint_tolerance = 1e-4;  ///< [m] allowed corridor violation at convergence
     int print_level = 0;
+    /// Called after each iteration with its number (from 1); empty: none. For progress reports.
+    std::function<void(int)> on_iteration;
 };
 
 /// Solves and, when the outcome is usable, stores the solution into the problem's state.

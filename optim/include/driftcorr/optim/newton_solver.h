@@ -15,6 +15,8 @@
 // below `tolerance`; `acceptable_tolerance` where the line search can no longer decrease the
 // objective, or where two steps in a row were taken within its rounding without lowering it.
 // The constrained program (the hard corridor) stays with Ipopt (ipopt_solver.h).
+#include <functional>
+
 #include "driftcorr/optim/solve_status.h"
 #include "driftcorr/optim/window_problem.h"
 
@@ -24,6 +26,8 @@ struct NewtonOptions {
     int max_iterations = 50;
     double tolerance = 1e-6;
     double acceptable_tolerance = 1e-4;
+    /// Called after each iteration with its number (from 1); empty: none. For progress reports.
+    std::function<void(int)> on_iteration;
 };
 
 /// Solves and, when the outcome is usable, stores the solution into the problem's state.
