@@ -15,6 +15,12 @@ std::vector<double> HorizontalErrors(const PlanarTrajectory& traj, const PlanarT
     return e;
 }
 
+double PathLength(const PlanarTrajectory& t) {
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < t.p_en.size(); ++i) path_m += (t.p_en[i] - t.p_en[i - 1]).norm();
+    return path_m;
+}
+
 std::vector<double> DistanceTravelled(const PlanarTrajectory& gt) {
     std::vector<double> s(gt.size(), 0.0);
     for (std::size_t i = 1; i < s.size(); ++i) s[i] = s[i - 1] + (gt.p_en[i] - gt.p_en[i - 1]).norm();

@@ -8,6 +8,7 @@
 
 #include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
+#include "driftcorr/core/metrics.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/window_problem.h"
@@ -436,10 +437,7 @@ constexpr double kRegionLevel = 0.95;
 // independent, the map's error holding along a street, so the sample is the path's number of
 // map-offset correlation lengths (CovarianceConfig::map_offset_correlation_m), at least one.
 double AgreementThreshold(const PlanarTrajectory& estimate, const CorrectorConfig& cfg) {
-    double path_m = 0.0;
-    for (std::size_t i = 1; i < estimate.size(); ++i) {
-        path_m += (estimate.p_en[i] - estimate.p_en[i - 1]).norm();
-    }
+    const double path_m = PathLength(estimate);
     const double n = std::max(1.0, path_m / cfg.covariance.map_offset_correlation_m);
     return kRegionLevel - kNormalOneSided95 * std::sqrt(kRegionLevel * (1.0 - kRegionLevel) / n);
 }
@@ -512,10 +510,7 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
     const double nan = std::numeric_limits<double>::quiet_NaN();
     CorrectorConfig one = cfg, walk = cfg;
     one.compute_covariance = walk.compute_covariance = false;
-    double path_m = 0.0;
-    for (std::size_t i = 1; i < estimate.size(); ++i) {
-        path_m += (estimate.p_en[i] - estimate.p_en[i - 1]).norm();
-    }
+    const double path_m = PathLength(estimate);
     one.model.scale_segment_m = 2.0 * path_m + 1.0;  // one segment (repaired steps are longer)
     std::optional<IncrementalCorrector> kept;
     kept.emplace(CorrectFromStarts(estimate, field, one, result, progress));

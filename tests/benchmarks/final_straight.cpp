@@ -64,12 +64,6 @@ double kClimbM = 0.5;
 // The causal first straight's scale when > 0 (environment SCALE_PRIOR), else the model's prior.
 double kScalePrior = 0.0;
 
-std::vector<double> PathLength(const PlanarTrajectory& t) {
-    std::vector<double> s(t.size(), 0.0);
-    for (std::size_t i = 1; i < t.size(); ++i) s[i] = s[i - 1] + (t.p_en[i] - t.p_en[i - 1]).norm();
-    return s;
-}
-
 // The step scale between poses a and b: ground-truth path over the estimate's path.
 double PathRatio(const std::vector<double>& sg, const std::vector<double>& se, std::size_t a,
                  std::size_t b) {
@@ -109,7 +103,7 @@ void Evaluate(const std::string& dir) {
     const PlanarTrajectory& gt = *ps.ground_truth;
     const PlanarTrajectory& est = ps.estimate;
     const std::size_t n = gt.size();
-    const std::vector<double> sg = PathLength(gt), se = PathLength(est);
+    const std::vector<double> sg = DistanceTravelled(gt), se = DistanceTravelled(est);
     const double prior = kScalePrior > 0.0
                              ? kScalePrior
                              : pipeline::CorrectorFor(ps.scenario, pipeline::PipelineConfig{})

@@ -10,6 +10,7 @@
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/errors.h"
 #include "driftcorr/core/format.h"
+#include "driftcorr/core/metrics.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/floor_plan.h"
@@ -403,10 +404,7 @@ void CheckWalkStart(const PreparedScenario& ps) {
 // other way round), reported before the solve.
 void CheckRoadFrame(const PreparedScenario& ps) {
     if (ps.estimate.size() < 2) return;
-    double path_m = 0.0;
-    for (std::size_t i = 1; i < ps.estimate.size(); ++i) {
-        path_m += (ps.estimate.p_en[i] - ps.estimate.p_en[i - 1]).norm();
-    }
+    const double path_m = PathLength(ps.estimate);
     const auto [lo, hi] = std::minmax_element(ps.estimate.up_m.begin(), ps.estimate.up_m.end());
     const double range_m = *hi - *lo;
     if (range_m <= std::max(50.0, 0.5 * path_m)) return;
@@ -425,10 +423,7 @@ void CheckRoadFrame(const PreparedScenario& ps) {
 void CheckRoadsInReach(const PreparedScenario& ps, const PipelineConfig& config) {
     if (ps.network.roads.empty() || ps.estimate.size() == 0) return;
     const double gap_m = ps.network.Bounds().exteriorDistance(ps.estimate.p_en[0]);
-    double path_m = 0.0;
-    for (std::size_t i = 1; i < ps.estimate.size(); ++i) {
-        path_m += (ps.estimate.p_en[i] - ps.estimate.p_en[i - 1]).norm();
-    }
+    const double path_m = PathLength(ps.estimate);
     if (gap_m <= kScaleMax * path_m + config.field.margin_m) return;
     std::string where = FormatFixed(gap_m / 1000.0, 1) + " km from the nearest road of the map";
     std::string hint = "check the anchor and the map file";

@@ -23,6 +23,9 @@ struct ErrorMetrics {
 /// Per-pose horizontal errors [m]. Precondition: same size.
 std::vector<double> HorizontalErrors(const PlanarTrajectory& traj, const PlanarTrajectory& gt);
 
+/// Horizontal path length of a trajectory [m] (0 for fewer than two poses).
+double PathLength(const PlanarTrajectory& t);
+
 /// Cumulative horizontal distance travelled along the ground truth [m], one entry per pose.
 std::vector<double> DistanceTravelled(const PlanarTrajectory& gt);
 
