@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 #include <proj.h>
 
+#include <GeographicLib/Geodesic.hpp>
 #include <GeographicLib/LocalCartesian.hpp>
 #include <cctype>
 #include <cmath>
@@ -169,6 +170,12 @@ std::string NormaliseCrsName(const std::string& crs) {
     if (std::regex_match(s, m, kEpsg)) return "EPSG:" + m[1].str();
     if (std::regex_match(s, kCrs84)) return "OGC:CRS84";
     return "";
+}
+
+double GeodesicDistanceM(const GeoPoint& a, const GeoPoint& b) {
+    double s12 = 0.0;
+    GeographicLib::Geodesic::WGS84().Inverse(a.lat_deg, a.lon_deg, b.lat_deg, b.lon_deg, s12);
+    return s12;
 }
 
 }  // namespace driftcorr

@@ -408,10 +408,10 @@ void CheckRoadFrame(const PreparedScenario& ps) {
     const auto [lo, hi] = std::minmax_element(ps.estimate.up_m.begin(), ps.estimate.up_m.end());
     const double range_m = *hi - *lo;
     if (range_m <= std::max(50.0, 0.5 * path_m)) return;
+    const std::string frame = ps.scenario.frame == FrameAxes::kEnu ? "enu" : "kitti_camera";
     throw InputError(ps.scenario.yaml_path, 0, "frame",
-                     "with frame " + std::string(ps.scenario.frame == FrameAxes::kEnu ? "enu" : "kitti_camera") + " the estimate's height " +
-                         "spans " + FormatFixed(range_m, 1) + " m over " +
-                         FormatFixed(path_m, 1) +
+                     "with frame " + frame + " the estimate's height spans " +
+                         FormatFixed(range_m, 1) + " m over " + FormatFixed(path_m, 1) +
                          " m of horizontal path, steeper than any road: are its axes those of "
                          "this frame (enu: x East, y North, z up; kitti_camera: x right, y down, "
                          "z forward)?");
@@ -435,17 +435,15 @@ void CheckRoadsInReach(const PreparedScenario& ps, const PipelineConfig& config)
                  FormatFixed(geo.max().x(), 4) + ")";
         const Eigen::Vector2d centre = geo.center();
         if (a.lat_deg && a.lon_deg) {
-            // Great-circle distance to the nearest corner or edge of the roads' extent (the
-            // plane's distance is meaningless that far from the anchor).
+            // The geodesic distance to the nearest point of the roads' extent (the plane's
+            // distance means little that far from the anchor).
             const Eigen::Vector2d anchor(*a.lon_deg, *a.lat_deg);
             const Eigen::Vector2d near = anchor.cwiseMax(geo.min()).cwiseMin(geo.max());
-            const double p1 = DegToRad(anchor.y()), p2 = DegToRad(near.y());
-            const double h = std::pow(std::sin(0.5 * (p2 - p1)), 2) +
-                             std::cos(p1) * std::cos(p2) *
-                                 std::pow(std::sin(0.5 * DegToRad(near.x() - anchor.x())), 2);
-            const double km = 2.0 * 6371.0 * std::asin(std::min(1.0, std::sqrt(h)));
-            where = FormatFixed(km, 1) + where.substr(where.find(" km"));
-            if (std::abs(*a.lat_deg - centre.x()) < 1.0 && std::abs(*a.lon_deg - centre.y()) < 1.0) {
+            const double m = GeodesicDistanceM({anchor.y(), anchor.x(), 0.0},
+                                               {near.y(), near.x(), 0.0});
+            where = FormatFixed(m / 1000.0, 1) + where.substr(where.find(" km"));
+            if (std::abs(*a.lat_deg - centre.x()) < 1.0 &&
+                std::abs(*a.lon_deg - centre.y()) < 1.0) {
                 hint = "lat and lon look swapped";
             }
         }

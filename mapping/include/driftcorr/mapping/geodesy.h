@@ -13,6 +13,9 @@ struct GeoPoint {
     double alt_m = 0.0;
 };
 
+/// The WGS84 ellipsoid's geodesic distance between two points [m] (heights ignored).
+double GeodesicDistanceM(const GeoPoint& a, const GeoPoint& b);
+
 /// The WGS84 local tangent plane (East-North-Up, true north) at an origin.
 class LocalTangentPlane {
 public:
