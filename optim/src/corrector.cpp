@@ -145,6 +145,17 @@ CorrectionResult DecideHeadingBias(const std::vector<double>& t_s, const Travers
 
 }  // namespace
 
+namespace {
+
+// Whether the batch correction re-runs itself on other floors after the estimate's floor changes
+// (CorrectorConfig::restart_height_gains): heights free, and the floors known.
+bool FloorHypotheses(const TraversableField* field, bool fix_height, const CorrectorConfig& cfg) {
+    return field && !fix_height && !cfg.model.floor_heights_m.empty() &&
+           !cfg.restart_height_gains.empty();
+}
+
+}  // namespace
+
 // The incremental pass and the refinement live in IncrementalCorrector (shared with the online
 // corrector); the batch case hands it the whole estimate at once, once per start scale.
 IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
@@ -304,9 +315,7 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
         initial.bias_segment.clear();
         initial.biases.clear();
     }
-    const bool floor_hypotheses = field && !initial.fix_height &&
-                                  !cfg.model.floor_heights_m.empty() &&
-                                  !cfg.restart_height_gains.empty();
+    const bool floor_hypotheses = FloorHypotheses(field, initial.fix_height, cfg);
     std::optional<IncrementalCorrector> best;
     std::vector<double> nll;
     std::vector<std::vector<Eigen::Vector2d>> paths;  // each start's corrected positions
@@ -565,9 +574,7 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {
     CorrectionResult result;
-    const bool floor_hypotheses = field && !field->planar() &&
-                                  !cfg.model.floor_heights_m.empty() &&
-                                  !cfg.restart_height_gains.empty();
+    const bool floor_hypotheses = FloorHypotheses(field, !field || field->planar(), cfg);
     if (cfg.decide_scale_walk && cfg.start_scales.size() == 1 && !floor_hypotheses &&
         estimate.size() >= 3) {
         CorrectWithDecidedScaleWalk(estimate, field, cfg, result, progress);
