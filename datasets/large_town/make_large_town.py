@@ -3,9 +3,9 @@
 and time of the road field on maps larger than a city district.
 
 The map: a grid of residential streets 150-400 m apart (a fixed pseudo-random sequence, so that
-no two blocks look alike) over SIZE x SIZE metres (OpenStreetMap XML, WGS84 through the
-ellipsoid's radii of curvature at the anchor: within about a metre of the anchor's tangent plane
-over 10 km). The drive: an L along two streets, about LEG metres East along the second street
+no two blocks look alike) over SIZE x SIZE metres of the anchor's East-North tangent plane,
+written in WGS84 (OpenStreetMap XML) through the exact ENU -> ECEF -> geodetic transform, so that
+the streets lie where the ground truth drives in the scenario's `enu` frame. The drive: an L along two streets, about LEG metres East along the second street
 from the South, then about LEG metres North, at 10 m/s and 10 Hz. The estimate dead-reckons the drive's steps
 with a step scale of 0.99 and a heading that drifts by 1e-6 rad a step; each pose's orientation
 faces its next step. Deterministic.
@@ -25,8 +25,41 @@ N = A / math.sqrt(1.0 - E2 * S * S)             # prime vertical radius of curva
 SPEED, RATE = 10.0, 10.0
 
 
-def latlon(e, n):
+def latlon_near(e, n):
+    """A point near the grid's origin through the radii of curvature (the anchor only)."""
     return (LAT0 + math.degrees(n / M), LON0 + math.degrees(e / (N * math.cos(math.radians(LAT0)))))
+
+
+def ecef(lat_deg, lon_deg, h):
+    la, lo = math.radians(lat_deg), math.radians(lon_deg)
+    nu = A / math.sqrt(1.0 - E2 * math.sin(la) ** 2)
+    return ((nu + h) * math.cos(la) * math.cos(lo), (nu + h) * math.cos(la) * math.sin(lo),
+            (nu * (1.0 - E2) + h) * math.sin(la))
+
+
+def geodetic(x, y, z):
+    """ECEF -> (lat, lon) in degrees; the latitude by fixed-point iteration (converges to 1e-12)."""
+    lon = math.atan2(y, x)
+    p = math.hypot(x, y)
+    lat = math.atan2(z, p * (1.0 - E2))
+    for _ in range(10):
+        nu = A / math.sqrt(1.0 - E2 * math.sin(lat) ** 2)
+        h = p / math.cos(lat) - nu
+        lat = math.atan2(z, p * (1.0 - E2 * nu / (nu + h)))
+    return math.degrees(lat), math.degrees(lon)
+
+
+class Enu:
+    """The East-North-Up tangent plane at (lat, lon, ALT0): plane point -> WGS84 (lat, lon)."""
+
+    def __init__(self, lat_deg, lon_deg):
+        self.origin = ecef(lat_deg, lon_deg, ALT0)
+        la, lo = math.radians(lat_deg), math.radians(lon_deg)
+        self.east = (-math.sin(lo), math.cos(lo), 0.0)
+        self.north = (-math.sin(la) * math.cos(lo), -math.sin(la) * math.sin(lo), math.cos(la))
+
+    def latlon(self, e, n):
+        return geodetic(*(o + e * ea + n * na for o, ea, na in zip(self.origin, self.east, self.north)))
 
 
 def streets(size):
@@ -40,13 +73,13 @@ def streets(size):
         offsets.append(round(nxt, 1))
 
 
-def write_map(path, xs):
+def write_map(path, xs, enu, e0, n0):
     k = len(xs) - 1
     with open(path + ".tmp", "w") as f:
         f.write('<?xml version="1.0" encoding="UTF-8"?>\n<osm version="0.6" generator="make_large_town">\n')
         for j in range(k + 1):
             for i in range(k + 1):
-                lat, lon = latlon(xs[i], xs[j])
+                lat, lon = enu.latlon(xs[i] - e0, xs[j] - n0)
                 f.write(f'  <node id="{1 + j * (k + 1) + i}" lat="{lat:.9f}" lon="{lon:.9f}"/>\n')
         way = 1
         for fixed in range(k + 1):
@@ -105,13 +138,14 @@ def main():
     if not 0.0 < a.leg < a.size - 2.0 * xs[1]:
         ap.error("--leg must be within (0, size - 2 x the first block)")
     os.makedirs(a.out_dir, exist_ok=True)
-    write_map(os.path.join(a.out_dir, "map.osm"), xs)
     gt, (e0, n0) = drive(xs, a.leg)
-    # The trajectory frame starts at the drive's start: the anchor is that crossing.
+    # The trajectory frame starts at the drive's start: the anchor is that crossing, and the
+    # map's plane is the anchor's tangent plane.
+    lat_s, lon_s = latlon_near(e0, n0)
+    write_map(os.path.join(a.out_dir, "map.osm"), xs, Enu(lat_s, lon_s), e0, n0)
     gt = [(x - e0, y - n0) for x, y in gt]
     write_tum(os.path.join(a.out_dir, "ground_truth.tum"), gt)
     write_tum(os.path.join(a.out_dir, "estimate.tum"), dead_reckon(gt))
-    lat_s, lon_s = latlon(e0, n0)
     yaml = f"""name: large-town-L
 mode: road2d
 estimate: {{path: estimate.tum, format: tum}}
