@@ -2,6 +2,7 @@
 // road network, ambiguity reported, and the pipeline's `yaw_deg: auto` on a real drive.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -62,6 +63,40 @@ TEST(AnchorFit, RecoversAHeadingFromTheWholeCircle) {
         EXPECT_EQ(fit.best.off_share, 0.0) << wrong_deg;
         ASSERT_TRUE(fit.runner_up.has_value()) << wrong_deg;
         EXPECT_GT(fit.runner_up->rms_m, 2.0 * fit.best.rms_m + 1.0) << wrong_deg;
+    }
+}
+
+// A monocular tracker's drive along the L: the right shape at a tenth of the size. Scaled by 10
+// it fits the L; scaled by 4 it fits as well, turning into the side street at x = 80 m (80 m
+// east, 80 m north): the leading path alone cannot tell the two, so both are candidates, and
+// other scales fit worse.
+TEST(AnchorFit, FindsTheGlobalScalesThatFitAShrunkenDrive) {
+    const TraversableField field = LField();
+    const PlanarTrajectory small = ScaleAbout(DriveAlongL(), Eigen::Vector2d::Zero(), 0.0, 0.1);
+    for (bool search_yaw : {false, true}) {
+        const ScaleFitResult fit = FitScale(small, Eigen::Vector2d::Zero(), 0.0, field, search_yaw,
+                                            2.0, 40.0, 1.02, 3, AnchorFitConfig{});
+        ASSERT_GE(fit.candidates.size(), 2u) << search_yaw;
+        const auto found = [&](double scale) {
+            return std::any_of(fit.candidates.begin(), fit.candidates.begin() + 2,
+                               [&](const ScaleCandidate& c) {
+                                   return std::abs(c.scale - scale) < 0.02 * scale &&
+                                          c.placement.rms_m < 0.3;
+                               });
+        };
+        EXPECT_TRUE(found(10.0)) << search_yaw;
+        EXPECT_TRUE(found(4.0)) << search_yaw;
+        EXPECT_EQ(fit.scales.size(), fit.rms_m.size());
+        EXPECT_NEAR(fit.scales.front(), 2.0, 1e-12);
+        EXPECT_GE(fit.scales.back(), 40.0);
+        // Away from both, the fit is worse (the turn falls beside every corner); below 3 the
+        // whole drive stays on the first street, which fits any such scale.
+        for (std::size_t k = 0; k < fit.scales.size(); ++k) {
+            const double s = fit.scales[k];
+            if (std::abs(std::log(s / 10.0)) > 0.1 && std::abs(std::log(s / 4.0)) > 0.1 && s > 3.0) {
+                EXPECT_GT(fit.rms_m[k], 1.0) << s;
+            }
+        }
     }
 }
 

@@ -14,6 +14,7 @@
 // estimate.kitti + times.txt, the indoor3d cases replace it with a small corridor walk written by
 // the test (GeoJSON floor plan + walkways, or an ASCII PCD floor); each has a valid case too.
 #include <gtest/gtest.h>
+#include <iomanip>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -1233,6 +1234,43 @@ TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
     SCOPED_TRACE(far.out + far.err);
     EXPECT_EQ(far.exit_code, kExitBadInput);
     EXPECT_NE(far.err.find("check the anchor and the map file"), std::string::npos);
+}
+
+// --scale S multiplies the trajectory's positions: a file written at a tenth of its size and
+// given --scale 10 is corrected as the metric file is; --scale 0 is bad input naming the flag.
+TEST_F(CliFormats, ScaleOnTheCommandLine) {
+    const CaseDirs c = MakeCase("ScaleFlag");
+    const fs::path metric = c.out_dir.parent_path() / "metric.tum";
+    const std::string estimate = (c.scenario / "estimate.tum").string();
+    ASSERT_EQ(RunProgram(kCli, CorrectFile(c, estimate, {"--anchor", "48.98,8.39,0", "--frame", "enu"}),
+                         c.out_dir.parent_path()).exit_code, kExitOk);
+    fs::rename(c.output, metric);
+    std::istringstream in(ReadFile(estimate));
+    std::ostringstream small;
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream f(line);
+        double v[8];
+        for (double& x : v) f >> x;
+        if (!f) continue;
+        small << std::setprecision(17) << v[0] << ' ' << 0.1 * v[1] << ' ' << 0.1 * v[2] << ' '
+              << 0.1 * v[3] << ' ' << v[4] << ' ' << v[5] << ' ' << v[6] << ' ' << v[7] << '\n';
+    }
+    const fs::path small_path = c.out_dir.parent_path() / "small.tum";
+    std::ofstream(small_path) << small.str();
+    const RunResult r = RunProgram(
+        kCli, CorrectFile(c, small_path.string(),
+                          {"--anchor", "48.98,8.39,0", "--frame", "enu", "--scale", "10"}),
+        c.out_dir.parent_path());
+    SCOPED_TRACE(r.out + r.err);
+    ASSERT_EQ(r.exit_code, kExitOk);
+    ExpectSameNumbers(ReadFile(c.output), ReadFile(metric.string()), 1e-3);
+
+    const RunResult zero = RunProgram(
+        kCli, CorrectFile(c, small_path.string(),
+                          {"--anchor", "48.98,8.39,0", "--frame", "enu", "--scale", "0"}),
+        c.out_dir.parent_path());
+    EXPECT_EQ(zero.exit_code, kExitBadInput);
+    EXPECT_NE(zero.err.find("--scale: must be auto or a number"), std::string::npos) << zero.err;
 }
 
 // A user's own ground truth beside a trajectory file: the summary gives the same errors as the

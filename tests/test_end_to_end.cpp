@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "driftcorr/core/errors.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/optim/online_corrector.h"
 #include "driftcorr/pipeline/pipeline.h"
@@ -226,6 +227,36 @@ TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
     ASSERT_TRUE(moved.after);
     EXPECT_GT(moved.after->ate_m, run.before->ate_m + 1.0)
         << "the correction must be worse than the input for the test to mean anything";
+}
+
+// KITTI 07's stereo drive as a monocular tracker would have written it (a tenth of its size, the
+// scale drifting 2 % per sqrt(100 m)): taken as metric it is bad input naming anchor.scale; with
+// `scale: auto` its size is found from the map and it is corrected about as well as the metric
+// drive.
+TEST(Monocular, ItsSizeIsFoundFromTheMapAndWithoutScaleAutoItIsNamed) {
+    const std::string real = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_cvo_stereo_geometric";
+    if (!fs::exists(real + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << real;
+    const std::string out = TmpDir("monocular");
+    const std::string command = std::string("\"") + DRIFTCORR_BINARY_DIR +
+                                "/datasets/driftcorr_make_stress_variants\" \"" + real + "\" \"" +
+                                out + "\" --monocular 0.1 > \"" + out + ".log\" 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    try {
+        pipeline::RunCorrection(out + "/mono_0.1", pipeline::PipelineConfig{});
+        ADD_FAILURE() << "a monocular estimate taken as metric must be bad input";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.key(), "anchor.scale");
+        EXPECT_NE(std::string(e.what()).find("monocular"), std::string::npos) << e.what();
+    }
+    const pipeline::CorrectionRun metric = pipeline::RunCorrection(real, pipeline::PipelineConfig{});
+    const pipeline::CorrectionRun mono =
+        pipeline::RunCorrection(out + "/mono_0.1_auto", pipeline::PipelineConfig{});
+    ASSERT_TRUE(Usable(mono.result.status)) << mono.result.message;
+    ASSERT_TRUE(metric.after && mono.after && mono.before);
+    EXPECT_NEAR(mono.global_scale, 10.0, 0.5);
+    EXPECT_NE(mono.verdict.level, VerdictLevel::kFailed);
+    EXPECT_LE(mono.after->ate_m, 1.5 * metric.after->ate_m);
+    EXPECT_LT(mono.after->ate_m, 0.5 * mono.before->ate_m);
 }
 
 // Rewrites the TUM estimate in `dir` with its steps stretched by `first` over the first half of

@@ -180,6 +180,38 @@ TEST(TrajectoryIo, KittiWithTimes) {
     EXPECT_DOUBLE_EQ(traj.t_s[3], 0.35);
 }
 
+// Lines that start with a frame index: the frames a tracker had no pose for are gaps, not poses;
+// the times come from the index (times file or rate).
+TEST(TrajectoryIo, KittiWithFrameIndices) {
+    const fs::path dir = TestDir();
+    std::istringstream in(KittiFixture());
+    std::string indexed;
+    const int frames[] = {0, 3, 4, 9};
+    int k = 0;
+    for (std::string line; std::getline(in, line);) {
+        if (line.empty() || line[0] == '#') continue;
+        indexed += std::to_string(frames[k++]) + " " + line + "\n";
+    }
+    ASSERT_EQ(k, 4);
+    const std::string path = WriteText(dir / "k_indexed.txt", indexed);
+    const Trajectory by_rate = ReadKitti(path, std::nullopt, 10.0);
+    ASSERT_EQ(by_rate.size(), 4u);
+    for (int i = 0; i < 4; ++i) EXPECT_DOUBLE_EQ(by_rate.t_s[i], frames[i] / 10.0);
+    EXPECT_LT((by_rate.p_frame[2] - Eigen::Vector3d(1.0, 0.0, 2.0)).norm(), 1e-12);
+    std::string times;
+    for (int f = 0; f < 10; ++f) times += std::to_string(0.5 * f) + "\n";
+    const Trajectory by_times = ReadKitti(path, WriteText(dir / "t10.txt", times), std::nullopt);
+    ASSERT_EQ(by_times.size(), 4u);
+    EXPECT_DOUBLE_EQ(by_times.t_s[3], 4.5);
+    ExpectInputError([&] { ReadKitti(path, WriteText(dir / "t5.txt", "0\n1\n2\n3\n4\n"), std::nullopt); },
+                     {"has 5 timestamps but", "names frame 9"});
+    std::string backwards = indexed;
+    backwards.replace(backwards.rfind("\n9 ") + 1, 1, "2");
+    const std::string back = WriteText(dir / "k_back.txt", backwards);
+    ExpectInputError([&] { ReadKitti(back, std::nullopt, 10.0); },
+                     {":4:", "frame index", "above the previous line's"});
+}
+
 /// A broken trajectory file and what its error must name.
 struct BadTrajectoryCase {
     std::string label;
@@ -412,6 +444,27 @@ TEST(Scenario, YawAutoAndPositionSearch) {
     EXPECT_EQ(LoadScenario(dir.string()).anchor.position_search_m, 0.0);
 }
 
+// `scale`: auto, or a number the estimate's positions are multiplied by; absent: metric.
+TEST(Scenario, AnchorScale) {
+    const fs::path dir = TestDir() / "scale_scenario";
+    fs::create_directories(dir);
+    WriteText(dir / "scenario.yaml",
+              Replace(kGoodScenario, "  yaw_deg: -30.5\n", "  yaw_deg: -30.5\n  scale: Auto\n"));
+    Scenario s = LoadScenario(dir.string());
+    EXPECT_TRUE(s.anchor.scale_auto);
+    EXPECT_TRUE(s.anchor.scale_given);
+    WriteText(dir / "scenario.yaml",
+              Replace(kGoodScenario, "  yaw_deg: -30.5\n", "  yaw_deg: -30.5\n  scale: 12.5\n"));
+    s = LoadScenario(dir.string());
+    EXPECT_FALSE(s.anchor.scale_auto);
+    EXPECT_TRUE(s.anchor.scale_given);
+    EXPECT_EQ(s.anchor.scale, 12.5);
+    WriteText(dir / "scenario.yaml", kGoodScenario);
+    s = LoadScenario(dir.string());
+    EXPECT_FALSE(s.anchor.scale_given || s.anchor.scale_auto);
+    EXPECT_EQ(s.anchor.scale, 1.0);
+}
+
 // A folder where the scenario file should be is bad input naming the path, not a read error.
 TEST(Scenario, FolderNamedLikeTheScenarioFileIsAnInputError) {
     const fs::path dir = TestDir() / "folder_yaml";
@@ -496,6 +549,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadScenarioCase{"position_search_negative", "  yaw_deg: -30.5\n",
                         "  yaw_deg: -30.5\n  position_search_m: -5\n",
                         ":16: anchor.position_search_m: must be within"},
+        BadScenarioCase{"scale_zero", "  yaw_deg: -30.5\n", "  yaw_deg: -30.5\n  scale: 0\n",
+                        ":16: anchor.scale: must be auto or a number in (0, 1e6)"},
+        BadScenarioCase{"scale_word", "  yaw_deg: -30.5\n", "  yaw_deg: -30.5\n  scale: mono\n",
+                        ":16: anchor.scale: must be auto or a number"},
         BadScenarioCase{"bad_crs", "  lat_deg: 48.98\n  lon_deg: 8.39\n",
                         "  crs: WGS84\n  easting_m: 1\n  northing_m: 2\n",
                         ":13: anchor.crs: unknown CRS"},

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -35,9 +37,30 @@ void PrintUsage(std::FILE* stream) {
         "  heading_bias_0.1, heading_bias_0.3, heading_bias_0.5, yaw_off_10, yaw_off_20,\n"
         "  yaw_off_30, anchor_off_20m, road_removed. A variant that cannot be made is skipped\n"
         "  with a message.\n"
-        "  --seed N   seed of the drop_steps episodes and the anchor_off direction, unsigned\n"
-        "             64-bit (default %llu)\n",
-        static_cast<unsigned long long>(StressConfig().seed));
+        "  --seed N   seed of the drop_steps episodes, the anchor_off direction and the\n"
+        "             monocular scale walk, unsigned 64-bit (default %llu)\n"
+        "  --monocular G1,G2,...  write only monocular variants instead: mono_<G> (the estimate's\n"
+        "             steps scaled by G times a random walk, the anchor as given) and\n"
+        "             mono_<G>_auto (the same with `scale: auto` in the anchor)\n"
+        "  --monocular-drift X    that walk's spread per sqrt(100 m) of path (default %g)\n",
+        static_cast<unsigned long long>(StressConfig().seed), StressConfig().monocular_drift_per_100m);
+}
+
+// "0.05,0.1,0.2": positive numbers, comma-separated.
+std::string ParseScales(const std::string& text, std::vector<double>& scales) {
+    scales.clear();
+    std::size_t begin = 0;
+    while (begin <= text.size()) {
+        const std::size_t end = std::min(text.find(',', begin), text.size());
+        const std::string item = text.substr(begin, end - begin);
+        const std::optional<double> v = synth::ParseDouble(item.c_str());
+        if (!v || !(*v > 0.0)) {
+            return "--monocular: expected positive scales separated by commas, got '" + text + "'";
+        }
+        scales.push_back(*v);
+        begin = end + 1;
+    }
+    return "";
 }
 
 std::string ParseArgs(int argc, char** argv, Options& opt) {
@@ -49,7 +72,14 @@ std::string ParseArgs(int argc, char** argv, Options& opt) {
             continue;
         }
         if (i + 1 >= argc) return arg + ": missing value";
-        const std::string error = synth::ApplySeedOrNumberFlag(arg, argv[++i], opt.config.seed, {});
+        if (arg == "--monocular") {
+            const std::string error = ParseScales(argv[++i], opt.config.monocular_scales);
+            if (!error.empty()) return error;
+            continue;
+        }
+        const std::string error = synth::ApplySeedOrNumberFlag(
+            arg, argv[++i], opt.config.seed,
+            {{"--monocular-drift", &opt.config.monocular_drift_per_100m}});
         if (!error.empty()) return error;
     }
     if (positional.size() != 2) {
@@ -58,7 +88,20 @@ std::string ParseArgs(int argc, char** argv, Options& opt) {
     }
     opt.input = positional[0];
     opt.out_dir = positional[1];
+    if (!(opt.config.monocular_drift_per_100m >= 0.0)) {
+        return "--monocular-drift: must be >= 0";
+    }
     return opt.config.drop.Validate();
+}
+
+// The --monocular flags that made the variants ("" for the default set).
+std::string MonocularFlags(const StressConfig& c) {
+    if (c.monocular_scales.empty()) return "";
+    std::string flags = " --monocular ";
+    for (std::size_t k = 0; k < c.monocular_scales.size(); ++k) {
+        flags += (k ? "," : "") + ExactNumber(c.monocular_scales[k]);
+    }
+    return flags + " --monocular-drift " + ExactNumber(c.monocular_drift_per_100m);
 }
 
 std::vector<std::string> GeneratedBy(const Options& opt, const InputScenario& input,
@@ -68,7 +111,7 @@ std::vector<std::string> GeneratedBy(const Options& opt, const InputScenario& in
             "input: " + input.scenario.yaml_path + " (scenario '" + input.scenario.name + "')",
             "variant: " + variant + "; seed " + std::to_string(opt.config.seed),
             "regenerate: driftcorr_make_stress_variants " + input.scenario.yaml_path +
-                " <out_dir> --seed " + std::to_string(opt.config.seed)};
+                " <out_dir> --seed " + std::to_string(opt.config.seed) + MonocularFlags(opt.config)};
 }
 
 /// A skipped variant must not leave an earlier run's scenario behind under its name: removes

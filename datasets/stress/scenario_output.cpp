@@ -175,6 +175,11 @@ std::string AnchorYaml(const io::AnchorSpec& a, bool with_z) {
     if (a.position_search_m > 0.0) {
         y += "  position_search_m: " + ExactNumber(a.position_search_m) + "\n";
     }
+    if (a.scale_auto) {
+        y += "  scale: auto\n";
+    } else if (a.scale_given || a.scale != 1.0) {
+        y += "  scale: " + ExactNumber(a.scale) + "\n";
+    }
     if (with_z) y += "  z_m: " + ExactNumber(a.z_m) + "\n";
     return y;
 }

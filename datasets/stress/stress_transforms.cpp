@@ -95,6 +95,23 @@ Trajectory ApplyHeadingBias(const Trajectory& traj, FrameAxes axes, double bias_
     return out;
 }
 
+Trajectory ScaleLikeMonocular(const Trajectory& traj, double global_scale, double drift_per_100m,
+                              synth::NormalSampler& normal, std::vector<double>* scales) {
+    Trajectory out = traj;
+    if (scales) scales->assign(traj.size(), global_scale);
+    if (traj.size() == 0) return out;
+    out.p_frame[0] = global_scale * traj.p_frame[0];
+    double w = 0.0;
+    for (std::size_t i = 1; i < traj.size(); ++i) {
+        const Eigen::Vector3d step = traj.p_frame[i] - traj.p_frame[i - 1];
+        w += drift_per_100m * std::sqrt(step.norm() / 100.0) * normal.Next();
+        const double s = global_scale * std::exp(w);
+        out.p_frame[i] = out.p_frame[i - 1] + s * step;
+        if (scales) (*scales)[i] = s;
+    }
+    return out;
+}
+
 Trajectory RotateAboutUp(const Trajectory& traj, FrameAxes axes, double angle_rad) {
     const Eigen::Quaterniond r = UpRotation(axes, angle_rad);
     Trajectory out = traj;

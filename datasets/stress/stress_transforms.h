@@ -64,6 +64,14 @@ Trajectory ShortenSteps(const Trajectory& traj, const std::vector<DropEpisode>& 
 /// bias * (t_i - t_{i-1}) about Up. The heading of pose i is therefore off by exactly psi_i.
 Trajectory ApplyHeadingBias(const Trajectory& traj, FrameAxes axes, double bias_rad_per_s);
 
+/// A monocular tracker's trajectory: each step's translation multiplied by
+///   s_i = global_scale * exp(w_i),   w_i = w_{i-1} + drift_per_100m * sqrt(L_i / 100 m) * n_i,
+/// with L_i the step's length and n_i standard normal (w_0 = 0), and the poses re-integrated from
+/// global_scale * p_0; orientations unchanged. `scales`, when given, receives s_i (index 0: the
+/// global scale).
+Trajectory ScaleLikeMonocular(const Trajectory& traj, double global_scale, double drift_per_100m,
+                              synth::NormalSampler& normal, std::vector<double>* scales = nullptr);
+
 /// Every pose turned about Up by angle_rad about the frame's origin (positions and orientations).
 Trajectory RotateAboutUp(const Trajectory& traj, FrameAxes axes, double angle_rad);
 

@@ -20,6 +20,8 @@ using synth::Format;
 // Streams of the seeded random numbers, one per variant that draws any.
 constexpr std::uint64_t kDropStepsStream = 1;
 constexpr std::uint64_t kAnchorOffsetStream = 2;
+// The monocular variants' normal numbers: seeded by the seed plus this, one sequence per scale.
+constexpr std::uint64_t kMonocularSeedOffset = 1000;
 
 VariantOutcome Skipped(const std::string& name, const std::string& reason) {
     return {name, std::nullopt, reason};
@@ -289,11 +291,48 @@ VariantOutcome RoadRemoved(const InputScenario& input, const StressConfig& confi
                    static_cast<long long>(best->way.id), best->way.along_m)};
 }
 
+// mono_<g> and mono_<g>_auto: the estimate as a monocular tracker would have written it, with
+// the anchor as given and with `scale: auto`. Both share one draw of the scale's walk.
+std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressConfig& config,
+                                      std::size_t index) {
+    const double g = config.monocular_scales[index];
+    const std::string name = Format("mono_%g", g);
+    synth::NormalSampler normal(config.seed + kMonocularSeedOffset + index);
+    std::vector<double> scales;
+    VariantSpec spec = BaseSpec(input, name);
+    spec.estimate = ScaleLikeMonocular(input.estimate, g, config.monocular_drift_per_100m, normal,
+                                       &scales);
+    const auto [lo, hi] = std::minmax_element(scales.begin(), scales.end());
+    spec.description = {
+        Format("variant %s (seed %llu): a monocular tracker's estimate: every step's translation "
+               "multiplied by",
+               name.c_str(), static_cast<unsigned long long>(config.seed)),
+        Format("s_i = %s * exp(w_i), w_i a random walk of %s per sqrt(100 m) of the step's length, "
+               "and the estimate re-integrated",
+               ExactNumber(g).c_str(), ExactNumber(config.monocular_drift_per_100m).c_str()),
+        Format("(orientations unchanged); s_i ranges over %.4f..%.4f (%.3f..%.3f of %s); path "
+               "length %.1f m -> %.1f m",
+               *lo, *hi, *lo / g, *hi / g, ExactNumber(g).c_str(), PathLength_m(input.estimate),
+               PathLength_m(*spec.estimate))};
+    VariantSpec with_auto = spec;
+    with_auto.name = name + "_auto";
+    with_auto.anchor.scale_auto = true;
+    with_auto.description.push_back("the anchor says `scale: auto`");
+    const std::string note = Format("scale %.4f..%.4f", *lo, *hi);
+    return {{spec.name, spec, note}, {with_auto.name, with_auto, note + ", scale: auto"}};
+}
+
 }  // namespace
 
 std::vector<VariantOutcome> MakeVariants(const InputScenario& input, const StressConfig& config) {
     const FrameAxes axes = input.scenario.frame;
     std::vector<VariantOutcome> out;
+    if (!config.monocular_scales.empty()) {
+        for (std::size_t k = 0; k < config.monocular_scales.size(); ++k) {
+            for (VariantOutcome& v : Monocular(input, config, k)) out.push_back(std::move(v));
+        }
+        return out;
+    }
     out.push_back(Clean(input));
     out.push_back(DropSteps(input, config));
     for (double bias : config.heading_bias_deg_per_s) out.push_back(HeadingBias(input, axes, bias));

@@ -20,6 +20,10 @@ struct StressConfig {
     double anchor_offset_m = 20.0;
     /// road_removed: a ground-truth pose counts as on a way within this distance of its polyline.
     double road_radius_m = 5.0;
+    /// Monocular variants (only these are written when any is asked for): the global scales of
+    /// the estimate, and its scale's random walk [share per sqrt(100 m)] (ScaleLikeMonocular).
+    std::vector<double> monocular_scales;
+    double monocular_drift_per_100m = 0.02;
 };
 
 /// One variant, or why it was skipped.
@@ -30,7 +34,8 @@ struct VariantOutcome {
 };
 
 /// All variants, in a fixed order: clean, drop_steps, heading_bias_*, yaw_off_*, anchor_off_*,
-/// road_removed. Throws InputError naming the file for bad input found on the way (a map that
+/// road_removed; or, when config.monocular_scales is not empty, only mono_<scale> (the anchor as
+/// given) and mono_<scale>_auto (the anchor with `scale: auto`) for each scale. Throws InputError naming the file for bad input found on the way (a map that
 /// cannot be read, an unknown CRS).
 std::vector<VariantOutcome> MakeVariants(const InputScenario& input, const StressConfig& config);
 

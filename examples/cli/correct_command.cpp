@@ -24,6 +24,7 @@
 
 #include "commands.h"
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/metrics.h"
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/trajectory_io.h"
@@ -87,7 +88,7 @@ struct Args {
     std::string on_failure = "refuse";
     std::string jobs = "1";
     /// A trajectory file without a scenario file.
-    std::string osm, anchor, crs, frame, format, rate_hz, heading;
+    std::string osm, anchor, crs, scale, frame, format, rate_hz, heading;
     /// With --osm: the ground truth (same format and frame as the trajectory, the summary's
     /// errors) and a kitti file's per-line times (instead of --rate-hz), the ground truth's too.
     std::string ground_truth, times, ground_truth_times;
@@ -121,7 +122,8 @@ std::string CheckChoices(const Args& a) {
 }
 
 std::string CheckModes(const Args& a) {
-    const bool file_options = !a.anchor.empty() || !a.crs.empty() || !a.frame.empty() ||
+    const bool file_options = !a.anchor.empty() || !a.crs.empty() || !a.scale.empty() ||
+                              !a.frame.empty() ||
                               !a.format.empty() || !a.rate_hz.empty() || !a.heading.empty() ||
                               !a.ground_truth.empty() || !a.times.empty() ||
                               !a.ground_truth_times.empty();
@@ -134,7 +136,7 @@ std::string CheckModes(const Args& a) {
         return "--osm corrects one trajectory file; several scenarios need scenario files";
     }
     if (a.osm.empty() && file_options) {
-        return "--anchor, --crs, --frame, --format, --rate-hz, --times, --heading, "
+        return "--anchor, --crs, --scale, --frame, --format, --rate-hz, --times, --heading, "
                "--ground-truth and --ground-truth-times go with --osm (a trajectory without a "
                "scenario file)";
     }
@@ -149,7 +151,7 @@ bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
          {"--geojson", &a.geojson}, {"--solver", &a.solver}, {"--covariance", &a.covariance},
          {"--on-failure", &a.on_failure}, {"--manifest", &a.manifest}, {"-j", &a.jobs},
          {"--jobs", &a.jobs}, {"--osm", &a.osm}, {"--anchor", &a.anchor}, {"--crs", &a.crs},
-         {"--frame", &a.frame}, {"--format", &a.format}, {"--rate-hz", &a.rate_hz},
+         {"--scale", &a.scale}, {"--frame", &a.frame}, {"--format", &a.format}, {"--rate-hz", &a.rate_hz},
          {"--heading", &a.heading}, {"--ground-truth", &a.ground_truth}, {"--times", &a.times},
          {"--ground-truth-times", &a.ground_truth_times}}};
     auto positional = [&a](const std::string& arg) -> std::string {
@@ -216,6 +218,37 @@ void PrintAnchorFit(std::FILE* out, const pipeline::CorrectionRun& run) {
         std::fprintf(out, "; next distinct start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
                     RadToDeg(f.runner_up->dyaw_rad), f.runner_up->offset_en.x(),
                     f.runner_up->offset_en.y(), f.runner_up->rms_m);
+    }
+    std::fprintf(out, "\n");
+}
+
+// The estimate's global scale: given, or found from the map (`scale: auto`) with the candidates
+// of the search.
+void PrintGlobalScale(std::FILE* out, const pipeline::CorrectionRun& run) {
+    const io::AnchorSpec& a = run.scenario.anchor;
+    if (!a.scale_auto && run.global_scale == 1.0) return;
+    if (!run.scale_fit) {
+        std::fprintf(out, "scale      given %.6g: the estimate's positions times it are metres\n",
+                     run.global_scale);
+        return;
+    }
+    const ScaleFitResult& f = *run.scale_fit;
+    std::fprintf(out, "scale      found %.4f from the map", run.global_scale);
+    if (Usable(run.result.status) && !run.result.input_kept) {
+        // The drive's scale as corrected: the corrected path over the input's.
+        const double overall = run.global_scale * PathLength(run.result.corrected) /
+                               std::max(PathLength(run.estimate), 1e-9);
+        std::fprintf(out, ", %.4f over the drive with the correction's scale walk (%.4f..%.4f)",
+                     overall, run.global_scale * run.result.scale_min,
+                     run.global_scale * run.result.scale_max);
+    }
+    std::fprintf(out, "; searched %.4g..%.4g, the leading path's best fits:", f.scales.front(),
+                 f.scales.back());
+    for (std::size_t k = 0; k < f.candidates.size(); ++k) {
+        const ScaleCandidate& c = f.candidates[k];
+        std::fprintf(out, "%s %.4f RMS %.2f m", k ? "," : "", c.scale, c.placement.rms_m);
+        if (!std::isnan(c.nll)) std::fprintf(out, " NLL %.1f", c.nll);
+        if (k == f.kept) std::fprintf(out, " (kept)");
     }
     std::fprintf(out, "\n");
 }
@@ -359,6 +392,7 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                 run.timings.map_s, run.timings.solve_s,
                 run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
                 r.refine_s, PeakMemoryMb());
+    PrintGlobalScale(out, run);
     if (run.anchor_fit) PrintAnchorFit(out, run);
     PrintAgreement(out, r);
     if (run.before) {
@@ -471,6 +505,10 @@ io::AnchorSpec ParseAnchorOption(const Args& a) {
         }
     }
     if (parts[2] != "auto") anchor.yaw_deg = AnchorNumber(parts[2], "yaw");
+    if (!a.scale.empty()) {
+        const std::string problem = io::ParseAnchorScale(a.scale, anchor);
+        if (!problem.empty()) throw InputError("", 0, "--scale", problem);
+    }
     return anchor;
 }
 
@@ -634,6 +672,8 @@ std::string InFlagTerms(std::string text, const Args& a) {
         {"anchor.yaw_deg and the position", "the yaw and the position of --anchor"},
         {"anchor.yaw_deg", "the yaw of --anchor"},
         {"yaw_deg: auto", "--anchor " + place + ",auto"},
+        {"anchor.scale: auto", "--scale auto"},
+        {"`scale: auto` in the anchor", "--scale auto"},
     };
     for (const auto& [from, to] : terms) {
         for (std::size_t at = text.find(from); at != std::string::npos;

@@ -155,7 +155,7 @@ public:
         }
         const FrameAxes axes = setup_.scenario.frame;
         const PlanarPose in =
-            pipeline::ToPlanarPose(line.t_s, line.p_frame, line.q_frame_body, axes, setup_.anchor);
+            pipeline::ToPlanarPose(line.t_s, line.p_frame, line.q_frame_body, setup_);
         const PushResult r = corrector_.Push(in);
         if (!r.Accepted()) return Skip(number, r.message);
         const auto [p, q] = pipeline::FromPlanarPose(r.corrected, in, line.p_frame,

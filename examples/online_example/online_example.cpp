@@ -24,8 +24,8 @@ int main(int argc, char** argv) {
 
         OnlineCorrector online(&setup.field, OnlineConfig{});
         for (std::size_t i = 0; i < est.size(); ++i) {
-            const PlanarPose in = pipeline::ToPlanarPose(est.t_s[i], est.p_frame[i],
-                                                         est.q_frame_body[i], axes, setup.anchor);
+            const PlanarPose in =
+                pipeline::ToPlanarPose(est.t_s[i], est.p_frame[i], est.q_frame_body[i], setup);
             const PushResult r = online.Push(in);  // returns at once: a causal estimate
             if (!r.Accepted()) {
                 std::fprintf(stderr, "pose %zu skipped: %s\n", i, r.message.c_str());

@@ -150,6 +150,67 @@ AnchorFitResult FitAnchor(const PlanarTrajectory& estimate, const Eigen::Vector2
     return res;
 }
 
+PlanarTrajectory ScaleAbout(const PlanarTrajectory& t, const Eigen::Vector2d& pivot_en,
+                            double pivot_up_m, double scale) {
+    PlanarTrajectory out = t;
+    for (auto& p : out.p_en) p = pivot_en + scale * (p - pivot_en);
+    for (double& u : out.up_m) u = pivot_up_m + scale * (u - pivot_up_m);
+    return out;
+}
+
+ScaleFitResult FitScale(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
+                        double pivot_up_m, const TraversableField& field, bool search_yaw, double min_scale,
+                        double max_scale, double step_ratio, std::size_t max_candidates,
+                        const AnchorFitConfig& c) {
+    ScaleFitResult res;
+    const auto fit = [&](double scale) {
+        const PlanarTrajectory scaled = ScaleAbout(estimate, pivot_en, pivot_up_m, scale);
+        return FitAnchor(scaled, pivot_en, field, search_yaw, 0.0, c).best;
+    };
+    const double log_step = std::log(step_ratio);
+    const int n = 1 + int(std::ceil(std::log(max_scale / min_scale) / log_step - 1e-9));
+    std::vector<AnchorPlacement> best(n);
+    for (int k = 0; k < n; ++k) {
+        res.scales.push_back(min_scale * std::exp(k * log_step));
+        best[k] = fit(res.scales.back());
+        res.rms_m.push_back(best[k].rms_m);
+    }
+    // Local minima (a plateau counts once, at its first grid point), lowest first.
+    std::vector<int> minima;
+    for (int k = 0; k < n; ++k) {
+        const bool left = k == 0 || res.rms_m[k] < res.rms_m[k - 1];
+        const bool right = k + 1 == n || res.rms_m[k] <= res.rms_m[k + 1];
+        if (left && right) minima.push_back(k);
+    }
+    std::sort(minima.begin(), minima.end(),
+              [&](int a, int b) { return res.rms_m[a] < res.rms_m[b]; });
+    for (int k : minima) {
+        if (res.candidates.size() >= max_candidates) break;
+        const bool near = std::any_of(
+            res.candidates.begin(), res.candidates.end(), [&](const ScaleCandidate& cand) {
+                return std::abs(std::log(cand.scale / res.scales[k])) < 2.5 * log_step;
+            });
+        if (near) continue;
+        // Golden-section search of log(scale) between the neighbours.
+        double a = std::log(res.scales[k]) - log_step, b = std::log(res.scales[k]) + log_step;
+        const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+        double x1 = b - g * (b - a), x2 = a + g * (b - a);
+        AnchorPlacement f1 = fit(std::exp(x1)), f2 = fit(std::exp(x2));
+        for (int it = 0; it < 12; ++it) {
+            if (f1.rms_m <= f2.rms_m) {
+                b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = fit(std::exp(x1));
+            } else {
+                a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = fit(std::exp(x2));
+            }
+        }
+        ScaleCandidate cand{res.scales[k], best[k]};
+        if (f1.rms_m < cand.placement.rms_m) cand = {std::exp(x1), f1};
+        if (f2.rms_m < cand.placement.rms_m) cand = {std::exp(x2), f2};
+        res.candidates.push_back(cand);
+    }
+    return res;
+}
+
 PlanarTrajectory ApplyPlacement(const PlanarTrajectory& t, const Eigen::Vector2d& pivot_en,
                                 const AnchorPlacement& pl) {
     PlanarTrajectory out = t;

@@ -94,10 +94,16 @@ void JudgeScale(const PlanarTrajectory& est, const std::vector<double>& step_m,
     }
     const std::string range = FormatFixed(v.scale_min, 2) + ".." + FormatFixed(v.scale_max, 2);
     if (v.scale_min < c.scale_failed_min || v.scale_max > c.scale_failed_max) {
+        // Every part squeezed (or stretched) alike: the estimate's size itself is off, as a
+        // monocular tracker's is.
+        const bool whole = v.scale_max < c.scale_plausible_min || v.scale_min > c.scale_plausible_max;
         f.Failed("the correction stretches or squeezes the drive by " + range +
                  " (corrected / estimated path per " + FormatFixed(segment_m, 0) +
                  " m; plausible " + FormatFixed(c.scale_plausible_min, 2) + ".." +
-                 FormatFixed(c.scale_plausible_max, 2) + "): it was forced onto the map");
+                 FormatFixed(c.scale_plausible_max, 2) + "): it was forced onto the map" +
+                 (whole ? "; the whole drive alike, as when the estimate's size is unknown (a "
+                          "monocular tracker's): then give anchor.scale: auto"
+                        : ""));
     } else if (implausible > 0) {
         f.Degraded("the correction stretches or squeezes " +
                    FormatPercent(double(implausible) / est.size()) +

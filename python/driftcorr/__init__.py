@@ -81,6 +81,7 @@ class Correction:
     warnings: List[str]
     anchor_yaw_deg: float               #: as given, or as estimated (yaw_deg: auto)
     anchor_origin_en: tuple
+    global_scale: float                 #: the estimate's positions times it are metres (scale: auto)
     timings: dict                       #: load_s, map_s, solve_s
     windows: int
     iterations: int

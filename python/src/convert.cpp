@@ -123,7 +123,7 @@ io::AnchorSpec AnchorFromDict(const py::handle& obj, io::ScenarioMode mode) {
     const py::dict d = DictOf(obj, "anchor");
     CheckKeys(d,
               {"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m", "yaw_deg", "z_m",
-               "position_search_m"},
+               "position_search_m", "scale"},
               "anchor");
     auto has = [&d](const char* k) { return d.contains(k) && !d[k].is_none(); };
     auto num = [&d](const char* k) { return DoubleOf(d[k], std::string("anchor['") + k + "']"); };
@@ -165,6 +165,14 @@ io::AnchorSpec AnchorFromDict(const py::handle& obj, io::ScenarioMode mode) {
         if (yaw.cast<std::string>() != "auto") Fail("anchor['yaw_deg']", "a number or 'auto'");
     } else {
         a.yaw_deg = num("yaw_deg");
+    }
+    if (has("scale")) {
+        const py::handle scale = d["scale"];
+        const std::string text = py::isinstance<py::str>(scale)
+                                     ? scale.cast<std::string>()
+                                     : py::str(scale).cast<std::string>();
+        const std::string problem = io::ParseAnchorScale(text, a);
+        if (!problem.empty()) Fail("anchor['scale']", problem);
     }
     a.position_search_m = has("position_search_m") ? num("position_search_m") : 0.0;
     if (!(a.position_search_m >= 0.0 && a.position_search_m <= 1000.0)) {
@@ -441,6 +449,11 @@ py::dict AnchorToDict(const io::AnchorSpec& a) {
         d["yaw_deg"] = "auto";
     }
     d["position_search_m"] = a.position_search_m;
+    if (a.scale_auto) {
+        d["scale"] = "auto";
+    } else if (a.scale_given) {
+        d["scale"] = a.scale;
+    }
     d["z_m"] = a.z_m;
     return d;
 }

@@ -88,6 +88,7 @@ py::dict RunToDict(const pipeline::CorrectionRun& run) {
     d["warnings"] = Strings(warnings);
     d["anchor_yaw_deg"] = RadToDeg(run.anchor.yaw_rad);
     d["anchor_origin_en"] = py::make_tuple(run.anchor.origin_en.x(), run.anchor.origin_en.y());
+    d["global_scale"] = run.global_scale;
     py::dict t;
     t["load_s"] = run.timings.load_s;
     t["map_s"] = run.timings.map_s;
@@ -189,7 +190,7 @@ public:
         const FramePose in = FramePoseFromArray(pose, "pose");
         const FrameAxes axes = setup_->scenario.frame;
         const PlanarPose planar =
-            pipeline::ToPlanarPose(in.t_s, in.p_frame, in.q_frame_body, axes, setup_->anchor);
+            pipeline::ToPlanarPose(in.t_s, in.p_frame, in.q_frame_body, *setup_);
         PushResult r;
         std::pair<Eigen::Vector3d, Eigen::Quaterniond> out;
         {

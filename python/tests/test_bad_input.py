@@ -73,6 +73,8 @@ CASES = [
      r"^anchor\['yaw_deg'\]: is not a finite number"),
     ("anchor yaw text", lambda p: {"anchor": anchor_with(p, yaw_deg="north")}, ValueError,
      r"^anchor\['yaw_deg'\]: a number or 'auto'"),
+    ("anchor scale", lambda p: {"anchor": anchor_with(p, scale=0)}, ValueError,
+     r"^anchor\['scale'\]: must be auto or a number"),
     ("anchor latitude", lambda p: {"anchor": anchor_with(p, lat_deg=91.0)}, ValueError,
      r"^anchor\['lat_deg'\]: must be within \[-90, 90\]"),
     ("anchor both kinds", lambda p: {"anchor": anchor_with(p, crs="EPSG:32632")}, ValueError,

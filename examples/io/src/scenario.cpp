@@ -248,10 +248,30 @@ void ParseGridAnchor(const Block& block, AnchorSpec& anchor) {
     anchor.northing_m = block.Double("northing_m");
 }
 
+}  // namespace
+
+std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor) {
+    if (Lower(text) == "auto") {
+        anchor.scale_given = anchor.scale_auto = true;
+        return "";
+    }
+    const std::optional<double> v = internal::ParseDouble(internal::Trim(text));
+    if (!v || !(*v > 0.0 && *v < 1e6)) {
+        return "must be auto or a number in (0, 1e6): the estimate's positions times it are "
+               "metres (got '" + text + "')";
+    }
+    anchor.scale_given = true;
+    anchor.scale_auto = false;
+    anchor.scale = *v;
+    return "";
+}
+
+namespace {
+
 AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::string>& warnings) {
     block.WarnUnknownKeys(
         {"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m", "yaw_deg", "z_m",
-         "position_search_m"},
+         "position_search_m", "scale"},
         warnings);
     const bool geographic = block.Has("lat_deg") || block.Has("lon_deg") || block.Has("alt_m");
     const bool grid = block.Has("crs") || block.Has("easting_m") || block.Has("northing_m");
@@ -273,6 +293,10 @@ AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::s
                               "from the map)");
     }
     if (Lower(block.String("yaw_deg")) != "auto") anchor.yaw_deg = block.Double("yaw_deg");
+    if (block.Has("scale")) {
+        const std::string problem = ParseAnchorScale(block.String("scale"), anchor);
+        if (!problem.empty()) block.Fail("scale", problem);
+    }
     anchor.position_search_m = block.OptDouble("position_search_m").value_or(0.0);
     if (!(anchor.position_search_m >= 0.0 && anchor.position_search_m <= 1000.0)) {
         block.Fail("position_search_m", "must be within [0, 1000] m");

@@ -131,8 +131,10 @@ Eigen::Quaterniond KittiRotation(const double* v, const std::string& path, long 
     return Eigen::Quaterniond(rot).normalized();
 }
 
-/// Poses of a KITTI file; timestamps are left empty.
-Trajectory ReadKittiPoses(const std::string& path) {
+/// Poses of a KITTI file; timestamps are left empty. A file whose first line has 13 numbers
+/// starts each line with its frame index (as trackers that skip frames where they were lost or
+/// initialising write it): `frames` then receives the indices, whole numbers that increase.
+Trajectory ReadKittiPoses(const std::string& path, std::vector<std::size_t>& frames) {
     const std::string text = ReadWholeFile(path);
     Trajectory traj;
     const std::size_t lines_in_file = CountLines(text);
@@ -140,11 +142,28 @@ Trajectory ReadKittiPoses(const std::string& path) {
     traj.q_frame_body.reserve(lines_in_file);
     DataLines lines(text);
     std::vector<std::string_view> fields;
-    double v[12];
+    double v[13];
+    std::size_t columns = 0;  // 12, or 13 with a frame index: the first data line decides
+    frames.clear();
     while (lines.Next()) {
-        ParseNumbers(lines, 12, path, fields, v);
-        traj.q_frame_body.push_back(KittiRotation(v, path, lines.number()));
-        traj.p_frame.emplace_back(v[3], v[7], v[11]);
+        if (columns == 0) {
+            SplitFields(lines.line(), fields);
+            columns = fields.size() == 13 ? 13 : 12;
+        }
+        ParseNumbers(lines, columns, path, fields, v);
+        const double* m = v + (columns - 12);
+        if (columns == 13) {
+            const double f = v[0];
+            if (!(f >= 0.0 && f < 1e9 && f == std::floor(f)) ||
+                (!frames.empty() && !(f > double(frames.back())))) {
+                throw InputError(path, lines.number(), "",
+                                 "field 1 (a frame index, the line having 13 numbers) must be a "
+                                 "whole number above the previous line's");
+            }
+            frames.push_back(std::size_t(f));
+        }
+        traj.q_frame_body.push_back(KittiRotation(m, path, lines.number()));
+        traj.p_frame.emplace_back(m[3], m[7], m[11]);
     }
     return traj;
 }
@@ -203,10 +222,21 @@ Trajectory ReadKitti(const std::string& path, const std::optional<std::string>& 
     if (!times_path && !(std::isfinite(*rate_hz) && *rate_hz > 0.0)) {
         throw InputError(path, 0, "rate_hz", "must be a positive number");
     }
-    Trajectory traj = ReadKittiPoses(path);
+    std::vector<std::size_t> frames;
+    Trajectory traj = ReadKittiPoses(path, frames);
     CheckMinPoses(traj.p_frame.size(), min_poses, path);
     if (times_path) {
-        traj.t_s = ReadTimes(*times_path);
+        const std::vector<double> times = ReadTimes(*times_path);
+        if (!frames.empty()) {  // the times file lists every frame, the poses only some
+            if (frames.back() >= times.size()) {
+                throw InputError(*times_path, 0, "",
+                                 "has " + std::to_string(times.size()) + " timestamps but " +
+                                     path + " names frame " + std::to_string(frames.back()));
+            }
+            for (std::size_t f : frames) traj.t_s.push_back(times[f]);
+        } else {
+            traj.t_s = times;
+        }
         if (traj.t_s.size() != traj.p_frame.size()) {
             throw InputError(*times_path, 0, "",
                              "has " + std::to_string(traj.t_s.size()) + " timestamps but " + path +
@@ -214,7 +244,9 @@ Trajectory ReadKitti(const std::string& path, const std::optional<std::string>& 
         }
     } else {
         traj.t_s.resize(traj.p_frame.size());
-        for (std::size_t i = 0; i < traj.t_s.size(); ++i) traj.t_s[i] = i / *rate_hz;
+        for (std::size_t i = 0; i < traj.t_s.size(); ++i) {
+            traj.t_s[i] = double(frames.empty() ? i : frames[i]) / *rate_hz;
+        }
         if (!traj.t_s.empty() && !std::isfinite(traj.t_s.back())) {  // rate_hz 1e-320, say
             throw InputError(path, 0, "rate_hz", "is so small that the timestamps overflow");
         }

@@ -20,6 +20,13 @@ StreamSetup LoadStreamSetup(io::Scenario scenario, const PipelineConfig& config)
                          "a start estimated from the map (yaw_deg: auto, position_search_m) needs "
                          "the whole trajectory: use correct, or give the start for stream");
     }
+    if (sc.anchor.scale_auto) {
+        throw InputError(sc.yaml_path, 0, "anchor.scale",
+                         "scale: auto finds the scale from the drive's leading kilometre, which a "
+                         "stream does not have yet: correct a recording with scale: auto, then "
+                         "stream with the scale it found (scale: S)");
+    }
+    setup.scale = sc.anchor.scale;
     std::unique_ptr<WorldFrame> world;
     try {
         world = std::make_unique<WorldFrame>(sc.anchor);
@@ -35,13 +42,12 @@ StreamSetup LoadStreamSetup(io::Scenario scenario, const PipelineConfig& config)
 }
 
 PlanarPose ToPlanarPose(double t_s, const Eigen::Vector3d& p_frame,
-                        const Eigen::Quaterniond& q_frame_body, FrameAxes axes,
-                        const PlanarAnchor& anchor) {
+                        const Eigen::Quaterniond& q_frame_body, const StreamSetup& setup) {
     Trajectory one;
     one.t_s = {t_s};
-    one.p_frame = {p_frame};
+    one.p_frame = {setup.scale * p_frame};
     one.q_frame_body = {q_frame_body};
-    const PlanarTrajectory planar = ToPlanar(one, axes, anchor);
+    const PlanarTrajectory planar = ToPlanar(one, setup.scenario.frame, setup.anchor);
     PlanarPose out;
     out.t_s = t_s;
     out.p_en = planar.p_en[0];

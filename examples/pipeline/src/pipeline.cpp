@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <future>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -186,6 +187,11 @@ std::optional<HeightRange> WalkHeights(const PlanarTrajectory& estimate,
     return HeightRange{*lo - grow, *hi + grow};
 }
 
+// `scale: auto`: the leading path whose fit to the map picks the global scale [m], and the
+// ratio between neighbouring scales of the search.
+constexpr double kScaleLeadPathM = 1000.0;
+constexpr double kScaleStepRatio = 1.02;
+
 // `yaw_deg: auto` / `position_search_m`: the leading path is matched against a field that covers
 // every heading and position searched, then the estimate is placed where it fits best and the
 // anchor takes that heading and position.
@@ -210,6 +216,122 @@ void PlaceStart(const WorldFrame& world, const PipelineConfig& config, PreparedS
     ps.estimate = ApplyPlacement(ps.estimate, ps.anchor.origin_en, best);
     ps.anchor.yaw_rad += best.dyaw_rad;
     ps.anchor.origin_en += best.offset_en;
+}
+
+// The poses of `traj` at the times `t_s` (both increasing), each within 1 ms of its time;
+// nullopt if one has none.
+std::optional<Trajectory> PosesAtTimes(const Trajectory& traj, const std::vector<double>& t_s) {
+    Trajectory out;
+    std::size_t j = 0;
+    for (double t : t_s) {
+        while (j < traj.size() && traj.t_s[j] < t - 1e-3) ++j;
+        if (j == traj.size() || std::abs(traj.t_s[j] - t) > 1e-3) return std::nullopt;
+        out.t_s.push_back(traj.t_s[j]);
+        out.p_frame.push_back(traj.p_frame[j]);
+        if (traj.HasOrientation()) out.q_frame_body.push_back(traj.q_frame_body[j]);
+    }
+    return out;
+}
+
+// The plausible median speed of a drive or a walk while it moves [m/s]: a vehicle's median
+// below walking pace or above 40 m/s (144 km/h), a walker's outside 0.3-2.5 m/s, is not
+// plausible. Outside a band twice as wide, an estimate with no `scale` is not taken as metric.
+struct SpeedBand {
+    double lo_mps, hi_mps;
+};
+SpeedBand PlausibleSpeeds(const io::Scenario& sc) {
+    return sc.mode == io::ScenarioMode::kIndoor3d ? SpeedBand{0.3, 2.5} : SpeedBand{2.0, 40.0};
+}
+
+// The median speed of the steps that move (longer than stationary_m, dt > 0) [m/s]; 0 if none.
+double MedianMovingSpeed(const PlanarTrajectory& t, double stationary_m) {
+    std::vector<double> v;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+        const double d = (t.p_en[i] - t.p_en[i - 1]).norm(), dt = t.t_s[i] - t.t_s[i - 1];
+        if (d > stationary_m && dt > 0.0) v.push_back(d / dt);
+    }
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+}
+
+// An estimate without `scale` is taken as metric: one whose median speed is far outside the
+// mode's plausible band (a monocular tracker's, whose size is arbitrary) is bad input.
+void CheckMetricSpeeds(const PreparedScenario& ps, const PipelineConfig& config) {
+    const io::Scenario& sc = ps.scenario;
+    const double v = MedianMovingSpeed(ps.estimate, CorrectorFor(sc, config).stationary_m);
+    const SpeedBand band = PlausibleSpeeds(sc);
+    if (v <= 0.0 || (v >= 0.5 * band.lo_mps && v <= 2.0 * band.hi_mps)) return;
+    const bool walk = sc.mode == io::ScenarioMode::kIndoor3d;
+    throw InputError(
+        sc.yaml_path, 0, "anchor.scale",
+        "the estimate's median speed is " + FormatFixed(v, v < 1.0 ? 2 : 1) + " m/s, where " +
+            (walk ? "a walker's" : "a vehicle's") + " is " + FormatFixed(band.lo_mps, 1) + "-" +
+            FormatFixed(band.hi_mps, 0) + " m/s: it looks " +
+            (v < band.lo_mps ? "monocular (its size unknown)" : "not in metres") +
+            ". Give `scale: auto` in the anchor (--scale auto) to find its scale from the map, "
+            "`scale: S` if its positions times S are metres, or `scale: 1` if it is metric");
+}
+
+// `scale: auto`: the estimate's global scale is searched over the scales that give it a
+// plausible median speed, by how its leading path fits the map (FitScale, every heading when the
+// yaw is auto too); the scales that fit best are each corrected whole and the estimate takes the
+// one of lowest NLL.
+void PlaceScale(const WorldFrame& world, const PipelineConfig& config, PreparedScenario& ps) {
+    const io::Scenario& sc = ps.scenario;
+    const double v = MedianMovingSpeed(ps.estimate, CorrectorFor(sc, config).stationary_m);
+    if (!(v > 0.0)) {
+        throw InputError(sc.yaml_path, 0, "anchor.scale",
+                         "`scale: auto` needs an estimate that moves (every step is a stop)");
+    }
+    const SpeedBand band = PlausibleSpeeds(sc);
+    AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
+    fit_cfg.lead_path_m = kScaleLeadPathM;
+    const double half = fit_cfg.lead_path_m + sc.anchor.position_search_m + fit_cfg.reach_m;
+    const Eigen::Vector2d c = ps.anchor.origin_en;
+    const Eigen::AlignedBox2d region(c - Eigen::Vector2d(half, half), c + Eigen::Vector2d(half, half));
+    RoadNetwork unused;
+    const TraversableField lead_field =
+        LoadMapField(sc, world, config, region, ps.anchor.origin_up_m, unused, nullptr,
+                     WalkHeights(ps.estimate, config.indoor_field));
+    ps.scale_fit = FitScale(ps.estimate, c, ps.anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
+                            band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
+    std::vector<ScaleCandidate>& candidates = ps.scale_fit->candidates;
+    if (candidates.empty()) {
+        throw InputError(sc.yaml_path, 0, "anchor.scale", "no scale of the estimate fits the map");
+    }
+    // The leading path alone may fit several scales about as well, and tells the scale only as
+    // well as its first kilometre does: each candidate is corrected whole (its start placed as
+    // the fit placed it), the one of lowest NLL is kept, and the global scale is its scale times
+    // the ratio of that correction's path to the scaled estimate's.
+    // A trial is scored, not written: no window restarts, final solve or covariance.
+    CorrectorConfig corrector = CorrectorFor(sc, config);
+    corrector.restart_nll_per_pose = std::numeric_limits<double>::infinity();
+    corrector.restart_offroad_share = 1.0;
+    corrector.refine = false;
+    corrector.compute_covariance = false;
+    std::size_t kept = 0;
+    double best_nll = std::numeric_limits<double>::infinity(), kept_ratio = 1.0;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const PlanarTrajectory trial = ApplyPlacement(
+            ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, candidates[k].scale), c,
+            candidates[k].placement);
+        const std::vector<FieldDisc> corridor =
+            FieldCorridor(trial, c, AnchorFitFor(sc, config), config.field);
+        RoadNetwork network;
+        const TraversableField field =
+            LoadMapField(sc, world, config, BoundsOf(trial), ps.anchor.origin_up_m, network,
+                         &corridor, WalkHeights(trial, config.indoor_field));
+        const CorrectionResult r = CorrectTrajectory(trial, &field, corrector);
+        candidates[k].nll = Usable(r.status) ? r.nll : std::numeric_limits<double>::infinity();
+        if (candidates[k].nll < best_nll) {
+            best_nll = candidates[k].nll, kept = k;
+            kept_ratio = PathLength(r.corrected) / std::max(PathLength(trial), 1e-9);
+        }
+    }
+    ps.scale_fit->kept = kept;
+    ps.global_scale = candidates[kept].scale * (std::isfinite(best_nll) ? kept_ratio : 1.0);
+    ps.estimate = ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, ps.global_scale);
 }
 
 // The anchor check: the given start, scored against every other heading and against nearby
@@ -528,6 +650,11 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     // Without yaw the corrector takes the heading from the direction of motion (observables.h).
     if (sc.estimate.heading_from_motion) ps.estimate.yaw_rad.clear();
     ps.heading_from_motion = !ps.estimate.HasYaw();
+    if (gt && gt->size() > ps.estimate_frame.size()) {
+        // An estimate with gaps (frames where the tracker had no pose): the ground truth's poses
+        // at the estimate's times, when each has one.
+        if (std::optional<Trajectory> at = PosesAtTimes(*gt, ps.estimate_frame.t_s)) gt = at;
+    }
     if (gt && gt->size() != ps.estimate_frame.size()) {
         throw InputError(sc.ground_truth ? sc.ground_truth->path : "", 0,
                          sc.ground_truth ? "" : "ground_truth",
@@ -536,6 +663,15 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     }
 
     const auto t0 = std::chrono::steady_clock::now();
+    if (sc.anchor.scale_auto) {
+        PlaceScale(world, config, ps);
+    } else if (sc.anchor.scale != 1.0) {
+        ps.global_scale = sc.anchor.scale;
+        ps.estimate =
+            ScaleAbout(ps.estimate, ps.anchor.origin_en, ps.anchor.origin_up_m, ps.global_scale);
+    } else if (!sc.anchor.scale_given) {
+        CheckMetricSpeeds(ps, config);
+    }
     if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
         PlaceStart(world, config, ps);
         if (gt) {
@@ -674,6 +810,8 @@ CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
     CorrectionRun run;
     run.timings = ps.timings;
     run.map_grid_cells = ps.field.Samples();
+    run.global_scale = ps.global_scale;
+    run.scale_fit = ps.scale_fit;
 
     // A scenario prepared without its anchor check has it done here, beside the correction.
     std::future<AnchorFitResult> check;

@@ -9,8 +9,11 @@
 // A straight leading path fits a road in both directions, and a grid of streets fits every 90 deg:
 // the result names the best placement clearly apart from the best one (the runner-up), so the
 // caller can tell an ambiguous start. No I/O.
+#include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "driftcorr/core/params.h"
 #include "driftcorr/core/types.h"
@@ -86,6 +89,40 @@ struct AnchorFitResult {
 AnchorFitResult FitAnchor(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
                           const TraversableField& field, bool search_yaw, double radius_m,
                           const AnchorFitConfig& config);
+
+/// One global scale of the estimate and where its leading path then fits best.
+struct ScaleCandidate {
+    double scale = 1.0;
+    AnchorPlacement placement;  ///< of the estimate scaled by `scale` (ScaleAbout)
+    /// The NLL of the whole correction at this scale, where the caller compared candidates by
+    /// it (NaN: not computed; infinity: the correction failed).
+    double nll = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The global scale of an estimate whose size is unknown (a monocular tracker's), as the fit of
+/// its leading path to the map tells it.
+struct ScaleFitResult {
+    std::vector<double> scales;  ///< the log-spaced grid searched
+    std::vector<double> rms_m;   ///< per grid scale, its best placement's RMS (FitAnchor)
+    /// The grid's local minima, each refined between its neighbours, lowest RMS first; no two
+    /// within two grid steps of each other.
+    std::vector<ScaleCandidate> candidates;
+    std::size_t kept = 0;  ///< the candidate the caller kept (its scale refined by the caller)
+};
+
+/// Scores the estimate scaled about (pivot_en, pivot_up_m) by every scale of a log-spaced grid from
+/// min_scale to max_scale (ratio step_ratio > 1 between neighbours) as FitAnchor does (config's
+/// lead_path_m of the scaled path; every heading when `search_yaw`), and returns at most
+/// `max_candidates` local minima. Precondition: 0 < min_scale <= max_scale, config valid.
+ScaleFitResult FitScale(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
+                        double pivot_up_m, const TraversableField& field, bool search_yaw, double min_scale,
+                        double max_scale, double step_ratio, std::size_t max_candidates,
+                        const AnchorFitConfig& config);
+
+/// `estimate` with its positions scaled by `scale` about (pivot_en, pivot_up_m); headings and
+/// times unchanged.
+PlanarTrajectory ScaleAbout(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
+                            double pivot_up_m, double scale);
 
 /// `estimate` turned by placement.dyaw_rad about `pivot_en` and moved by placement.offset_en
 /// (positions and headings).

@@ -42,11 +42,21 @@ struct AnchorSpec {
     /// `position_search_m` (optional): radius around the given position within which the start
     /// is estimated from the map together with the yaw [m]; 0: the position is taken as given.
     double position_search_m = 0.0;
+    /// `scale` (optional): the estimate's positions times this are metres (1: a metric estimate,
+    /// as when the key is absent). `scale: auto` sets scale_auto: the global scale of a
+    /// monocular estimate is then found from the map.
+    double scale = 1.0;
+    bool scale_given = false;  ///< the key is present (a number or auto)
+    bool scale_auto = false;
     /// Height of the frame's origin in the map's height datum; required in indoor3d, where it
     /// picks the floor (road2d ignores heights: 0 when absent).
     double z_m = 0.0;
     bool IsGeographic() const { return lat_deg.has_value(); }
 };
+
+/// Why `text` cannot be an anchor's `scale` (empty if it can): `auto` or a number in (0, 1e6).
+/// Sets `anchor`'s scale fields when it can.
+std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor);
 
 struct MapLayerSpec {
     std::string path;                  ///< resolved

@@ -126,6 +126,9 @@ struct CorrectionRun {
     PlanarAnchor anchor;                ///< as given, or as estimated from the map
     std::optional<AnchorFitResult> anchor_fit;  ///< see PreparedScenario
     std::size_t map_grid_cells = 0;
+    /// See PreparedScenario.
+    double global_scale = 1.0;
+    std::optional<ScaleFitResult> scale_fit;
     CorrectionResult result;
     /// Can the result be vouched for (no ground truth used): ok, degraded or failed, reasons and
     /// per-pose flags.
@@ -149,6 +152,11 @@ struct PreparedScenario {
     /// How the start fits the map: the estimated start (`yaw_deg: auto`, `position_search_m`), or
     /// the given anchor scored against every other heading (the anchor check).
     std::optional<AnchorFitResult> anchor_fit;
+    /// The estimate's global scale: the anchor's `scale`, or with `scale: auto` the one found
+    /// from the map; `estimate` is scaled by it (1: a metric estimate).
+    double global_scale = 1.0;
+    /// `scale: auto`: how the leading path fits the map at each scale (FitScale).
+    std::optional<ScaleFitResult> scale_fit;
     RoadNetwork network;
     TraversableField field;
     Timings timings;                    ///< load_s and map_s
