@@ -773,9 +773,9 @@ TEST(GeoJson, WritesFeatureCollectionThatParsesBack) {
     const fs::path dir = TestDir();
     const std::string path = (dir / "tracks.geojson").string();
     const std::vector<GeoTrack> tracks = {
-        {"estimate", {{48.9825452359, 8.39036610, 116.0}, {48.98260000, 8.39040000, 116.0}}},
-        {"corr\"ected\\", {{-33.5, -70.25, 0.0}, {-33.6, -70.35, 0.0}, {-33.7, -70.45, 0.0}}},
-        {"single", {{1.0, 2.0, 0.0}}},
+        {"estimate", {{48.9825452359, 8.39036610, 116.0}, {48.98260000, 8.39040000, 116.0}}, {}},
+        {"corr\"ected\\", {{-33.5, -70.25, 0.0}, {-33.6, -70.35, 0.0}, {-33.7, -70.45, 0.0}}, {}},
+        {"single", {{1.0, 2.0, 0.0}}, {}},
     };
     WriteGeoJsonTracks(path, tracks);
     const std::string text = ReadText(path);
@@ -799,7 +799,7 @@ TEST(GeoJson, WritesFeatureCollectionThatParsesBack) {
 TEST(GeoJson, NonFiniteCoordinateWritesNothing) {
     const fs::path dir = TestDir();
     const fs::path path = dir / "tracks.geojson";
-    const std::vector<GeoTrack> tracks = {{"bad", {{1.0, 2.0, 0.0}, {NAN, 2.0, 0.0}}}};
+    const std::vector<GeoTrack> tracks = {{"bad", {{1.0, 2.0, 0.0}, {NAN, 2.0, 0.0}}, {}}};
     EXPECT_THROW(WriteGeoJsonTracks(path.string(), tracks), std::runtime_error);
     EXPECT_FALSE(fs::exists(path));
     EXPECT_EQ(CountFiles(dir), 0u);
