@@ -215,6 +215,9 @@ TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
         << run.result.input_nll << " against " << run.result.nll;
     EXPECT_TRUE(run.result.input_kept);
     EXPECT_EQ(run.after->ate_m, run.before->ate_m);
+    // Its covariance is the model's at the input, not the correction's.
+    ASSERT_EQ(run.result.covariance.status, CovarianceStatus::kOk);
+    ASSERT_EQ(run.result.covariance.poses.size(), run.result.corrected.size());
     EXPECT_EQ(run.verdict.level, VerdictLevel::kDegraded);
     EXPECT_TRUE(std::any_of(run.verdict.reasons.begin(), run.verdict.reasons.end(),
                             [](const std::string& r) {
@@ -227,6 +230,13 @@ TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
     ASSERT_TRUE(moved.after);
     EXPECT_GT(moved.after->ate_m, run.before->ate_m + 1.0)
         << "the correction must be worse than the input for the test to mean anything";
+    ASSERT_EQ(moved.result.covariance.status, CovarianceStatus::kOk);
+    double most = 0.0;
+    for (std::size_t i = 0; i < run.result.covariance.poses.size(); ++i) {
+        most = std::max(most, std::abs(run.result.covariance.poses[i].xy_m2(0, 0) -
+                                       moved.result.covariance.poses[i].xy_m2(0, 0)));
+    }
+    EXPECT_GT(most, 1e-6) << "the kept input's covariance is its own";
 }
 
 // KITTI 07's stereo drive as a monocular tracker would have written it (a tenth of its size, the

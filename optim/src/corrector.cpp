@@ -493,6 +493,12 @@ void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField*
         double(result.agreement_inside) / double(result.agreement_poses) >=
             result.agreement_threshold;
     if (result.input_nll_lower || agrees) KeepInput(estimate, result);
+    // An input kept for its lower NLL lies in another basin than the correction: its covariance
+    // is the model's curvature at the input, not the correction's. (An input kept for lying
+    // inside the correction's 95 % region keeps the correction's.)
+    if (result.input_nll_lower && cfg.compute_covariance) {
+        result.covariance = ComputeCovariance(input, field, cfg.model, cfg.covariance);
+    }
 }
 
 // The BIC price of a correction's unknowns beyond one scale: (scales - 1 + heading-rate biases
