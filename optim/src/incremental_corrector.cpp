@@ -372,7 +372,6 @@ void IncrementalCorrector::SolveChunk(std::size_t end) {
     SeedNewScales(state_, done_ + 1, end);
     ComposeOdometry(state_, done_ + 1, end);
     const std::size_t first = WindowFirst(end);
-    window_first_ = first;
     SolveReport rep = SolveSoftWindow(state_, field_, cfg_, first, end, std::nullopt, true, stats_);
     ++stats_.windows;
     if (!Usable(rep.status)) ++stats_.window_failures;

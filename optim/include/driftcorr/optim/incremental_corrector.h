@@ -52,8 +52,6 @@ public:
     std::size_t size() const { return state_.poses.size(); }
     /// Poses [0, done()] are corrected.
     std::size_t done() const { return done_; }
-    /// First pose of the last solved window (poses before it were not changed by that solve).
-    std::size_t last_window_first() const { return window_first_; }
     /// Path length from pose 0 to pose i along the estimate [m].
     double PathLength(std::size_t i) const { return dist_[i]; }
 
@@ -97,7 +95,6 @@ private:
     std::vector<double> dist_;
     double elapsed_s_ = 0.0;  ///< time of the appended steps (heading-rate bias segments)
     std::size_t done_ = 0;
-    std::size_t window_first_ = 1;
     /// First pose of the trailing window that ends at `end`.
     std::size_t WindowFirst(std::size_t end) const;
     CorrectionResult stats_;
