@@ -201,6 +201,35 @@ TEST(ParameterReference, ListsEveryRowOfEveryTable) {
     });
 }
 
+/// Every value of `a` and `b` that a row of `table` holds, as params.yaml writes it (the shortest
+/// text that reads back as the same double: equal texts are equal values).
+template <class Config>
+void ExpectRowsEqual(const ParamTable<Config>& table, const Config& a, const Config& b) {
+    for (const Param<Config>& p : table) {
+        EXPECT_EQ(FormatParamValue(p, a), FormatParamValue(p, b)) << table.section << "." << p.key;
+    }
+}
+
+// The pipeline corrects indoor3d walks with the pedestrian preset: every field, the rows of
+// the model, corrector and covariance tables and the members that are no params.yaml key.
+TEST(CorrectorConfig, PedestrianPresetIsThePipelinesIndoorCorrector) {
+    const CorrectorConfig preset = CorrectorConfig::Pedestrian();
+    const CorrectorConfig indoor = pipeline::PipelineConfig{}.indoor_corrector;
+    EXPECT_EQ(preset.Validate(), "");
+    ExpectRowsEqual(kModelParams, preset.model, indoor.model);
+    ExpectRowsEqual(kModelParams, preset.model, ModelConfig::Pedestrian());
+    ExpectRowsEqual(kCorrectorParams, preset, indoor);
+    ExpectRowsEqual(kCovarianceParams, preset.covariance, indoor.covariance);
+    EXPECT_EQ(preset.model.floor_heights_m, indoor.model.floor_heights_m);
+    EXPECT_EQ(preset.start_scales, indoor.start_scales);
+    EXPECT_EQ(preset.restart_scale_factors, indoor.restart_scale_factors);
+    EXPECT_EQ(preset.restart_height_gains, indoor.restart_height_gains);
+    EXPECT_EQ(preset.restart_height_change_m, indoor.restart_height_change_m);
+    // It is a preset, not the struct's defaults.
+    EXPECT_NE(CorrectorConfig{}.model.max_speed_mps, preset.model.max_speed_mps);
+    EXPECT_NE(CorrectorConfig{}.start_scales, preset.start_scales);
+}
+
 std::string ReadText(const fs::path& path) {
     std::ifstream in(path);
     std::stringstream s;

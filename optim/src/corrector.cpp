@@ -44,6 +44,19 @@ std::string CorrectorConfig::Validate() const {
     return covariance.Validate();
 }
 
+CorrectorConfig CorrectorConfig::Pedestrian() {
+    CorrectorConfig c;
+    c.model = ModelConfig::Pedestrian();
+    c.chunk_m = 15.0;
+    c.window_m = 60.0;
+    c.restart_offroad_m = 2.0;
+    c.covariance.step_error_sd = 0.10;
+    c.covariance.step_error_correlation_m = 10.0;
+    c.start_scales = {1.0, 1.25, 1.5};
+    c.floor_gain_sigma = 0.03;
+    return c;
+}
+
 namespace {
 
 // Share of poses within reach of the map: inside the field and closer than 3 giveup distances to

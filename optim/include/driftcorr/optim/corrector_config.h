@@ -106,6 +106,13 @@ struct CorrectorConfig {
     /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field of
     /// model, this struct (section corrector) or covariance.
     std::string Validate() const;
+
+    /// The settings for a pedestrian indoors (the members' initialisers are those for a car on
+    /// roads): ModelConfig::Pedestrian(), chunks and windows of a walk's tens of metres, restarts
+    /// closer to the walkways, start scales over the pedestrian's plausible range, the floor
+    /// hypotheses scored with their floor changes' gains, and the covariance's correlated step
+    /// error. How each value was chosen: docs/results.md, "Indoor parameters".
+    static CorrectorConfig Pedestrian();
 };
 
 /// Params.yaml section `corrector` (and `indoor_corrector`).

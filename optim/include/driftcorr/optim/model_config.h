@@ -132,6 +132,16 @@ struct ModelConfig {
     std::optional<ParamProblem> FindProblem() const;
     /// Empty if valid, else "model.<key>: <rule> (got <value>)" for the first bad field.
     std::string Validate() const;
+
+    /// The model of a pedestrian's dead reckoning indoors (the members' initialisers are the
+    /// road model of a car's metric odometry): steps of ~0.7 m at ~2 Hz from a step model that
+    /// can be tens of percent off, their lengths erring with the gait and read about the walk's
+    /// median step; a heading that errs by offsets and jumps (a heading walk, no rate bias); a
+    /// barometer's height changes; walkways a few metres wide; poses drawn to a lift shaft during
+    /// a ride and to the nearest floor where the walk is level (floor_heights_m stays empty: it
+    /// comes from the floor plans). How each value was chosen: docs/results.md, "Indoor
+    /// parameters".
+    static ModelConfig Pedestrian();
 };
 
 /// Params.yaml section `model` (and `indoor_model`); the defaults are the members' initialisers.
