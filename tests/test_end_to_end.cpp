@@ -370,7 +370,7 @@ namespace {
 
 // Real indoor PDR walk on GeoJSON floor plans and walkways of three floors: the corrector must
 // pick the right floor itself (all poses) and meet the issue's ATE <= 1.0 m (measured 0.94 m with
-// the pedestrian defaults, which were chosen on another walk: pipeline.cpp).
+// the pedestrian defaults, which were chosen on other walks: CorrectorConfig::Pedestrian()).
 TEST(EndToEndIndoor, HcuEightMeetsTheIndoorIssueFigures) {
     const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
     if (!fs::exists(dir + "/scenario.yaml")) {

@@ -115,7 +115,8 @@ struct CorrectorConfig {
     static CorrectorConfig Pedestrian();
 };
 
-/// Params.yaml section `corrector` (and `indoor_corrector`).
+/// Params.yaml section `corrector` (and `indoor_corrector`, CorrectorConfig::Pedestrian() by
+/// default).
 inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
     {"chunk_m", Field<&CorrectorConfig::chunk_m>(), kPositive,
      "estimated path added per incremental step"},

@@ -144,7 +144,8 @@ struct ModelConfig {
     static ModelConfig Pedestrian();
 };
 
-/// Params.yaml section `model` (and `indoor_model`); the defaults are the members' initialisers.
+/// Params.yaml section `model` (and `indoor_model`); the defaults are the members' initialisers
+/// (`indoor_model`: ModelConfig::Pedestrian()).
 inline constexpr Param<ModelConfig> kModelParamRows[] = {
     {"step_sigma_m", Field<&ModelConfig::step_sigma_m>(), kPositive,
      "step length sigma = step_sigma_m + step_sigma_rel * L"},

@@ -25,17 +25,12 @@ namespace driftcorr::pipeline {
 enum class Solver { kDriftcorr, kPaper };
 std::string ToString(Solver solver);
 
-/// The corrector's defaults for a pedestrian indoors (mode indoor3d): steps of ~0.7 m at ~2 Hz
-/// from pedestrian dead reckoning (step-length errors of several percent), corridors a few metres
-/// wide, heights free (the height-change term and the 3D field decide the floor).
-CorrectorConfig PedestrianCorrectorDefaults();
-
 /// Every parameter of a run; defaults written once, in the member structs.
 struct PipelineConfig {
     Solver solver = Solver::kDriftcorr;
     CorrectorConfig corrector;   ///< road2d, Solver::kDriftcorr (sections `model`, `corrector`)
     /// indoor3d, Solver::kDriftcorr (sections `indoor_model`, `indoor_corrector`)
-    CorrectorConfig indoor_corrector = PedestrianCorrectorDefaults();
+    CorrectorConfig indoor_corrector = CorrectorConfig::Pedestrian();
     IndoorFieldConfig indoor_field;  ///< indoor3d GeoJSON map field (section `indoor_field`)
     /// indoor3d point-cloud / OctoMap map field (section `surface_field`)
     SurfaceFieldConfig surface_field;
@@ -71,9 +66,9 @@ void ForEachParamSection(Pipeline&& config, F&& f) {
     f("field", kRoadFieldParams, config.field,
       "road2d: the road distance field (mapping/include/driftcorr/mapping/road_network.h)");
     f("indoor_model", kModelParams, config.indoor_corrector.model,
-      "indoor3d: the keys of model, pedestrian defaults (pipeline.h)");
+      "indoor3d: the keys of model at ModelConfig::Pedestrian() (model_config.h)");
     f("indoor_corrector", kCorrectorParams, config.indoor_corrector,
-      "indoor3d: the keys of corrector, pedestrian defaults (pipeline.h)");
+      "indoor3d: the keys of corrector at CorrectorConfig::Pedestrian() (corrector_config.h)");
     f("indoor_field", kIndoorFieldParams, config.indoor_field,
       "indoor3d GeoJSON floor plans (mapping/include/driftcorr/mapping/indoor_field.h)");
     f("surface_field", kSurfaceFieldParams, config.surface_field,
