@@ -1085,6 +1085,44 @@ TEST(CliHelp, ListsTheCommandsAndExitsZero) {
     }
 }
 
+// `params --preset NAME` prints the sections model and corrector at a preset's values, in the
+// lines `params` prints; `road` gives the defaults' (the start of `params`), a bad name is a usage
+// error naming the valid ones.
+TEST(CliParams, PresetPrintsTheModelAndCorrectorAtItsValues) {
+    const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "cli_params";  // its own capture files
+    fs::create_directories(dir);
+    const RunResult all = RunProgram(kCli, {"params"}, dir);
+    const RunResult road = RunProgram(kCli, {"params", "--preset", "road"}, dir);
+    const RunResult walk = RunProgram(kCli, {"params", "--preset", "pedestrian"}, dir);
+    for (const RunResult* r : {&all, &road, &walk}) {
+        ASSERT_EQ(r->exit_code, kExitOk) << r->command << "\n" << r->err;
+        EXPECT_EQ(r->err, "") << r->command;
+    }
+    const std::string header = "# driftcorr params --preset ";
+    ASSERT_EQ(road.out.rfind(header + "road\n", 0), 0u) << road.out;
+    ASSERT_EQ(walk.out.rfind(header + "pedestrian\n", 0), 0u) << walk.out;
+    const std::string road_sections = road.out.substr(road.out.find('\n') + 1);
+    EXPECT_EQ(all.out.rfind(road_sections, 0), 0u) << road_sections;
+    EXPECT_NE(road.out.find("\n  max_speed_mps: 70 "), std::string::npos) << road.out;
+    EXPECT_NE(walk.out.find("\n  max_speed_mps: 10 "), std::string::npos) << walk.out;
+    EXPECT_NE(walk.out.find("\n  chunk_m: 15 "), std::string::npos) << walk.out;
+    EXPECT_NE(walk.out.find("\nmodel:  # "), std::string::npos) << walk.out;
+    EXPECT_NE(walk.out.find("\ncorrector:  # "), std::string::npos) << walk.out;
+    EXPECT_EQ(walk.out.find("indoor_"), std::string::npos) << walk.out;
+
+    for (const std::string bad : {"car", "Pedestrian", ""}) {
+        const RunResult r = RunProgram(kCli, {"params", "--preset", bad}, dir);
+        EXPECT_EQ(r.exit_code, kExitUsage) << bad;
+        EXPECT_EQ(r.out, "") << bad;
+        const std::vector<std::string> lines = MessageLines(r.err);
+        ASSERT_EQ(lines.size(), 1u) << r.err;
+        EXPECT_EQ(lines[0], "driftcorr: --preset must be road or pedestrian, not '" + bad + "'");
+    }
+    const RunResult missing = RunProgram(kCli, {"params", "--preset"}, dir);
+    EXPECT_EQ(missing.exit_code, kExitUsage);
+    EXPECT_NE(missing.err.find("--preset needs a value"), std::string::npos) << missing.err;
+}
+
 // The valid scenario with its anchor turned by 30 deg: the start does not fit the map, the verdict
 // is failed, and what is written depends on --on-failure; the exit code is 3 in every case.
 class CliOnFailure : public CliTest {

@@ -230,6 +230,26 @@ TEST(CorrectorConfig, PedestrianPresetIsThePipelinesIndoorCorrector) {
     EXPECT_NE(CorrectorConfig{}.start_scales, preset.start_scales);
 }
 
+// CorrectorReference writes a preset as the sections model and corrector of a params.yaml:
+// read back, they set the road2d corrector's keys to the preset's values and nothing else.
+TEST(CorrectorReference, ReadsBackToThePresetsKeys) {
+    const CorrectorConfig preset = CorrectorConfig::Pedestrian();
+    const std::string text = pipeline::CorrectorReference(preset);
+    EXPECT_EQ(text.rfind("model:  # ", 0), 0u) << text;
+    EXPECT_NE(text.find("\ncorrector:  # "), std::string::npos) << text;
+    EXPECT_EQ(text.find("indoor_"), std::string::npos) << text;
+    const fs::path path = TempFile("preset.yaml");
+    WriteFile(path, text);
+    const pipeline::PipelineConfig read = pipeline::LoadPipelineConfig(path.string());
+    ExpectRowsEqual(kModelParams, read.corrector.model, preset.model);
+    ExpectRowsEqual(kCorrectorParams, read.corrector, preset);
+    pipeline::PipelineConfig expected;
+    expected.corrector = preset;
+    EXPECT_EQ(pipeline::ParameterReference(read), pipeline::ParameterReference(expected));
+    // The defaults' two sections are where ParameterReference begins.
+    EXPECT_EQ(pipeline::ParameterReference().rfind(pipeline::CorrectorReference({}), 0), 0u);
+}
+
 std::string ReadText(const fs::path& path) {
     std::ifstream in(path);
     std::stringstream s;

@@ -20,7 +20,8 @@ const char* kAbout =
     "  stream    online correction, pose by pose (driftcorr stream -h)\n"
     "  eval      the estimate, the paper's method and driftcorr against ground truth\n"
     "            (driftcorr eval -h)\n"
-    "  params    every params.yaml key at its default, with its allowed values\n"
+    "  params    every params.yaml key at its default, with its allowed values, or those of\n"
+    "            the model and corrector at a preset (driftcorr params -h)\n"
     "  map       the walkable surface of a raw 3D map of a building (driftcorr map -h)\n"
     "driftcorr --version prints the version.\n"
     "\n";
@@ -28,7 +29,7 @@ const char* kOtherUsage =
     "       driftcorr eval <scenario dirs...> [-o report_dir] [--config params.yaml] [--quiet]\n"
     "       driftcorr stream <scenario dir | scenario.yaml> [--replay] [--rate-hz R] [--sync]\n"
     "                        [--config params.yaml] [--smoothed-out smoothed.tum]\n"
-    "       driftcorr params\n"
+    "       driftcorr params [--preset road|pedestrian]\n"
     "       driftcorr map extract <raw .pcd | .ply | .bt | .ot> -o walkable.pcd [--lifts ...]\n";
 
 struct Command {

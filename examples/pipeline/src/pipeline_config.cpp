@@ -189,6 +189,20 @@ std::string ReferenceLine(const Param<Config>& p, const Config& part) {
     return line + "# " + rule.substr(rule.rfind("must be ", 0) == 0 ? 8 : 0) + "; " + p.doc;
 }
 
+/// The sections of `config` whose name `keep` accepts, each under a line with its name and
+/// what it sets, then a line per key.
+template <class Keep>
+std::string Reference(const PipelineConfig& config, Keep keep) {
+    std::string out;
+    ForEachParamSection(
+        config, [&](const char* section, const auto& table, const auto& part, const char* about) {
+            if (!keep(std::string(section))) return;
+            out += std::string(section) + ":  # " + about + "\n";
+            for (const auto& p : table) out += ReferenceLine(p, part) + "\n";
+        });
+    return out;
+}
+
 }  // namespace
 
 std::string PipelineConfig::Validate() const {
@@ -207,13 +221,15 @@ std::string PipelineConfig::Validate() const {
 }
 
 std::string ParameterReference(const PipelineConfig& config) {
-    std::string out;
-    ForEachParamSection(
-        config, [&](const char* section, const auto& table, const auto& part, const char* about) {
-            out += std::string(section) + ":  # " + about + "\n";
-            for (const auto& p : table) out += ReferenceLine(p, part) + "\n";
-        });
-    return out;
+    return Reference(config, [](const std::string&) { return true; });
+}
+
+std::string CorrectorReference(const CorrectorConfig& corrector) {
+    PipelineConfig config;
+    config.corrector = corrector;
+    return Reference(config, [](const std::string& section) {
+        return section == kModelParams.section || section == kCorrectorParams.section;
+    });
 }
 
 PipelineConfig LoadPipelineConfig(const std::string& path) {

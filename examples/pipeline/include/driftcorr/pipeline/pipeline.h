@@ -91,6 +91,11 @@ PipelineConfig LoadPipelineConfig(const std::string& path);
 /// `driftcorr params` prints it for the defaults; it is the parameter list of README.md.
 std::string ParameterReference(const PipelineConfig& config = PipelineConfig{});
 
+/// The sections `model` and `corrector` of ParameterReference (road2d's) with the values of
+/// `corrector`, e.g. CorrectorConfig::Pedestrian(): a preset as params.yaml writes it. Members
+/// that are no params.yaml key (start_scales, restart_*_factors/gains, covariance) are not listed.
+std::string CorrectorReference(const CorrectorConfig& corrector);
+
 /// Converts between the world plane (ENU at the anchor) and WGS84, for maps and GeoJSON output.
 class WorldFrame {
 public:
