@@ -72,8 +72,8 @@ struct CorrectorConfig {
     /// at 1e-4, less than 1 mm on the generated road and building scenarios (one Newton step
     /// fewer in most drives, docs/results.md).
     double refine_newton_tolerance = 1e-4;
-    IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0};
-    IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0};
+    IpoptOptions window_ipopt{50, 30.0, 1e-6, 1e-4, 1e-4, 0, {}};
+    IpoptOptions refine_ipopt{200, 120.0, 1e-6, 1e-4, 1e-4, 0, {}};
     /// Per-pose covariance of the corrected trajectory (optim/covariance.h) into
     /// CorrectionResult::covariance. Linear in the number of poses; KITTI 00 (4541 poses):
     /// 15-20 ms, about 2 % of the correction.
