@@ -192,6 +192,17 @@ std::optional<HeightRange> WalkHeights(const PlanarTrajectory& estimate,
 constexpr double kScaleLeadPathM = 1000.0;
 constexpr double kScaleStepRatio = 1.02;
 
+// The map field over the square of half-width `half_m` about the anchor, for matching the
+// estimate's leading path.
+TraversableField LeadField(const WorldFrame& world, const PipelineConfig& config,
+                           const PreparedScenario& ps, double half_m) {
+    const Eigen::Vector2d c = ps.anchor.origin_en, h(half_m, half_m);
+    RoadNetwork unused;
+    return LoadMapField(ps.scenario, world, config, Eigen::AlignedBox2d(c - h, c + h),
+                        ps.anchor.origin_up_m, unused, nullptr,
+                        WalkHeights(ps.estimate, config.indoor_field));
+}
+
 // `yaw_deg: auto` / `position_search_m`: the leading path is matched against a field that covers
 // every heading and position searched, then the estimate is placed where it fits best and the
 // anchor takes that heading and position.
@@ -203,13 +214,8 @@ void PlaceStart(const WorldFrame& world, const PipelineConfig& config, PreparedS
         if (i > 0) path_m += (ps.estimate.p_en[i] - ps.estimate.p_en[i - 1]).norm();
         reach_m = std::max(reach_m, (ps.estimate.p_en[i] - ps.anchor.origin_en).norm());
     }
-    const double half = reach_m + sc.anchor.position_search_m + fit_cfg.reach_m;
-    const Eigen::Vector2d c = ps.anchor.origin_en;
-    const Eigen::AlignedBox2d region(c - Eigen::Vector2d(half, half), c + Eigen::Vector2d(half, half));
-    RoadNetwork unused;
     const TraversableField lead_field =
-        LoadMapField(sc, world, config, region, ps.anchor.origin_up_m, unused, nullptr,
-                     WalkHeights(ps.estimate, config.indoor_field));
+        LeadField(world, config, ps, reach_m + sc.anchor.position_search_m + fit_cfg.reach_m);
     ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, lead_field,
                               !sc.anchor.yaw_deg, sc.anchor.position_search_m, fit_cfg);
     const AnchorPlacement& best = ps.anchor_fit->best;
@@ -287,13 +293,9 @@ void PlaceScale(const WorldFrame& world, const PipelineConfig& config, PreparedS
     const SpeedBand band = PlausibleSpeeds(sc);
     AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
     fit_cfg.lead_path_m = kScaleLeadPathM;
-    const double half = fit_cfg.lead_path_m + sc.anchor.position_search_m + fit_cfg.reach_m;
+    const TraversableField lead_field = LeadField(
+        world, config, ps, fit_cfg.lead_path_m + sc.anchor.position_search_m + fit_cfg.reach_m);
     const Eigen::Vector2d c = ps.anchor.origin_en;
-    const Eigen::AlignedBox2d region(c - Eigen::Vector2d(half, half), c + Eigen::Vector2d(half, half));
-    RoadNetwork unused;
-    const TraversableField lead_field =
-        LoadMapField(sc, world, config, region, ps.anchor.origin_up_m, unused, nullptr,
-                     WalkHeights(ps.estimate, config.indoor_field));
     ps.scale_fit = FitScale(ps.estimate, c, ps.anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
                             band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
     std::vector<ScaleCandidate>& candidates = ps.scale_fit->candidates;
