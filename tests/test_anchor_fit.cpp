@@ -78,11 +78,10 @@ TEST(AnchorFit, FindsTheGlobalScalesThatFitAShrunkenDrive) {
                                             2.0, 40.0, 1.02, 3, AnchorFitConfig{});
         ASSERT_GE(fit.candidates.size(), 2u) << search_yaw;
         const auto found = [&](double scale) {
-            return std::any_of(fit.candidates.begin(), fit.candidates.begin() + 2,
-                               [&](const ScaleCandidate& c) {
-                                   return std::abs(c.scale - scale) < 0.02 * scale &&
-                                          c.placement.rms_m < 0.3;
-                               });
+            return std::any_of(
+                fit.candidates.begin(), fit.candidates.begin() + 2, [&](const ScaleCandidate& c) {
+                    return std::abs(c.scale - scale) < 0.02 * scale && c.placement.rms_m < 0.3;
+                });
         };
         EXPECT_TRUE(found(10.0)) << search_yaw;
         EXPECT_TRUE(found(4.0)) << search_yaw;
@@ -93,7 +92,8 @@ TEST(AnchorFit, FindsTheGlobalScalesThatFitAShrunkenDrive) {
         // whole drive stays on the first street, which fits any such scale.
         for (std::size_t k = 0; k < fit.scales.size(); ++k) {
             const double s = fit.scales[k];
-            if (std::abs(std::log(s / 10.0)) > 0.1 && std::abs(std::log(s / 4.0)) > 0.1 && s > 3.0) {
+            if (std::abs(std::log(s / 10.0)) > 0.1 && std::abs(std::log(s / 4.0)) > 0.1 &&
+                s > 3.0) {
                 EXPECT_GT(fit.rms_m[k], 1.0) << s;
             }
         }

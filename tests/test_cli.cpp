@@ -14,7 +14,6 @@
 // estimate.kitti + times.txt, the indoor3d cases replace it with a small corridor walk written by
 // the test (GeoJSON floor plan + walkways, or an ASCII PCD floor); each has a valid case too.
 #include <gtest/gtest.h>
-#include <iomanip>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,6 +25,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <iostream>
 #include <iterator>
 #include <ostream>
@@ -1280,8 +1280,11 @@ TEST_F(CliFormats, ScaleOnTheCommandLine) {
     const CaseDirs c = MakeCase("ScaleFlag");
     const fs::path metric = c.out_dir.parent_path() / "metric.tum";
     const std::string estimate = (c.scenario / "estimate.tum").string();
-    ASSERT_EQ(RunProgram(kCli, CorrectFile(c, estimate, {"--anchor", "48.98,8.39,0", "--frame", "enu"}),
-                         c.out_dir.parent_path()).exit_code, kExitOk);
+    ASSERT_EQ(
+        RunProgram(kCli, CorrectFile(c, estimate, {"--anchor", "48.98,8.39,0", "--frame", "enu"}),
+                   c.out_dir.parent_path())
+            .exit_code,
+        kExitOk);
     fs::rename(c.output, metric);
     std::istringstream in(ReadFile(estimate));
     std::ostringstream small;
@@ -1295,18 +1298,20 @@ TEST_F(CliFormats, ScaleOnTheCommandLine) {
     }
     const fs::path small_path = c.out_dir.parent_path() / "small.tum";
     std::ofstream(small_path) << small.str();
-    const RunResult r = RunProgram(
-        kCli, CorrectFile(c, small_path.string(),
-                          {"--anchor", "48.98,8.39,0", "--frame", "enu", "--scale", "10"}),
-        c.out_dir.parent_path());
+    const RunResult r =
+        RunProgram(kCli,
+                   CorrectFile(c, small_path.string(),
+                               {"--anchor", "48.98,8.39,0", "--frame", "enu", "--scale", "10"}),
+                   c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     ASSERT_EQ(r.exit_code, kExitOk);
     ExpectSameNumbers(ReadFile(c.output), ReadFile(metric.string()), 1e-3);
 
-    const RunResult zero = RunProgram(
-        kCli, CorrectFile(c, small_path.string(),
-                          {"--anchor", "48.98,8.39,0", "--frame", "enu", "--scale", "0"}),
-        c.out_dir.parent_path());
+    const RunResult zero =
+        RunProgram(kCli,
+                   CorrectFile(c, small_path.string(),
+                               {"--anchor", "48.98,8.39,0", "--frame", "enu", "--scale", "0"}),
+                   c.out_dir.parent_path());
     EXPECT_EQ(zero.exit_code, kExitBadInput);
     EXPECT_NE(zero.err.find("--scale: must be auto or a number"), std::string::npos) << zero.err;
 }

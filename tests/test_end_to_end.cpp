@@ -244,7 +244,8 @@ TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
 // `scale: auto` its size is found from the map and it is corrected about as well as the metric
 // drive.
 TEST(Monocular, ItsSizeIsFoundFromTheMapAndWithoutScaleAutoItIsNamed) {
-    const std::string real = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_cvo_stereo_geometric";
+    const std::string real =
+        std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_cvo_stereo_geometric";
     if (!fs::exists(real + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << real;
     const std::string out = TmpDir("monocular");
     const std::string command = std::string("\"") + DRIFTCORR_BINARY_DIR +
@@ -258,7 +259,8 @@ TEST(Monocular, ItsSizeIsFoundFromTheMapAndWithoutScaleAutoItIsNamed) {
         EXPECT_EQ(e.key(), "anchor.scale");
         EXPECT_NE(std::string(e.what()).find("monocular"), std::string::npos) << e.what();
     }
-    const pipeline::CorrectionRun metric = pipeline::RunCorrection(real, pipeline::PipelineConfig{});
+    const pipeline::CorrectionRun metric =
+        pipeline::RunCorrection(real, pipeline::PipelineConfig{});
     const pipeline::CorrectionRun mono =
         pipeline::RunCorrection(out + "/mono_0.1_auto", pipeline::PipelineConfig{});
     ASSERT_TRUE(Usable(mono.result.status)) << mono.result.message;

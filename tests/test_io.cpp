@@ -203,8 +203,9 @@ TEST(TrajectoryIo, KittiWithFrameIndices) {
     const Trajectory by_times = ReadKitti(path, WriteText(dir / "t10.txt", times), std::nullopt);
     ASSERT_EQ(by_times.size(), 4u);
     EXPECT_DOUBLE_EQ(by_times.t_s[3], 4.5);
-    ExpectInputError([&] { ReadKitti(path, WriteText(dir / "t5.txt", "0\n1\n2\n3\n4\n"), std::nullopt); },
-                     {"has 5 timestamps but", "names frame 9"});
+    ExpectInputError(
+        [&] { ReadKitti(path, WriteText(dir / "t5.txt", "0\n1\n2\n3\n4\n"), std::nullopt); },
+        {"has 5 timestamps but", "names frame 9"});
     std::string backwards = indexed;
     backwards.replace(backwards.rfind("\n9 ") + 1, 1, "2");
     const std::string back = WriteText(dir / "k_back.txt", backwards);

@@ -1,11 +1,11 @@
 // driftcorr_make_stress_variants: writes stress variants of a scenario (one complete scenario
 // folder per variant: clean, drop_steps, heading_bias_*, yaw_off_*, anchor_off_20m,
 // road_removed). See datasets/README.md, "Stress variants".
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <optional>
-#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -43,7 +43,8 @@ void PrintUsage(std::FILE* stream) {
         "             steps scaled by G times a random walk, the anchor as given) and\n"
         "             mono_<G>_auto (the same with `scale: auto` in the anchor)\n"
         "  --monocular-drift X    that walk's spread per sqrt(100 m) of path (default %g)\n",
-        static_cast<unsigned long long>(StressConfig().seed), StressConfig().monocular_drift_per_100m);
+        static_cast<unsigned long long>(StressConfig().seed),
+        StressConfig().monocular_drift_per_100m);
 }
 
 // "0.05,0.1,0.2": positive numbers, comma-separated.
@@ -111,7 +112,8 @@ std::vector<std::string> GeneratedBy(const Options& opt, const InputScenario& in
             "input: " + input.scenario.yaml_path + " (scenario '" + input.scenario.name + "')",
             "variant: " + variant + "; seed " + std::to_string(opt.config.seed),
             "regenerate: driftcorr_make_stress_variants " + input.scenario.yaml_path +
-                " <out_dir> --seed " + std::to_string(opt.config.seed) + MonocularFlags(opt.config)};
+                " <out_dir> --seed " + std::to_string(opt.config.seed) +
+                MonocularFlags(opt.config)};
 }
 
 /// A skipped variant must not leave an earlier run's scenario behind under its name: removes

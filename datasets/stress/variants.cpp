@@ -300,8 +300,8 @@ std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressCo
     synth::NormalSampler normal(config.seed + kMonocularSeedOffset + index);
     std::vector<double> scales;
     VariantSpec spec = BaseSpec(input, name);
-    spec.estimate = ScaleLikeMonocular(input.estimate, g, config.monocular_drift_per_100m, normal,
-                                       &scales);
+    spec.estimate =
+        ScaleLikeMonocular(input.estimate, g, config.monocular_drift_per_100m, normal, &scales);
     const auto [lo, hi] = std::minmax_element(scales.begin(), scales.end());
     spec.description = {
         Format("variant %s (seed %llu): a monocular tracker's estimate: every step's translation "

@@ -35,8 +35,8 @@ struct VariantOutcome {
 
 /// All variants, in a fixed order: clean, drop_steps, heading_bias_*, yaw_off_*, anchor_off_*,
 /// road_removed; or, when config.monocular_scales is not empty, only mono_<scale> (the anchor as
-/// given) and mono_<scale>_auto (the anchor with `scale: auto`) for each scale. Throws InputError naming the file for bad input found on the way (a map that
-/// cannot be read, an unknown CRS).
+/// given) and mono_<scale>_auto (the anchor with `scale: auto`) for each scale. Throws InputError
+/// naming the file for bad input found on the way (a map that cannot be read, an unknown CRS).
 std::vector<VariantOutcome> MakeVariants(const InputScenario& input, const StressConfig& config);
 
 }  // namespace driftcorr::stress

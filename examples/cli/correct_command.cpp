@@ -24,8 +24,8 @@
 
 #include "commands.h"
 #include "driftcorr/core/angles.h"
-#include "driftcorr/core/metrics.h"
 #include "driftcorr/core/errors.h"
+#include "driftcorr/core/metrics.h"
 #include "driftcorr/io/geojson_writer.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/mapping/atomic_file.h"
@@ -57,7 +57,8 @@ const char* kCorrectUsage =
     "--geojson also writes estimate and corrected track (and ground truth) as WGS84 GeoJSON\n"
     "LineStrings; properties.coordinateProperties.times holds each vertex's timestamp [s].\n"
     "--solver paper runs, as a reference, the epoch-wise gradient descent of Navard and Yilmaz,\n"
-    "\"A Probabilistic-based Drift Correction Module for Visual Inertial SLAMs\" (arXiv:2404.10140).\n"
+    "\"A Probabilistic-based Drift Correction Module for Visual Inertial SLAMs\" "
+    "(arXiv:2404.10140).\n"
     "--covariance writes per pose: t, the horizontal covariance (East, North) [m^2], the\n"
     "height and heading variances, and the verdict's pose flags.\n"
     "A trajectory without a scenario file: road2d on one OpenStreetMap file (XML or PBF).\n"
@@ -124,9 +125,8 @@ std::string CheckChoices(const Args& a) {
 
 std::string CheckModes(const Args& a) {
     const bool file_options = !a.anchor.empty() || !a.crs.empty() || !a.scale.empty() ||
-                              !a.frame.empty() ||
-                              !a.format.empty() || !a.rate_hz.empty() || !a.heading.empty() ||
-                              !a.ground_truth.empty() || !a.times.empty() ||
+                              !a.frame.empty() || !a.format.empty() || !a.rate_hz.empty() ||
+                              !a.heading.empty() || !a.ground_truth.empty() || !a.times.empty() ||
                               !a.ground_truth_times.empty();
     if (a.inputs.empty() && a.manifest.empty()) return "missing scenario";
     if (a.output.empty()) {
@@ -152,8 +152,9 @@ bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
          {"--geojson", &a.geojson}, {"--solver", &a.solver}, {"--covariance", &a.covariance},
          {"--on-failure", &a.on_failure}, {"--manifest", &a.manifest}, {"-j", &a.jobs},
          {"--jobs", &a.jobs}, {"--osm", &a.osm}, {"--anchor", &a.anchor}, {"--crs", &a.crs},
-         {"--scale", &a.scale}, {"--frame", &a.frame}, {"--format", &a.format}, {"--rate-hz", &a.rate_hz},
-         {"--heading", &a.heading}, {"--ground-truth", &a.ground_truth}, {"--times", &a.times},
+         {"--scale", &a.scale}, {"--frame", &a.frame}, {"--format", &a.format},
+         {"--rate-hz", &a.rate_hz}, {"--heading", &a.heading},
+         {"--ground-truth", &a.ground_truth}, {"--times", &a.times},
          {"--ground-truth-times", &a.ground_truth_times}}};
     auto positional = [&a](const std::string& arg) -> std::string {
         a.inputs.push_back(arg);

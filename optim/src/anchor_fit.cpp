@@ -159,9 +159,9 @@ PlanarTrajectory ScaleAbout(const PlanarTrajectory& t, const Eigen::Vector2d& pi
 }
 
 ScaleFitResult FitScale(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
-                        double pivot_up_m, const TraversableField& field, bool search_yaw, double min_scale,
-                        double max_scale, double step_ratio, std::size_t max_candidates,
-                        const AnchorFitConfig& c) {
+                        double pivot_up_m, const TraversableField& field, bool search_yaw,
+                        double min_scale, double max_scale, double step_ratio,
+                        std::size_t max_candidates, const AnchorFitConfig& c) {
     ScaleFitResult res;
     const auto fit = [&](double scale) {
         const PlanarTrajectory scaled = ScaleAbout(estimate, pivot_en, pivot_up_m, scale);

@@ -96,7 +96,8 @@ void JudgeScale(const PlanarTrajectory& est, const std::vector<double>& step_m,
     if (v.scale_min < c.scale_failed_min || v.scale_max > c.scale_failed_max) {
         // Every part squeezed (or stretched) alike: the estimate's size itself is off, as a
         // monocular tracker's is.
-        const bool whole = v.scale_max < c.scale_plausible_min || v.scale_min > c.scale_plausible_max;
+        const bool whole =
+            v.scale_max < c.scale_plausible_min || v.scale_min > c.scale_plausible_max;
         f.Failed("the correction stretches or squeezes the drive by " + range +
                  " (corrected / estimated path per " + FormatFixed(segment_m, 0) +
                  " m; plausible " + FormatFixed(c.scale_plausible_min, 2) + ".." +

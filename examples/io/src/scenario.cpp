@@ -257,8 +257,8 @@ std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor) {
     }
     const std::optional<double> v = internal::ParseDouble(internal::Trim(text));
     if (!v || !(*v > 0.0 && *v < 1e6)) {
-        return "must be auto or a number in (0, 1e6): the estimate's positions times it are "
-               "metres (got '" + text + "')";
+        return std::string("must be auto or a number in (0, 1e6): the estimate's positions ") +
+               "times it are metres (got '" + text + "')";
     }
     anchor.scale_given = true;
     anchor.scale_auto = false;
@@ -269,10 +269,9 @@ std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor) {
 namespace {
 
 AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::string>& warnings) {
-    block.WarnUnknownKeys(
-        {"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m", "yaw_deg", "z_m",
-         "position_search_m", "scale"},
-        warnings);
+    block.WarnUnknownKeys({"lat_deg", "lon_deg", "alt_m", "crs", "easting_m", "northing_m",
+                           "yaw_deg", "z_m", "position_search_m", "scale"},
+                          warnings);
     const bool geographic = block.Has("lat_deg") || block.Has("lon_deg") || block.Has("alt_m");
     const bool grid = block.Has("crs") || block.Has("easting_m") || block.Has("northing_m");
     if (geographic && grid) {

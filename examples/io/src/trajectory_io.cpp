@@ -230,8 +230,8 @@ Trajectory ReadKitti(const std::string& path, const std::optional<std::string>& 
         if (!frames.empty()) {  // the times file lists every frame, the poses only some
             if (frames.back() >= times.size()) {
                 throw InputError(*times_path, 0, "",
-                                 "has " + std::to_string(times.size()) + " timestamps but " +
-                                     path + " names frame " + std::to_string(frames.back()));
+                                 "has " + std::to_string(times.size()) + " timestamps but " + path +
+                                     " names frame " + std::to_string(frames.back()));
             }
             for (std::size_t f : frames) traj.t_s.push_back(times[f]);
         } else {

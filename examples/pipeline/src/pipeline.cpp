@@ -315,9 +315,9 @@ void PlaceScale(const WorldFrame& world, const PipelineConfig& config, PreparedS
     std::size_t kept = 0;
     double best_nll = std::numeric_limits<double>::infinity(), kept_ratio = 1.0;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
-        const PlanarTrajectory trial = ApplyPlacement(
-            ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, candidates[k].scale), c,
-            candidates[k].placement);
+        const PlanarTrajectory trial =
+            ApplyPlacement(ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, candidates[k].scale),
+                           c, candidates[k].placement);
         const std::vector<FieldDisc> corridor =
             FieldCorridor(trial, c, AnchorFitFor(sc, config), config.field);
         RoadNetwork network;

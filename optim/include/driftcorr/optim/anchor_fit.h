@@ -115,9 +115,9 @@ struct ScaleFitResult {
 /// lead_path_m of the scaled path; every heading when `search_yaw`), and returns at most
 /// `max_candidates` local minima. Precondition: 0 < min_scale <= max_scale, config valid.
 ScaleFitResult FitScale(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,
-                        double pivot_up_m, const TraversableField& field, bool search_yaw, double min_scale,
-                        double max_scale, double step_ratio, std::size_t max_candidates,
-                        const AnchorFitConfig& config);
+                        double pivot_up_m, const TraversableField& field, bool search_yaw,
+                        double min_scale, double max_scale, double step_ratio,
+                        std::size_t max_candidates, const AnchorFitConfig& config);
 
 /// `estimate` with its positions scaled by `scale` about (pivot_en, pivot_up_m); headings and
 /// times unchanged.

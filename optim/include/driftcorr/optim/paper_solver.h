@@ -1,10 +1,10 @@
 #pragma once
 // The baseline: the solver of P. Navard and A. Yilmaz, "A Probabilistic-based Drift Correction
 // Module for Visual Inertial SLAMs" (arXiv:2404.10140, 2024), kept as a reference mode
-// (`driftcorr correct --solver paper`, and a column of `driftcorr eval`): an epoch-by-epoch filter. Per epoch i the previous poses stay
-// fixed, the new position starts at the previous corrected pose composed with the observed step,
-// and plain fixed-step gradient descent (learning rate 0.01, as published, no line search)
-// minimises four weighted terms of that one position:
+// (`driftcorr correct --solver paper`, and a column of `driftcorr eval`): an epoch-by-epoch filter.
+// Per epoch i the previous poses stay fixed, the new position starts at the previous corrected pose
+// composed with the observed step, and plain fixed-step gradient descent (learning rate 0.01, as
+// published, no line search) minimises four weighted terms of that one position:
 //
 //   E_i(p) = w_t (c_i - c_{i-1} - dc_i)^2 / 2 sigma_t^2     turn angle        (HeadingChangeTerm)
 //          + w_s (|p - p_{i-1}| - L_i)^2 / 2 sigma_s^2      step length       (StepLengthTerm)
