@@ -195,6 +195,15 @@ TEST(DecidedFreedoms, TheHeadingBiasIsKeptOnlyWhereTheHeadingDrifts) {
     EXPECT_FALSE(c.result.heading_bias.has_value());
 }
 
+// Runs the committed stress generator on the scenario `input` into `out` with `args`; its output
+// goes to out.log. Returns the exit status.
+int MakeStressVariants(const std::string& input, const std::string& out, const std::string& args) {
+    const std::string command = std::string("\"") + DRIFTCORR_BINARY_DIR +
+                                "/datasets/driftcorr_make_stress_variants\" \"" + input + "\" \"" +
+                                out + "\" " + args + " > \"" + out + ".log\" 2>&1";
+    return std::system(command.c_str());
+}
+
 // KITTI 07's accurate LiDAR odometry with the street it drives along the longest removed from the
 // map (the stress generator's road_removed): the correction pulls the drive onto other streets
 // and explains the data worse than the input itself does, so the input comes back as it was,
@@ -203,10 +212,7 @@ TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
     const std::string real = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_imls_aloam_fork";
     if (!fs::exists(real + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << real;
     const std::string out = TmpDir("road_removed");
-    const std::string command = std::string("\"") + DRIFTCORR_BINARY_DIR +
-                                "/datasets/driftcorr_make_stress_variants\" \"" + real + "\" \"" +
-                                out + "\" > \"" + out + ".log\" 2>&1";
-    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    ASSERT_EQ(MakeStressVariants(real, out, ""), 0);
     const pipeline::CorrectionRun run =
         pipeline::RunCorrection(out + "/road_removed", pipeline::PipelineConfig{});
     ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
@@ -248,10 +254,7 @@ TEST(Monocular, ItsSizeIsFoundFromTheMapAndWithoutScaleAutoItIsNamed) {
         std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti07_cvo_stereo_geometric";
     if (!fs::exists(real + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << real;
     const std::string out = TmpDir("monocular");
-    const std::string command = std::string("\"") + DRIFTCORR_BINARY_DIR +
-                                "/datasets/driftcorr_make_stress_variants\" \"" + real + "\" \"" +
-                                out + "\" --monocular 0.1 > \"" + out + ".log\" 2>&1";
-    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    ASSERT_EQ(MakeStressVariants(real, out, "--monocular 0.1"), 0);
     try {
         pipeline::RunCorrection(out + "/mono_0.1", pipeline::PipelineConfig{});
         ADD_FAILURE() << "a monocular estimate taken as metric must be bad input";
