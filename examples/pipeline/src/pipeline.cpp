@@ -192,6 +192,21 @@ std::optional<HeightRange> WalkHeights(const PlanarTrajectory& estimate,
 constexpr double kScaleLeadPathM = 1000.0;
 constexpr double kScaleStepRatio = 1.02;
 
+// The road field of `network` over `region_en`: along `corridor` when given and tiled, else the
+// whole region. A field the settings cannot make is bad input naming the map.
+TraversableField RoadField(const io::Scenario& sc, const RoadNetwork& network,
+                           const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
+                           const std::vector<FieldDisc>* corridor) {
+    try {
+        if (corridor != nullptr && config.field.tile_m > 0.0) {
+            return RasteriseRoadCorridor(network, region_en, *corridor, config.field);
+        }
+        return RasteriseRoads(network, region_en, config.field);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(sc.yaml_path, 0, "map", e.what());
+    }
+}
+
 // The map field over the square of half-width `half_m` about the anchor, for matching the
 // estimate's leading path.
 TraversableField LeadField(const WorldFrame& world, const PipelineConfig& config,
@@ -314,16 +329,20 @@ void PlaceScale(const WorldFrame& world, const PipelineConfig& config, PreparedS
     corrector.compute_covariance = false;
     std::size_t kept = 0;
     double best_nll = std::numeric_limits<double>::infinity(), kept_ratio = 1.0;
+    // Roads are read once; each trial rasterises its own corridor.
+    const bool road = sc.mode == io::ScenarioMode::kRoad2d;
+    const RoadNetwork roads = road ? LoadRoads(sc, world, config.roads) : RoadNetwork{};
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const PlanarTrajectory trial =
             ApplyPlacement(ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, candidates[k].scale),
                            c, candidates[k].placement);
         const std::vector<FieldDisc> corridor =
             FieldCorridor(trial, c, AnchorFitFor(sc, config), config.field);
-        RoadNetwork network;
+        RoadNetwork unused;
         const TraversableField field =
-            LoadMapField(sc, world, config, BoundsOf(trial), ps.anchor.origin_up_m, network,
-                         &corridor, WalkHeights(trial, config.indoor_field));
+            road ? RoadField(sc, roads, config, BoundsOf(trial), &corridor)
+                 : LoadMapField(sc, world, config, BoundsOf(trial), ps.anchor.origin_up_m, unused,
+                                &corridor, WalkHeights(trial, config.indoor_field));
         const CorrectionResult r = CorrectTrajectory(trial, &field, corrector);
         candidates[k].nll = Usable(r.status) ? r.nll : std::numeric_limits<double>::infinity();
         if (candidates[k].nll < best_nll) {
@@ -619,14 +638,7 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
         return LoadIndoorField(sc, config.indoor_field, up_m, network, heights);
     }
     network = LoadRoads(sc, world, config.roads);
-    try {
-        if (corridor != nullptr && config.field.tile_m > 0.0) {
-            return RasteriseRoadCorridor(network, region_en, *corridor, config.field);
-        }
-        return RasteriseRoads(network, region_en, config.field);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(sc.yaml_path, 0, "map", e.what());
-    }
+    return RoadField(sc, network, config, region_en, corridor);
 }
 
 std::vector<double> FloorHeights(const io::Scenario& sc, const PipelineConfig& config) {
