@@ -2,7 +2,8 @@
 // The terms of the weighted negative log-likelihood (NLL). Each term is one small unit whose
 // Evaluate returns its cost and, on request, the exact gradient and Hessian with respect to its
 // local variables. A Gaussian term with residual r, standard deviation sigma and weight w in (0, 1]
-// costs 0.5 * w * (r / sigma)^2 (Eq. 1 of our method notes: the NLL of a Gaussian observation).
+// costs 0.5 * w * (r / sigma)^2 (docs/method.md, Eq. 1: the NLL of a Gaussian observation).
+// The equation each term implements is cited at the term (docs/method.md, Eq. n).
 //
 // For the curvature of the NLL at a solution (optim/covariance.h) each term also linearises:
 // Linearise returns its residual, the residual's Jacobian and a curvature weight (Linearisation).
@@ -70,9 +71,10 @@ constexpr std::uint16_t ReadsOf(std::initializer_list<int> vars) {
     return bits;
 }
 
-/// Step length along the observed step direction: r = u(yaw_a + direction) . (p_b - p_a) - s * L.
+/// Step length along the observed step direction (docs/method.md, Eq. 4):
+/// r = u(yaw_a + direction) . (p_b - p_a) - s * L.
 /// Smooth at zero length, so stationary steps (L = 0) need no special case.
-/// With robust_k > 0 the likelihood is heavy-tailed (Cauchy, width k sigmas):
+/// With robust_k > 0 the likelihood is heavy-tailed (Cauchy, width k sigmas; Eq. 2):
 ///   rho = w * k^2 / 2 * log(1 + (r / sigma)^2 / k^2),
 /// so a step the odometry dropped (frame-to-frame registration returning ~0 while the platform
 /// moved) is an outlier the other terms can overrule, instead of a hard pull to zero.
@@ -85,9 +87,10 @@ struct StepLengthTerm {
     Linearisation<9> Linearise(const StepVector& x) const;
 };
 
-/// Speed continuity over two consecutive steps (poses a, b, c): the along-track speed changes
-/// little from one step to the next, r = along_bc / dt_bc - along_ab / dt_ab [m/s], Gaussian
-/// with sigma_mps. Variables [x_a, y_a, z_a, yaw_a, x_b, y_b, z_b, yaw_b, x_c, y_c, z_c, yaw_c];
+/// Speed continuity over two consecutive steps (poses a, b, c; Eq. 10): the along-track speed
+/// changes little from one step to the next, r = along_bc / dt_bc - along_ab / dt_ab [m/s],
+/// Gaussian with sigma_mps. Variables
+/// [x_a, y_a, z_a, yaw_a, x_b, y_b, z_b, yaw_b, x_c, y_c, z_c, yaw_c];
 /// along_ab = u(yaw_a + direction_ab) . (p_b - p_a), likewise along_bc.
 using SpeedVector = Eigen::Matrix<double, 12, 1>;
 using SpeedMatrix = Eigen::Matrix<double, 12, 12>;
@@ -99,7 +102,8 @@ struct SpeedChangeTerm {
     Linearisation<12> Linearise(const SpeedVector& x) const;
 };
 
-/// Sideways motion relative to the observed step direction: r = n(yaw_a + direction) . (p_b - p_a),
+/// Sideways motion relative to the observed step direction (Eq. 6):
+/// r = n(yaw_a + direction) . (p_b - p_a),
 /// n the left normal. Ties the heading variables to the direction the positions move in.
 struct StepDirectionTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kXa, kYa, kYawA, kXb, kYb});
@@ -109,7 +113,7 @@ struct StepDirectionTerm {
     Linearisation<9> Linearise(const StepVector& x) const;
 };
 
-/// Heading change: r = yaw_b - yaw_a - dheading (headings unwrapped).
+/// Heading change (Eq. 7 without a bias): r = yaw_b - yaw_a - dheading (headings unwrapped).
 struct HeadingChangeTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kYawA, kYawB});
     double dheading_rad, sigma_rad, weight;
@@ -118,7 +122,7 @@ struct HeadingChangeTerm {
     Linearisation<9> Linearise(const StepVector& x) const;
 };
 
-/// Heading change with a heading-rate bias, variables [yaw_a, yaw_b, bias]:
+/// Heading change with a heading-rate bias (Eq. 7), variables [yaw_a, yaw_b, bias]:
 /// r = yaw_b - yaw_a - dheading - bias * dt, bias [rad/s] the odometry's slowly varying heading
 /// drift (one unknown per stretch of time, tied by a RandomWalkTerm), so a steady drift costs the
 /// bias's prior once instead of every step's heading sigma.
@@ -129,7 +133,7 @@ struct HeadingChangeBiasTerm {
     Linearisation<3> Linearise(const Eigen::Vector3d& x) const;
 };
 
-/// The plausible range of the step-length scale as a prior, not a cliff: zero cost within
+/// The plausible range of the step-length scale as a prior, not a cliff (Eq. 15): zero cost within
 /// [min, max], Gaussian with sigma beyond it, r = s - max above, min - s below (continuous with
 /// its gradient; the Hessian steps from 0 to w / sigma^2 at the ends).
 using Vector1d = Eigen::Matrix<double, 1, 1>;
@@ -140,7 +144,7 @@ struct ScaleRangeTerm {
     Linearisation<1> Linearise(const Vector1d& x) const;
 };
 
-/// Heading preservation prior (turns are small): r = yaw_b - yaw_a.
+/// Heading preservation prior (turns are small; Eq. 8): r = yaw_b - yaw_a.
 struct HeadingPreservationTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kYawA, kYawB});
     double sigma_rad, weight;
@@ -149,7 +153,7 @@ struct HeadingPreservationTerm {
     Linearisation<9> Linearise(const StepVector& x) const;
 };
 
-/// Height change: r = z_b - z_a - dup.
+/// Height change (Eq. 9): r = z_b - z_a - dup.
 struct HeightChangeTerm {
     static constexpr std::uint16_t kReads = ReadsOf({kZa, kZb});
     double dup_m, sigma_m, weight;
@@ -159,12 +163,13 @@ struct HeightChangeTerm {
 };
 
 /// Random walk between consecutive segments of a slowly varying quantity (the step-length scale,
-/// the heading-rate bias), variables [v_prev, v_next]: r = (v_next - v_prev) / sigma. With robust_k > 0 the walk is heavy-tailed (Cauchy),
+/// the heading-rate bias), variables [v_prev, v_next]: r = (v_next - v_prev) / sigma. With
+/// robust_k > 0 the walk is heavy-tailed (Cauchy),
 ///   rho(r) = w * k^2 / 2 * log(1 + r^2 / k^2),
 /// quadratic for |r| << k, so the scale of a steady odometry stays steady, but a jump that the map
 /// supports (frame-to-frame ICP shortening its steps along a straight street) costs only
 /// logarithmically. robust_k = 0: Gaussian, 0.5 * w * r^2. With v_prev held fixed at the prior's
-/// mean it is the prior on the first segment.
+/// mean it is the prior on the first segment (Eq. 13, 14, 16; a floor's pull, Eq. 17).
 struct RandomWalkTerm {
     double sigma, weight;
     double robust_k = 0.0;
@@ -181,7 +186,8 @@ struct ScalePriorTerm {
 /// Map distance term on one pose: the distance d(p) to the nearest traversable centre should be
 /// near zero (Gaussian with sigma_m), but a pose far from every road gives up: the cost saturates,
 ///   rho(d) = w * (c / sigma)^2 * (1 - exp(-d^2 / (2 c^2))),   c = giveup_m,
-/// which is 0.5 * w * (d / sigma)^2 for d << c and flat (no pull) for d >> c.
+/// which is 0.5 * w * (d / sigma)^2 for d << c and flat (no pull) for d >> c (Eq. 3, 11; a lift
+/// shaft's pull, Eq. 18).
 /// The distance, its gradient and Hessian come from the map field at p (world ENU).
 struct MapDistanceTerm {
     double sigma_m, giveup_m, weight;
@@ -191,9 +197,9 @@ struct MapDistanceTerm {
     Linearisation<3> Linearise(double d, const Eigen::Vector3d& grad_d) const;
 };
 
-/// Gaussian prior on one pose, variables [x, y, z, yaw] (ENU [m], unwrapped yaw [rad]): what the
-/// poses before a fixed-lag window say about its boundary pose once they are marginalised (the
-/// Schur complement of their Gauss-Newton information onto that pose, optim/fixed_lag.h),
+/// Gaussian prior on one pose (Eq. 19), variables [x, y, z, yaw] (ENU [m], unwrapped yaw [rad]):
+/// what the poses before a fixed-lag window say about its boundary pose once they are marginalised
+/// (the Schur complement of their Gauss-Newton information onto that pose, optim/fixed_lag.h),
 ///   cost = 0.5 (x - mean)^T I (x - mean),
 /// I symmetric positive semi-definite [1/m^2, 1/(m rad), 1/rad^2]; rows and columns of a variable
 /// the prior says nothing about (a fixed height) are zero. Quadratic: the Hessian is I everywhere.
