@@ -1,6 +1,6 @@
-// The parameter tables (core/params.h) against the params.yaml reader and the README: every key of
-// every section, mistyped, out of range or of the wrong type, gives one message naming the file,
-// the line and the key as written; the README lists exactly what the tables say.
+// The parameter tables (core/params.h) against the params.yaml reader and docs/parameters.md: every
+// key of every section, mistyped, out of range or of the wrong type, gives one message naming the
+// file, the line and the key as written; docs/parameters.md lists exactly what the tables say.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -265,19 +265,19 @@ std::string Between(const std::string& text, const std::string& begin, const std
     return text.substr(a + begin.size(), b - a - begin.size());
 }
 
-TEST(ParameterReference, ReadmeListsEveryParameter) {
-    const std::string readme = ReadText(DRIFTCORR_README);
-    const std::string listed = Between(readme, "<!-- BEGIN driftcorr params -->\n```yaml\n",
+TEST(ParameterReference, ParametersDocListsEveryParameter) {
+    const std::string doc = ReadText(DRIFTCORR_PARAMETERS_DOC);
+    const std::string listed = Between(doc, "<!-- BEGIN driftcorr params -->\n```yaml\n",
                                        "```\n<!-- END driftcorr params -->");
     EXPECT_EQ(listed, pipeline::ParameterReference())
-        << "README.md's parameter list differs from the tables: replace the block between the "
-           "BEGIN/END driftcorr params markers with the output of `driftcorr params`";
+        << "docs/parameters.md's parameter list differs from the tables: replace the block "
+           "between the BEGIN/END driftcorr params markers with the output of `driftcorr params`";
 }
 
-TEST(ParameterReference, ReadmeExampleIsAValidParameterFile) {
-    const std::string readme = ReadText(DRIFTCORR_README);
+TEST(ParameterReference, ParametersDocExampleIsAValidParameterFile) {
+    const std::string doc = ReadText(DRIFTCORR_PARAMETERS_DOC);
     const std::string example =
-        Between(readme, "A file sets only the keys it names, e.g.\n\n```yaml\n", "```");
+        Between(doc, "A file sets only the keys it names, e.g.\n\n```yaml\n", "```");
     ASSERT_FALSE(example.empty());
     const fs::path path = TempFile("example.yaml");
     WriteFile(path, example);

@@ -3,8 +3,8 @@
 // params.yaml), the member it sets, the allowed range and one line of documentation. The default is
 // the member's initialiser, written once in the struct; a row only points at it. Each config
 // struct's Validate(), the params.yaml reader (examples/pipeline), its error messages and the
-// parameter list in the README are made from the rows, so adding a parameter is its member and one
-// row. Header-only and std-only: the YAML walking lives at the edge, in examples/pipeline.
+// parameter list in docs/parameters.md are made from the rows, so adding a parameter is its member
+// and one row. Header-only and std-only: the YAML walking lives at the edge, in examples/pipeline.
 //
 //   struct FooConfig { double gap_m = 1.0; };
 //   inline constexpr Param<FooConfig> kFooParamRows[] = {

@@ -88,7 +88,7 @@ PipelineConfig LoadPipelineConfig(const std::string& path);
 
 /// Every section and key of params.yaml with its value in `config`, and a comment with what it
 /// may be and what it does: a complete params.yaml (LoadPipelineConfig reads it back to `config`).
-/// `driftcorr params` prints it for the defaults; it is the parameter list of README.md.
+/// `driftcorr params` prints it for the defaults; it is the parameter list of docs/parameters.md.
 std::string ParameterReference(const PipelineConfig& config = PipelineConfig{});
 
 /// The sections `model` and `corrector` of ParameterReference (road2d's) with the values of
