@@ -47,9 +47,9 @@ std::vector<double> UnwrappedHeadings(const PlanarTrajectory& traj, double stati
 /// no vehicle makes. An edge is a change of the mean speed over `window_s` against the window
 /// before it faster than `max_accel_mps2`; a drop edge followed by a rise edge within
 /// `max_episode_s` encloses an episode of dropped steps. Doubled steps (a rise and a drop) are
-/// left to the step terms: repairing them too made frame-to-frame ICP drives worse (kitti00
-/// gicp ATE 6.8 -> 330 m), a drop whose onset stays under the threshold pairs its recovery with
-/// the next drop. Inside it (widened by one window each side)
+/// left to the step terms: a drop whose onset stays under the threshold would pair its recovery
+/// with the next drop (measured: docs/results.md, "Heavy-tailed step and scale terms on the KITTI
+/// drives"). Inside it (widened by one window each side)
 /// every moving step whose speed is more than `deviation` (a share) off the speed interpolated
 /// between the windows before and after the episode is repaired: its length becomes that speed
 /// times dt (repaired = true, observed_length_m keeps the odometry's). A lone edge (a speed that

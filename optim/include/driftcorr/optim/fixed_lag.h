@@ -18,11 +18,10 @@
 // out, the heading-rate biases held at their values. The new window makes s_g a variable under
 // the prior (its walk and range terms are in the prior, not added again): when the window learns
 // that the scale was wrong, the scale and the boundary's place along the track move together, as
-// they do in the batch's joint solve. A prior on the pose alone, given the scales, held the scale
-// at what the first windows had found (a generated HCU walk whose first corridor hides the scale:
-// causal ATE 5.56 against 3.43 m; the synthetic road drive 3.00 against 2.45 m); integrating the
-// scales out of it while the window held the earlier ones fixed counted their uncertainty twice
-// (synthetic road 4.41 against 3.05 m).
+// they do in the batch's joint solve. A prior on the pose alone, given the scales, holds the scale
+// at what the first windows found; integrating the scales out of it while the window held the
+// earlier ones fixed counts their uncertainty twice (measured: docs/results.md, "Online correction
+// that keeps up").
 // The linear term is kept: the state is the previous window's optimum, not the old terms' own,
 // so their gradient g_old there is not zero (it balanced the terms the new window keeps). The
 // prior's mean is the (b, s_g)-part of the old terms' Gauss-Newton minimiser,

@@ -1,6 +1,7 @@
 #pragma once
 // The parameters of the weighted NLL: one sigma and one weight per term. Sigmas are given in
 // sampling-independent units so the same values serve 10 Hz cars and 2 Hz pedestrian steps.
+// The terms and their equations: docs/method.md.
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,14 +26,13 @@ struct ModelConfig {
     // Sideways motion against the observed step direction: sigma = lateral_sigma_m + rel * L.
     double lateral_sigma_m = 0.02;    ///< [m]
     double lateral_sigma_rel = 0.02;  ///< [-]
-    /// Heavy-tailed step-length likelihood (Cauchy width in sigmas; 0 = Gaussian): a step the
-    /// odometry dropped (near zero while moving) becomes an outlier instead of a hard pull.
-    /// Speed continuity: the along-track speed of consecutive steps differs by a Gaussian with
-    /// sigma = accel_sigma_mps2 * dt [m/s]; 0 disables the term.
-    /// Both off by default. Measured on KITTI (ATE, gicp00 / gicp07 / cvo05): defaults 6.8 / 8.2 /
-    /// 7.0 m; step_robust_k 3 + accel 2: 256 / 118 / 8.3 m (steps become free, windows fall into
-    /// wrong basins); accel 2 alone: 307 / 118 / 8.3 m (the tight Gaussian steps of dropped
-    /// frames and the smooth-speed prior fight); step_robust_k 10: 6.8 / 8.2 / 7.2 m.
+    /// Heavy-tailed step-length likelihood (docs/method.md, Eq. 2 and 4): the Cauchy width in
+    /// sigmas [-], >= 0; 0 = Gaussian. A step the odometry dropped (near zero while moving) then
+    /// becomes an outlier instead of a hard pull.
+    /// Speed continuity (Eq. 10): the along-track speed of consecutive steps differs by a Gaussian
+    /// with sigma = accel_sigma_mps2 * dt [m/s]; accel_sigma_mps2 [m/s^2], >= 0; 0 disables the
+    /// term. speed_weight in (0, 1]: its weight. Both off by default (measured: docs/results.md,
+    /// "Heavy-tailed step and scale terms on the KITTI drives").
     double step_robust_k = 0.0;
     double accel_sigma_mps2 = 0.0;
     double speed_weight = 1.0;
@@ -116,8 +116,9 @@ struct ModelConfig {
     /// kScaleMax stay hard).
     double scale_range_min = 0.8, scale_range_max = 1.25;  ///< [-]
     double scale_range_sigma = 0.05;                       ///< [-]
-    /// Cauchy width of the walk in sigmas; 0 = Gaussian. Measured on KITTI: k = 3 or 10 lets the
-    /// scale jump into wrong basins (kitti00 gicp ATE 6.8 -> 190 m), so the default is Gaussian.
+    /// Cauchy width of the scale walk in sigmas (Eq. 2 and 14) [-], >= 0; 0 = Gaussian, the
+    /// default (measured: docs/results.md, "Heavy-tailed step and scale terms on the KITTI
+    /// drives").
     double scale_rw_robust_k = 0.0;
     // Weights w in (0, 1] of each term family.
     double step_weight = 1.0, heading_weight = 1.0, preservation_weight = 1.0, map_weight = 1.0,

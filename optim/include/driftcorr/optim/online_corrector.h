@@ -1,78 +1,18 @@
 #pragma once
 // The online (streaming) corrector: Push(pose) returns a causal corrected estimate of that pose at
-// once; Finish() returns the smoothed whole trajectory. The same cost terms, map field and
-// incremental machinery as the batch corrector (IncrementalCorrector).
-//
-// How a pose is estimated
-//  - Push computes the observation of the new step (from the previous accepted pose) and returns
-//    the pose composed onto the newest solved state: the corrected pose it chains from, with the
-//    heading and the step-length scale that solve found. Never raw dead reckoning from the
-//    start: O(1) on the Push path, no solve there (in the default, threaded mode).
-//  - Every update_fraction * chunk_m of path a solve is requested; at the batch chunk rule
-//    (chunk_m of path, or max_chunk_poses poses) the request also allows restarts from other
-//    step-length scale hypotheses. A solve is a fixed-lag window (optim/fixed_lag.h): the trailing
-//    window_m of path ending at the newest pose, so its cost does not grow with the trajectory;
-//    its boundary pose and that pose's step-length scale are variables under the marginalised
-//    prior of the poses before it (boundary_prior; false: held at their last solution, as the
-//    batch windows do). Its solution
-//    replaces the causal estimates of the window's poses and the poses pushed since are
-//    re-composed onto it. Outputs already returned are not changed (causal).
-//  - The worker always works on the newest data: when it is free it solves the window that ends
-//    at the newest accepted pose, whatever was requested before (under a burst the requests in
-//    between are skipped, not queued).
-//  - Start scales (CorrectorConfig::start_scales, more than one: the pedestrian model's): one
-//    hypothesis per start scale runs the whole online correction from that scale (its own solver
-//    and, threaded, its own worker), fed every pose. The start nearest the scale prior's mean
-//    (ModelConfig::scale_prior_mean) solves from the first pose; the hypotheses of the other
-//    starts solve first at the end of the first chunk (the chunk rule above): a window of a few
-//    metres holds no basin but the scale prior's, and every start would meet there (measured on
-//    a generated HCU walk solved from the first pose on: the three starts' NLLs equal at every
-//    solve). After each solve a hypothesis records the NLL of its poses up to that solve's end
-//    (FixedLagSmoother::Nll, time linear in the walk: the batch's score over the part solved so
-//    far). A Push returns the output of the hypothesis of lowest NLL at the latest solve end
-//    that every hypothesis has reached (the start nearest the prior's mean until there is one),
-//    so the output may switch to another hypothesis, as the batch keeps another start.
-//    PushResult::start_scale says which; another hypothesis replaces the chosen one only when its
-//    NLL is lower by more than kNllTie. Statistics() give the ages of the outputs returned and
-//    add up the hypotheses' solves and waits. The output's covariance is that of the mixture
-//    of the hypotheses about the output: each hypothesis weighs exp(-(its NLL - the lowest)) at
-//    that solve end (equally before one), and adds its own covariance and its output's offset
-//    from the returned one (squared), so that where hypotheses of close NLL part the covariance
-//    says so (generated HCU walks, seeds 1001-1030: outputs inside their 95 % region 84.6 % with
-//    the chosen one's covariance alone, 87.1 % with the mixture's; of the outputs more than 5 m
-//    off, 11.2 and 19.0 %).
-//  - Freshness: every PushResult says which solve its pose chains from (the age in epochs and in
-//    stream seconds) and whether that is the newest solve the schedule had asked for before the
-//    pose (fresh).
-//  - Back-pressure: before it takes a pose, Push waits while the previous pose is more than
-//    max_lag_epochs past the last solved one and a solve is under way, but (hold_live_input
-//    false, the default) only while the input arrives faster than real time: its stream time
-//    over the last kPaceWindow poses (at least two steps) advanced more than kAheadFactor times
-//    as fast as the wall clock outside Push (a replay from a file, a burst). A producer running
-//    at its own pace is never held back: when the solver does not keep up with it, outputs chain
-//    from older solves and say so (correction_age, fresh). The wait comes before the pose is
-//    taken, so it delays reading the next input, not the output of a pose already taken.
-//  - Finish() solves the whole trajectory as the batch mode does (CorrectFromStarts: from each
-//    start scale, CorrectTrajectory's chunks, windows and hard-corridor refinement over the same
-//    observations, the lowest NLL kept): the batch result when the input carries headings (up to
-//    Ipopt's own run-to-run variation).
-//
-// Headings: with an orientation (PlanarPose::yaw_rad) the observation of a step is causal as in
-// the batch mode. Without one, the batch mode takes a pose's heading from the *next* step
-// (non-causal); here the heading of pose i is the direction of the step *into* pose i (carried
-// across stops; the poses before the first moving step take its direction), so turns are seen
-// one step late. Do not mix poses with and without heading in one stream.
-//
-// Threading model (synchronous = false): one worker thread owns the FixedLagSmoother and runs the
-// window solves, at a lower scheduling priority than the caller (Linux: SCHED_BATCH, nice + 10),
-// so that an arriving pose pre-empts a running solve on a busy core and the solve never pre-empts
-// a Push. Push (the caller's thread) and the worker share, under one mutex: the poses not
-// yet handed to the solver, the request flag, and the causal estimates with the latest scales.
-// Push holds the mutex for O(1) work; the worker holds it only to take the queued poses and to
-// merge a solution (O(window + poses pushed during the solve)), never while solving. Push and
-// Finish must be called from one thread (or serialised by the caller). With synchronous = true
-// no thread is started and Push solves a requested window before it returns (deterministic, but
-// that Push takes as long as the solve).
+// once, composed onto the newest solved fixed-lag window (optim/fixed_lag.h), never raw dead
+// reckoning; Finish() returns the smoothed whole trajectory, solved as the batch mode does
+// (CorrectFromStarts). The same cost terms, map field and incremental machinery as the batch
+// corrector (IncrementalCorrector). A worker thread (synchronous = false) solves the window that
+// ends at the newest pose whenever it is free; Push then never solves, holds one mutex for O(1)
+// work, and waits only for back-pressure on input faster than real time (synchronous = true: Push
+// solves a requested window before it returns). With several start scales
+// (CorrectorConfig::start_scales) one hypothesis runs per start scale and each output comes from
+// the one of lowest NLL. Without headings in the input, the heading of pose i is the direction of
+// the step into pose i (turns seen one step late); do not mix poses with and without heading.
+// Push and Finish must be called from one thread. How it schedules, chains, scores and threads
+// its solves ("How a pose is estimated", "Start scales", "Threading"): docs/method.md, "The
+// online corrector"; measured: docs/results.md, "Online output".
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
@@ -109,21 +49,17 @@ struct OnlineConfig {
     /// running; 0: never waits (under a burst the outputs then chain from older solves, and say
     /// so in their age).
     std::size_t max_lag_epochs = 1;
-    /// false: back-pressure only while the input arrives faster than real time (see above), so
+    /// false: back-pressure only while the input arrives faster than real time (kAheadFactor), so
     /// a live producer is never held back; true: whenever the lag exceeds max_lag_epochs.
     bool hold_live_input = false;
     /// The online windows' boundary pose: true, a variable under the marginalised prior of the
-    /// poses before it (optim/fixed_lag.h); false, held fixed at its last solution. Measured
-    /// causal ATE (`driftcorr eval`) with (boundary_scale true) / without: generated road drive
-    /// 2.45 / 3.00, synthetic building 0.57 / 0.58, hcu_eight 1.60 / 1.72, kitti00 cvo 3.37 /
-    /// 2.92, kitti00 gicp 12.81 / 11.15, kitti00 orb2 2.49 / 2.39, kitti05 cvo 9.92 / 8.10,
-    /// kitti07 cvo 3.62 / 3.62, kitti07 gicp 12.83 / 10.83 m.
+    /// poses before it (optim/fixed_lag.h; docs/method.md, Eq. 19); false, held fixed at its last
+    /// solution. Measured both ways: docs/results.md, "The online windows' boundary prior".
     bool boundary_prior = true;
     /// With boundary_prior: the prior is joint with the scale of the boundary pose's segment,
     /// which the window then re-estimates (optim/fixed_lag.h); false: the prior is on the pose
-    /// alone, given the scales, and the earlier segments' scales stay fixed. Chosen on generated
-    /// road drives and HCU walks; on the seven KITTI drives false is better on six
-    /// (docs/results.md, "Online correction that keeps up").
+    /// alone, given the scales, and the earlier segments' scales stay fixed. Measured both ways:
+    /// docs/results.md, "Online correction that keeps up".
     bool boundary_scale = true;
 
     /// The first value kOnlineParams does not allow (corrector is not looked at).
@@ -185,9 +121,9 @@ struct PushResult {
     /// Time Push waited for the solver before taking the pose (back-pressure) [s]; with start
     /// scales, over every hypothesis
     double waited_s = 0.0;
-    /// The start scale of the hypothesis this output comes from (see "Start scales" above).
+    /// The start scale of the hypothesis this output comes from (docs/method.md, "Start scales").
     double start_scale = 1.0;
-    /// The input arrived faster than real time when this pose was pushed (see above).
+    /// The input arrived faster than real time when this pose was pushed (kAheadFactor).
     bool ahead_of_real_time = false;
     /// Covariance of the output pose: the solved pose's it chains from (FixedLagSolution::
     /// end_covariance, the batch's covariance model) carried through the odometry of the
@@ -223,7 +159,7 @@ public:
     static constexpr std::size_t kPaceWindow = 10;
     static constexpr double kAheadFactor = 2.0;
     /// With start scales: another hypothesis replaces the chosen one only when its NLL is lower
-    /// by more than this share of the chosen one's (see "Start scales" above).
+    /// by more than this share of the chosen one's (docs/method.md, "Start scales").
     static constexpr double kNllTie = 1e-3;
 
     /// `field` may be null (odometry only) and must outlive this object. Precondition:
