@@ -612,6 +612,50 @@ TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {
     EXPECT_EQ(p.NumConstraints(), 0);
 }
 
+// The soft NLL of a drive evaluated in consecutive windows (to bound memory) is the same sum as
+// in one problem: every step's and pose's terms once, and the walk and range terms of a scale or
+// heading-rate bias segment that straddles two windows once, whatever the window length.
+TEST(WindowProblem, SoftNllInWindowsIsTheWholeDrivesSum) {
+    ModelConfig model = Model();
+    model.heading_bias_segment_s = 1.0;  // bias segments of 5 steps, straddling windows too
+    TrajectoryState s = StateFrom(Curve(0.01, 1.03), model, false);
+    ASSERT_GT(s.scales.size(), 2u);
+    ASSERT_GT(s.biases.size(), 4u);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> n(0.0, 1.0);
+    for (double& scale : s.scales) scale += 0.05 * n(rng);
+    for (double& bias : s.biases) bias += 0.01 * n(rng);
+    for (std::size_t i = 1; i < s.poses.size(); ++i) {
+        s.poses[i].p += Eigen::Vector3d(0.5 * n(rng), 0.5 * n(rng), 0.2 * n(rng));
+        s.poses[i].yaw_rad += 0.05 * n(rng);
+    }
+    const TraversableField field = Field(3.5);
+    const std::size_t last = s.poses.size() - 1;
+    const double whole = SoftNll(s, &field, model, last);
+    ASSERT_GT(whole, 10.0);
+    for (std::size_t block : {1, 2, 4, 5, 7, 13, 28}) {
+        EXPECT_NEAR(SoftNll(s, &field, model, last, block), whole, 1e-12 * whole)
+            << block << " poses a window";
+    }
+    // Leaving out a straddling segment's walk term, or counting it twice, would be seen: each
+    // scale and bias walk term weighs more than that tolerance.
+    const WindowProblem p(s, &field, model, 1, last, std::vector<std::uint8_t>(last, 0),
+                          WindowUse::kLinearise);
+    std::vector<double> x(p.NumVariables());
+    p.InitialPoint(x.data());
+    int walks = 0;
+    for (const TermBlock* term : p.Blocks()) {
+        if (term->family() != TermFamily::kScaleWalk &&
+            term->family() != TermFamily::kHeadingBiasWalk) {
+            continue;
+        }
+        ++walks;
+        EXPECT_GT(term->Evaluate(p.Context(x.data()), term->Gather(x.data()), nullptr, nullptr),
+                  1e-9 * whole);
+    }
+    EXPECT_EQ(walks, int(s.scales.size() + s.biases.size()));
+}
+
 TEST(WindowProblem, BoundaryPriorMakesPoseFirstMinusOneAVariable) {
     const ModelConfig model = Model();
     TrajectoryState s = StateFrom(Curve(), model, true);

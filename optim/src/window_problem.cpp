@@ -585,13 +585,48 @@ void WindowProblem::Store(const double* x) const {
     for (int sgm = bias_first_; sgm <= bias_last_; ++sgm) state_.biases[sgm] = x[BiasVar(sgm)];
 }
 
+// Each step's and pose's terms belong to one window; a scale or bias segment that a window shares
+// with the one before has its walk and range terms counted there, so they are left out of the
+// later window's sum.
 double SoftNll(TrajectoryState& s, const TraversableField* field, const ModelConfig& model,
-               std::size_t last) {
-    WindowProblem problem(s, field, model, 1, last, std::vector<std::uint8_t>(last, 0),
-                          WindowUse::kLinearise);
-    std::vector<double> x(problem.NumVariables());
-    problem.InitialPoint(x.data());
-    return problem.Objective(x.data());
+               std::size_t last, std::size_t block_poses) {
+    const std::size_t block = std::max<std::size_t>(block_poses, 1);
+    if (last <= block) {
+        WindowProblem problem(s, field, model, 1, last, std::vector<std::uint8_t>(last, 0),
+                              WindowUse::kLinearise);
+        std::vector<double> x(problem.NumVariables());
+        problem.InitialPoint(x.data());
+        return problem.Objective(x.data());
+    }
+    double nll = 0.0;
+    for (std::size_t first = 1; first <= last; first += block) {
+        const std::size_t end = std::min(last, first + block - 1);
+        const WindowProblem problem(s, field, model, first, end,
+                                    std::vector<std::uint8_t>(end - first + 1, 0),
+                                    WindowUse::kLinearise);
+        std::vector<double> x(problem.NumVariables());
+        problem.InitialPoint(x.data());
+        const bool shared_scale = s.scale_segment[first] == s.scale_segment[first - 1];
+        const bool shared_bias =
+            !s.bias_segment.empty() && s.bias_segment[first] == s.bias_segment[first - 1];
+        const int scale_var = problem.ScaleVar(s.scale_segment[first]);
+        const int bias_var = s.bias_segment.empty() ? -1 : problem.BiasVar(s.bias_segment[first]);
+        const BlockContext ctx = problem.Context(x.data());
+        for (const TermBlock* term : problem.Blocks()) {
+            const TermFamily f = term->family();
+            const int segment_var = term->var(term->size() - 1);
+            if (first > 1 && shared_scale && segment_var == scale_var &&
+                (f == TermFamily::kScaleWalk || f == TermFamily::kScaleRange)) {
+                continue;
+            }
+            if (first > 1 && shared_bias && segment_var == bias_var &&
+                f == TermFamily::kHeadingBiasWalk) {
+                continue;
+            }
+            nll += term->Accumulate(ctx, x.data(), 1.0, nullptr, nullptr, nullptr, nullptr);
+        }
+    }
+    return nll;
 }
 
 }  // namespace driftcorr

@@ -191,8 +191,9 @@ private:
 
 /// The soft objective (the NLL without the hard corridor constraint) of poses [1, last] of `s` at
 /// its values, pose 0 fixed: the score that compares corrections of one trajectory from different
-/// start scales. Precondition: 1 <= last < s.poses.size().
+/// start scales. Precondition: 1 <= last < s.poses.size(). More than `block_poses` poses are
+/// evaluated in consecutive windows of that many, the same sum with a window's memory.
 double SoftNll(TrajectoryState& s, const TraversableField* field, const ModelConfig& model,
-               std::size_t last);
+               std::size_t last, std::size_t block_poses = 100000);
 
 }  // namespace driftcorr
