@@ -14,12 +14,12 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/angles.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/window_problem.h"
-
 #include "test_state.h"
 
 namespace driftcorr {
@@ -593,6 +593,99 @@ TEST(Covariance, TheCorrectorReportsIt) {
     cfg.compute_covariance = false;
     EXPECT_EQ(CorrectTrajectory(estimate, &field, cfg).covariance.status,
               CovarianceStatus::kNotComputed);
+}
+
+/// A street grid's drive: 2 m steps 0.5 s apart, turning 90 degrees (over 10 steps) left and
+/// right in turn every 60 steps.
+PlanarTrajectory Zigzag(int n) {
+    PlanarTrajectory t;
+    Eigen::Vector2d p(0.0, 0.0);
+    double yaw = 0.0;
+    for (int i = 0; i < n; ++i) {
+        if (i > 0) {
+            p += 2.0 * Eigen::Vector2d(std::cos(yaw), std::sin(yaw));
+            const int phase = i % 120;
+            if (phase < 10) yaw += 0.05 * kPi;
+            if (phase >= 60 && phase < 70) yaw -= 0.05 * kPi;
+        }
+        t.t_s.push_back(0.5 * i);
+        t.p_en.push_back(p);
+        t.up_m.push_back(1.0);
+        t.yaw_rad.push_back(yaw);
+    }
+    return t;
+}
+
+// A drive longer than block_poses is computed block by block, each from its terms and a tenth
+// of a block on either side, its past a prior: on a street grid, whose turns observe the
+// along-track position, the blocks' marginals are the whole drive's to within 10 %, and where
+// they differ (the last poses of a block, whose margin ends sooner than the drive) larger,
+// never smaller by more than 2 %.
+TEST(Covariance, ALongDriveInBlocksHasTheWholeDrivesMarginals) {
+    ModelConfig model;
+    model.scale_segment_m = 50.0;  // a margin spans several segments, as a 50000-pose block's does
+    const PlanarTrajectory truth = Zigzag(3001);  // 6 km, 50 turns
+    const TraversableField field = RoadAlong(truth);
+    const TrajectoryState s = StateFrom(truth, model, true);
+    CovarianceConfig block_cfg;
+    block_cfg.block_poses = 1000;
+    const CovarianceResult whole = ComputeCovariance(s, &field, model);
+    const CovarianceResult blocks = ComputeCovariance(s, &field, model, block_cfg);
+    ASSERT_EQ(whole.status, CovarianceStatus::kOk) << whole.message;
+    ASSERT_EQ(blocks.status, CovarianceStatus::kOk) << blocks.message;
+    // Three blocks, each but the last with a run for the next one's past.
+    EXPECT_EQ(blocks.message.rfind("5 runs over blocks of at most 1000 poses", 0), 0u)
+        << blocks.message;
+    ASSERT_EQ(blocks.poses.size(), s.poses.size());
+    double lowest = 1.0, highest = 1.0;
+    for (std::size_t i = 1; i < s.poses.size(); ++i) {
+        ASSERT_GT(blocks.poses[i].xy_m2.determinant(), 0.0) << "pose " << i;
+        for (const double ratio : {blocks.poses[i].xy_m2.trace() / whole.poses[i].xy_m2.trace(),
+                                   blocks.poses[i].yaw_rad2 / whole.poses[i].yaw_rad2}) {
+            lowest = std::min(lowest, ratio);
+            highest = std::max(highest, ratio);
+        }
+    }
+    EXPECT_GT(lowest, 0.98);
+    EXPECT_LT(highest, 1.1);
+    EXPECT_GT(highest, 1.0) << "the blocks were not computed apart";
+    // The statistics add up over the runs, their margins counted in each run that holds them.
+    EXPECT_GT(blocks.observations, whole.observations);
+}
+
+// A drive longer than refine_block_poses has its final solve in overlapping blocks: the same
+// correction to centimetres on a street grid, the report naming the blocks; and its covariance
+// (covariance.block_poses) in blocks too.
+TEST(Covariance, ALongDrivesFinalSolveInBlocksIsTheWholeSolve) {
+    const PlanarTrajectory truth = Zigzag(1201);
+    const TraversableField field = RoadAlong(truth);
+    PlanarTrajectory estimate = truth;  // a heading drift of 0.5 mrad a step, steps 2 % long
+    for (std::size_t i = 1; i < estimate.size(); ++i) {
+        const Eigen::Vector2d step = truth.p_en[i] - truth.p_en[i - 1];
+        const Eigen::Rotation2D<double> turn(0.0005 * double(i));
+        estimate.p_en[i] = estimate.p_en[i - 1] + 1.02 * (turn * step);
+        estimate.yaw_rad[i] = truth.yaw_rad[i] + 0.0005 * double(i);
+    }
+    CorrectorConfig whole_cfg, block_cfg;
+    block_cfg.refine_block_poses = 400;
+    block_cfg.covariance.block_poses = 500;
+    const CorrectionResult whole = CorrectTrajectory(estimate, &field, whole_cfg);
+    const CorrectionResult blocks = CorrectTrajectory(estimate, &field, block_cfg);
+    ASSERT_TRUE(Usable(whole.status)) << whole.message;
+    ASSERT_TRUE(Usable(blocks.status)) << blocks.message;
+    EXPECT_EQ(blocks.refine_report.message.rfind("4 blocks of at most 400 poses, the last: ", 0),
+              0u)
+        << blocks.refine_report.message;
+    EXPECT_EQ(whole.refine_report.message.find("blocks"), std::string::npos);
+    ASSERT_EQ(blocks.corrected.size(), whole.corrected.size());
+    double largest = 0.0;
+    for (std::size_t i = 0; i < whole.corrected.size(); ++i) {
+        largest = std::max(largest, (blocks.corrected.p_en[i] - whole.corrected.p_en[i]).norm());
+    }
+    EXPECT_LT(largest, 0.05);
+    EXPECT_GT(largest, 0.0) << "the blocks were not solved apart";
+    ASSERT_EQ(blocks.covariance.status, CovarianceStatus::kOk) << blocks.covariance.message;
+    EXPECT_NE(blocks.covariance.message.find("runs over blocks"), std::string::npos);
 }
 
 TEST(Covariance, BadStatesAreAStatusNotGarbage) {

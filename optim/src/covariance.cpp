@@ -1,5 +1,6 @@
 #include "driftcorr/optim/covariance.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -155,6 +156,11 @@ Ordering ChainOrdering(const WindowProblem& p, const TrajectoryState& s,
     int next_segment = s.scale_segment[1];
     int next_bias = s.bias_segment.empty() ? 0 : s.bias_segment[1];
     std::array<std::size_t, 2> next_stretch{0, 0};
+    if (p.PoseVar(0, 0) >= 0) {  // pose 0 under a boundary prior: a variable, first
+        for (int c = 0; c < 4; ++c) {
+            if (c != 2 || !s.fix_height) o.of_var[p.PoseVar(0, c)] = o.size++;
+        }
+    }
     for (std::size_t i = 1; i < n; ++i) {
         for (int c = 0; c < 4; ++c) {
             if (c != 2 || !s.fix_height) o.of_var[p.PoseVar(i, c)] = o.size++;
@@ -406,26 +412,19 @@ Eigen::MatrixXd DenseGaussNewtonHessian(const WindowProblem& problem, const doub
     return h;
 }
 
-CovarianceResult ComputeCovariance(const TrajectoryState& state, const TraversableField* field,
-                                   const ModelConfig& model, const CovarianceConfig& config,
-                                   CovarianceSystem* system) {
-    DRIFTCORR_CHECK(config.Validate().empty(), "invalid CovarianceConfig");
+namespace {
+
+// The covariance of a whole consistent state (ComputeCovariance without blocks); with `prior`,
+// pose 0 is not the known start but a variable under that prior (the past of a block).
+CovarianceResult WholeCovariance(const TrajectoryState& state, const TraversableField* field,
+                                 const ModelConfig& model, const CovarianceConfig& config,
+                                 CovarianceSystem* system,
+                                 const std::optional<PosePriorTerm>& prior = std::nullopt) {
     CovarianceResult r;
     const std::size_t n = state.poses.size();
-    if (n < 2 || state.obs.size() != n || state.scale_segment.size() != n ||
-        !std::is_sorted(state.scale_segment.begin() + 1, state.scale_segment.end()) ||
-        std::size_t(state.scale_segment.back()) >= state.scales.size() ||
-        !(state.bias_segment.empty() ||
-          (state.bias_segment.size() == n &&
-           std::is_sorted(state.bias_segment.begin() + 1, state.bias_segment.end()) &&
-           std::size_t(state.bias_segment.back()) < state.biases.size()))) {
-        r.status = CovarianceStatus::kBadInput;
-        r.message = "need >= 2 poses with one observation and scale segment each";
-        return r;
-    }
     TrajectoryState copy = state;  // WindowProblem writes solutions back; this one never does
     const WindowProblem problem(copy, field, model, 1, n - 1, std::vector<std::uint8_t>(n - 1, 0),
-                                WindowUse::kLinearise);
+                                WindowUse::kLinearise, prior);
     std::vector<double> x(problem.NumVariables());
     problem.InitialPoint(x.data());
     std::vector<LinearisedTerm> terms;
@@ -462,6 +461,156 @@ CovarianceResult ComputeCovariance(const TrajectoryState& state, const Traversab
                 " observations, variance factor " + std::to_string(r.variance_factor) +
                 (r.variance_factor_applied ? " (applied)" : " (not applied)");
     return r;
+}
+
+// Poses [from - 1, to] of `s` as a state of their own (pose from - 1 its pose 0, held fixed), its
+// scale and bias segments renumbered from the first that step `from` uses.
+TrajectoryState SubState(const TrajectoryState& s, std::size_t from, std::size_t to) {
+    TrajectoryState sub;
+    sub.fix_height = s.fix_height;
+    sub.obs.assign(s.obs.begin() + (from - 1), s.obs.begin() + (to + 1));
+    sub.poses.assign(s.poses.begin() + (from - 1), s.poses.begin() + (to + 1));
+    const auto renumber = [&](const std::vector<int>& segment, const std::vector<double>& values,
+                              std::vector<int>& sub_segment, std::vector<double>& sub_values) {
+        const int first = segment[from];
+        for (std::size_t i = from - 1; i <= to; ++i)
+            sub_segment.push_back(std::max(segment[i] - first, 0));
+        sub_values.assign(values.begin() + first, values.begin() + segment[to] + 1);
+    };
+    renumber(s.scale_segment, s.scales, sub.scale_segment, sub.scales);
+    if (!s.bias_segment.empty()) renumber(s.bias_segment, s.biases, sub.bias_segment, sub.biases);
+    if (!s.height_settled.empty()) {
+        sub.height_settled.assign(s.height_settled.begin() + (from - 1),
+                                  s.height_settled.begin() + (to + 1));
+    }
+    return sub;
+}
+
+// The prior on pose `pose` of `s` that a covariance `c` of it makes: its mean the pose, its
+// information the inverse of c on the free components (the height left out when fixed);
+// nothing when c is singular there.
+std::optional<PosePriorTerm> PriorFrom(const PoseCovariance& c, const PoseState& pose,
+                                       bool fix_height) {
+    const PoseMatrix sigma = ToPoseMatrix(c);
+    std::array<int, 4> free{0, 1, 2, 3};
+    int k = 0;
+    for (int v = 0; v < 4; ++v) {
+        if (v != 2 || !fix_height) free[k++] = v;
+    }
+    Eigen::MatrixXd sub(k, k);
+    for (int a = 0; a < k; ++a) {
+        for (int b = 0; b < k; ++b) sub(a, b) = sigma(free[a], free[b]);
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(sub);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || !(ldlt.vectorD().minCoeff() > 0.0)) {
+        return std::nullopt;
+    }
+    const Eigen::MatrixXd info = ldlt.solve(Eigen::MatrixXd::Identity(k, k));
+    PosePriorTerm prior;
+    prior.mean = PoseVector(pose.p.x(), pose.p.y(), pose.p.z(), pose.yaw_rad);
+    for (int a = 0; a < k; ++a) {
+        for (int b = 0; b < k; ++b) prior.information(free[a], free[b]) = info(a, b);
+    }
+    prior.information = 0.5 * (prior.information + prior.information.transpose()).eval();
+    if (!prior.information.allFinite()) return std::nullopt;
+    return prior;
+}
+
+// ComputeCovariance of a drive of more than config.block_poses poses, so that memory is a
+// block's. Block k (poses [first, last], block_poses of them) is computed from its terms and
+// those of a tenth of a block on either side, poses [from, to]; the pose before them, from - 1,
+// carries the past as a prior: its covariance given the terms before it alone (a filter, not the
+// smoothed marginal, which would count the overlap's terms twice). That filtered covariance is
+// the last pose's of the run over [from of block k-1, from - 1], under its own prior in turn.
+// The statistics add up over the blocks' runs (margins counted in each run that holds them);
+// the family factors are the largest of any run.
+CovarianceResult BlockCovariance(const TrajectoryState& state, const TraversableField* field,
+                                 const ModelConfig& model, const CovarianceConfig& config) {
+    const std::size_t n = state.poses.size(), block = config.block_poses;
+    const std::size_t margin = block / 10;
+    CovarianceResult r;
+    r.poses.assign(n, PoseCovariance{});
+    r.family_factors.fill(1.0);
+    double chi2 = 0.0;
+    std::size_t runs = 0;
+    const auto run = [&](std::size_t from, std::size_t to,
+                         const std::optional<PosePriorTerm>& prior) -> CovarianceResult {
+        CovarianceResult b =
+            WholeCovariance(SubState(state, from, to), field, model, config, nullptr, prior);
+        if (b.status != CovarianceStatus::kOk) {
+            b.message =
+                "poses " + std::to_string(from) + "-" + std::to_string(to) + ": " + b.message;
+            return b;
+        }
+        ++runs;
+        r.observations += b.observations;
+        r.unknowns += b.unknowns;
+        r.factor_nonzeros += b.factor_nonzeros;
+        for (int f = 0; f < kTermFamilies; ++f) {
+            r.families[f].terms += b.families[f].terms;
+            r.families[f].chi2 += b.families[f].chi2;
+            r.families[f].redundancy += b.families[f].redundancy;
+            r.family_factors[f] = std::max(r.family_factors[f], b.family_factors[f]);
+            chi2 += b.families[f].chi2;
+        }
+        r.variance_factor_applied = b.variance_factor_applied;
+        return b;
+    };
+    std::optional<PosePriorTerm> past;  // on pose from - 1; none: pose 0, the known start
+    std::size_t from = 1;
+    for (std::size_t first = 1; first < n; first += block) {
+        const std::size_t last = std::min(n - 1, first + block - 1);
+        const std::size_t to = std::min(n - 1, last + margin);
+        const CovarianceResult b = run(from, to, past);
+        if (b.status != CovarianceStatus::kOk) return b;
+        for (std::size_t i = first; i <= last; ++i) r.poses[i] = b.poses[i - from + 1];
+        if (last == n - 1) break;
+        // The next block's past: the filtered covariance of pose next_from - 1.
+        const std::size_t next_from = last + 1 - margin;
+        const CovarianceResult f = run(from, next_from - 1, past);
+        if (f.status != CovarianceStatus::kOk) return f;
+        past = PriorFrom(f.poses.back(), state.poses[next_from - 1], state.fix_height);
+        if (!past) {
+            CovarianceResult bad;
+            bad.status = CovarianceStatus::kNotPositiveDefinite;
+            bad.message = "pose " + std::to_string(next_from - 1) +
+                          ": its covariance, the next block's past, is singular";
+            return bad;
+        }
+        from = next_from;
+    }
+    r.variance_factor =
+        r.observations > r.unknowns ? chi2 / double(r.observations - r.unknowns) : 1.0;
+    r.status = CovarianceStatus::kOk;
+    r.message = std::to_string(runs) + " runs over blocks of at most " + std::to_string(block) +
+                " poses: " + std::to_string(r.unknowns) + " unknowns, " +
+                std::to_string(r.observations) + " observations, variance factor " +
+                std::to_string(r.variance_factor) +
+                (r.variance_factor_applied ? " (applied per run)" : " (not applied)");
+    return r;
+}
+
+}  // namespace
+
+CovarianceResult ComputeCovariance(const TrajectoryState& state, const TraversableField* field,
+                                   const ModelConfig& model, const CovarianceConfig& config,
+                                   CovarianceSystem* system) {
+    DRIFTCORR_CHECK(config.Validate().empty(), "invalid CovarianceConfig");
+    const std::size_t n = state.poses.size();
+    if (n < 2 || state.obs.size() != n || state.scale_segment.size() != n ||
+        !std::is_sorted(state.scale_segment.begin() + 1, state.scale_segment.end()) ||
+        std::size_t(state.scale_segment.back()) >= state.scales.size() ||
+        !(state.bias_segment.empty() ||
+          (state.bias_segment.size() == n &&
+           std::is_sorted(state.bias_segment.begin() + 1, state.bias_segment.end()) &&
+           std::size_t(state.bias_segment.back()) < state.biases.size()))) {
+        CovarianceResult r;
+        r.status = CovarianceStatus::kBadInput;
+        r.message = "need >= 2 poses with one observation and scale segment each";
+        return r;
+    }
+    if (n - 1 > config.block_poses) return BlockCovariance(state, field, model, config);
+    return WholeCovariance(state, field, model, config, system);
 }
 
 PoseMatrix PropagateStep(const PoseMatrix& sigma_a, const PoseState& a, const StepObservation& o,

@@ -143,6 +143,44 @@ double HeightTravel(const TrajectoryState& s, std::size_t first, std::size_t las
     return sum;
 }
 
+// The final solve of poses [1, n-1]: one window, or for a drive of more than
+// cfg.refine_block_poses poses, consecutive windows of that many poses, each starting a tenth of a
+// block before the end of the one before (its poses re-solved with the next block's terms), the
+// poses before each held at their solved values. A block's memory is the whole drive's bound.
+// Reports the first unusable block's outcome, else the last block's; the iterations of all, the
+// largest violation, the constrained poses of the poses each block settles.
+SolveReport RefineInBlocks(TrajectoryState& s, const TraversableField* field,
+                           const CorrectorConfig& cfg, const IpoptOptions& opt,
+                           CorrectionResult& result) {
+    const std::size_t n = s.poses.size(), block = std::max<std::size_t>(cfg.refine_block_poses, 2);
+    if (n - 1 <= block) return SolveWindow(s, field, cfg, opt, 1, n - 1, result, true);
+    const std::size_t step = block - block / 10;
+    SolveReport report;
+    std::size_t blocks = 0, constrained = 0;
+    int iterations = 0;
+    double violation = 0.0;
+    for (std::size_t first = 1;; first += step) {
+        const std::size_t last = std::min(n - 1, first + block - 1);
+        SolveReport rep = SolveWindow(s, field, cfg, opt, first, last, result, true);
+        ++blocks;
+        iterations += rep.iterations;
+        violation = std::max(violation, rep.max_violation_m);
+        const std::size_t settled_last = last == n - 1 ? last : first + step - 1;
+        const std::vector<std::uint8_t> flags =
+            GateConstraints(s, field, cfg.model, first, settled_last);
+        constrained += std::count(flags.begin(), flags.end(), std::uint8_t(1));
+        report = std::move(rep);
+        if (!Usable(report.status) || last == n - 1) break;
+    }
+    result.constrained_poses = constrained;
+    report.iterations = iterations;
+    report.max_violation_m = violation;
+    report.message = std::to_string(blocks) + " blocks of at most " + std::to_string(block) +
+                     " poses, " + (Usable(report.status) ? "the last: " : "stopped at: ") +
+                     report.message;
+    return report;
+}
+
 }  // namespace
 
 // One incremental window (soft terms). When its solution leaves many poses off the roads, or
@@ -418,7 +456,7 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
         if (progress) {
             opt.on_iteration = [&](int) { progress({"refining", n, n, ++iterations}); };
         }
-        result.refine_report = SolveWindow(state_, field_, cfg_, opt, 1, n - 1, result, true);
+        result.refine_report = RefineInBlocks(state_, field_, cfg_, opt, result);
         if (progress) progress({"refine", n, n});
         result.status = result.refine_report.status;
         result.message = "refine: " + result.refine_report.message;

@@ -20,6 +20,10 @@ struct CorrectorConfig {
     std::size_t max_chunk_poses = 400;    ///< cap per chunk (long stops) [poses]
     std::size_t max_window_poses = 1500;  ///< cap per window [poses]
     bool refine = true;                   ///< final whole-trajectory solve
+    /// A drive of more poses has its final solve in consecutive blocks of this many poses (each
+    /// overlapping the one before by a tenth), which bounds its memory; shorter drives are solved
+    /// whole.
+    std::size_t refine_block_poses = 100000;
     /// A window whose solution leaves more than restart_offroad_share of its poses farther than
     /// restart_offroad_m from every road, or whose NLL per pose exceeds restart_nll_per_pose, is
     /// re-solved from these step-length scale hypotheses
@@ -127,6 +131,8 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
     {"max_window_poses", Field<&CorrectorConfig::max_window_poses>(), AtLeast(1),
      "cap on the poses of a window; >= max_chunk_poses"},
     {"refine", Field<&CorrectorConfig::refine>(), kNoRange, "final whole-trajectory solve"},
+    {"refine_block_poses", Field<&CorrectorConfig::refine_block_poses>(), AtLeast(2),
+     "a longer drive's final solve runs in overlapping blocks of this many poses"},
     {"restart_offroad_m", Field<&CorrectorConfig::restart_offroad_m>(), kNonNegative,
      "a window leaving more than restart_offroad_share of its poses this far off the map restarts"},
     {"restart_offroad_share", Field<&CorrectorConfig::restart_offroad_share>(), kShare,

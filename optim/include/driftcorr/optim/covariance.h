@@ -91,8 +91,12 @@ struct CovarianceConfig {
     /// always reported). Off: on every drive measured it is far below 1 (0.08-0.5), because the
     /// map terms, most of the redundancy, fit the solution closer than their sigma (the solution
     /// absorbs the map's offset) and the heading-preservation prior is deliberately weak; applied,
-    /// it shrinks covariances that are already too small (README, Uncertainty).
+    /// it shrinks covariances that are already too small (docs/results.md, Uncertainty).
     bool apply_variance_factor = false;
+    /// A drive of more poses is computed block by block, each block of this many poses from the
+    /// terms of the block and a tenth of a block on either side (the pose before them held
+    /// fixed), which bounds the memory; shorter drives are computed whole.
+    std::size_t block_poses = 50000;
 
     /// The first value kCovarianceParams does not allow.
     std::optional<ParamProblem> FindProblem() const;
@@ -115,6 +119,8 @@ inline constexpr Param<CovarianceConfig> kCovarianceParamRows[] = {
      "variance components of the observation families"},
     {"apply_variance_factor", Field<&CovarianceConfig::apply_variance_factor>(), kNoRange,
      "multiply the covariances by the a posteriori variance factor"},
+    {"block_poses", Field<&CovarianceConfig::block_poses>(), AtLeast(10),
+     "a longer drive's covariance is computed in blocks of this many poses"},
 };
 inline constexpr ParamTable<CovarianceConfig> kCovarianceParams{"covariance", kCovarianceParamRows};
 
@@ -179,8 +185,9 @@ struct CovarianceSystem {
 /// The marginal covariance of every pose of a solved trajectory (poses 1..n-1 free, pose 0 held
 /// fixed, heights free unless state.fix_height; field may be null: odometry only), from the
 /// Gauss-Newton curvature of the NLL that WindowProblem(state, field, model, 1, n-1) defines.
-/// Time and memory linear in the number of poses. Numerical outcomes are the status, never an
-/// exception. `system`, when given, receives the matrix that was inverted.
+/// Time and memory linear in the number of poses, memory bounded by config.block_poses. Numerical
+/// outcomes are the status, never an exception. `system`, when given, receives the matrix that
+/// was inverted (not for a drive computed in blocks: then it is left as it is).
 /// Precondition: config.Validate() is empty.
 CovarianceResult ComputeCovariance(const TrajectoryState& state, const TraversableField* field,
                                    const ModelConfig& model, const CovarianceConfig& config = {},
