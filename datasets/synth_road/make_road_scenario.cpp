@@ -39,7 +39,7 @@ void PrintUsage(std::FILE* stream) {
         "  --heading-bias-deg-per-sqrt-s X   random walk of the heading-rate bias [deg/s per\n"
         "                                    sqrt(s)], in [0, 1] (default %g)\n"
         "  --scale-error X                   step length factor, in [0.5, 1.5] (default %g)\n"
-        "  --duration-s X                    length of the drive [s], in (0, 36000] (default %g)\n",
+        "  --duration-s X                    drive length [s], in (0, 100000] (default %g)\n",
         static_cast<unsigned long long>(drift.seed), drift.heading_bias_deg_per_sqrt_s,
         drift.scale_error, drive.duration_s);
 }
