@@ -70,7 +70,7 @@ const char* kCorrectUsage =
     "  or --times (one time [s] a line, as KITTI's times.txt).\n"
     "  --ground-truth: the same drive's true poses, in the trajectory's format and frame (and\n"
     "  rate or --ground-truth-times); the summary then gives the errors.\n"
-    "  TUM may hold positions only (t x y z); CSV has a header (README: Trajectory formats).\n"
+    "  TUM may hold positions only (t x y z); CSV has a header (docs/FORMAT.md).\n"
     "  Without orientations, or with --heading motion, the heading is the direction of motion.\n"
     "Several scenarios (or --manifest, one scenario path a line, or -o naming a folder): -o is\n"
     "a folder that gets <name>.tum per scenario (<name>: the scenario's folder, or its .yaml\n"
