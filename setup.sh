@@ -12,7 +12,7 @@ build_dir=${BUILD_DIR:-build}
 packages=(build-essential cmake pkg-config libeigen3-dev coinor-libipopt-dev liblapack-dev
           libblas-dev libyaml-cpp-dev libgeographiclib-dev libproj-dev libexpat1-dev
           libgtest-dev libbenchmark-dev libpcl-dev liboctomap-dev nlohmann-json3-dev
-          libosmium2-dev libprotozero-dev zlib1g-dev python3-dev pybind11-dev python3-numpy
+          libosmium2-dev libprotozero-dev zlib1g-dev librsvg2-dev python3-dev pybind11-dev python3-numpy
           python3-pytest python3-distributed)
 
 install_missing() {

@@ -1,9 +1,11 @@
 // Tests of `driftcorr eval`'s library (examples/eval): a short generated synthetic scenario, the
 // same scenario without ground truth, and a broken scenario folder are evaluated in one run; the
 // broken one must not stop the others and every file of the report must hold what it promises.
+#include <cairo.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -149,13 +151,45 @@ TEST_F(EvalReport, PlotsAreSvgWithPolylines) {
     // No error plot without ground truth, no plots for the failed scenario.
     EXPECT_FALSE(fs::exists(report_ / "no_gt_error.svg"));
     EXPECT_FALSE(fs::exists(report_ / "broken_map.svg"));
-    EXPECT_EQ(written_.size(), 5u);
+    EXPECT_EQ(written_.size(), 8u);
     // The map plot has every method's colour and a scale bar in metres.
     const std::string map = ReadFile(report_ / "synth_map.svg");
     for (const char* colour : {"#000", "#d62728", "#ff7f0e", "#1f77b4"}) {
         EXPECT_NE(map.find(colour), std::string::npos) << colour;
     }
     EXPECT_NE(map.find(" m</text>"), std::string::npos);
+}
+
+// Each plot also as a PNG of the SVG's size in pixels, drawn: its page (white, the map's plot
+// area #fafafa) and the estimate's red line (#d62728) are among its pixels.
+TEST_F(EvalReport, EveryPlotIsAlsoAPngOfItsSvg) {
+    for (const char* name : {"synth_map", "synth_error", "no_gt_map"}) {
+        const fs::path png = report_ / (std::string(name) + ".png");
+        ASSERT_TRUE(fs::exists(png)) << name;
+        cairo_surface_t* image = cairo_image_surface_create_from_png(png.c_str());
+        ASSERT_EQ(cairo_surface_status(image), CAIRO_STATUS_SUCCESS) << name;
+        const std::string svg = ReadFile(report_ / (std::string(name) + ".svg"));
+        const int w = cairo_image_surface_get_width(image),
+                  h = cairo_image_surface_get_height(image);
+        EXPECT_NE(svg.find("width=\"" + std::to_string(w) + "\""), std::string::npos) << name;
+        EXPECT_NE(svg.find("height=\"" + std::to_string(h) + "\""), std::string::npos) << name;
+        const unsigned char* data = cairo_image_surface_get_data(image);
+        const int stride = cairo_image_surface_get_stride(image);
+        int page = 0, red = 0;
+        for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+                const std::uint32_t argb =
+                    *reinterpret_cast<const std::uint32_t*>(data + y * stride + 4 * x);
+                page += (argb & 0xFFFFFFu) == 0xFFFFFFu || (argb & 0xFFFFFFu) == 0xFAFAFAu;
+                red += (argb & 0xFFFFFFu) == 0xD62728u;
+            }
+        }
+        EXPECT_GT(page, w * h / 2) << name;
+        EXPECT_GT(red, 20) << name << ": the estimate's line";
+        cairo_surface_destroy(image);
+    }
+    EXPECT_FALSE(fs::exists(report_ / "no_gt_error.png"));
+    EXPECT_THROW(SvgToPng("<svg"), std::runtime_error);
 }
 
 }  // namespace

@@ -35,7 +35,8 @@ const char* kEvalUsage =
     "--methods runs only the methods listed, comma-separated, in that order: estimate, paper,\n"
     "driftcorr, online (default: all four).\n"
     "-o also writes report_dir/summary.md, results.json, <scenario>_map.svg and\n"
-    "<scenario>_error.svg. A scenario that fails is reported and does not stop the others.\n"
+    "<scenario>_error.svg, each plot also as .png. A scenario that fails is reported and does\n"
+    "not stop the others.\n"
     "Exit codes: 0 all ran, 1 usage, 2 at least one scenario or method failed, 3 all ran but\n"
     "driftcorr's verdict is failed on at least one, 4 internal.\n";
 

@@ -600,10 +600,14 @@ std::vector<std::string> WriteReport(const std::string& report_dir,
         f.Commit();
         written.push_back(path);
     };
+    auto plot = [&](const std::string& name, const std::string& svg) {
+        write(name, svg);
+        write(name.substr(0, name.size() - 4) + ".png", SvgToPng(svg));
+    };
     for (const ScenarioEvaluation& ev : evals) {
         if (!ev.ok()) continue;
-        write(PlotName(ev, "map"), MapSvg(ev));
-        if (ev.has_ground_truth) write(PlotName(ev, "error"), ErrorSvg(ev));
+        plot(PlotName(ev, "map"), MapSvg(ev));
+        if (ev.has_ground_truth) plot(PlotName(ev, "error"), ErrorSvg(ev));
     }
     write("results.json", ResultsJson(evals));
     write("summary.md", SummaryMarkdown(evals));

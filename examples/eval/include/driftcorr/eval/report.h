@@ -1,7 +1,7 @@
 #pragma once
 // The report of `driftcorr eval`: a console table in the form of the paper's Table 1 (one row per
 // scenario, columns per method), summary.md, results.json and two hand-written SVG plots per
-// scenario (the map with every track, the error against distance travelled).
+// scenario (the map with every track, the error against distance travelled), each also as PNG.
 #include <string>
 #include <vector>
 
@@ -30,10 +30,14 @@ std::string MapSvg(const ScenarioEvaluation& ev);
 /// method, axes with ticks and labels. Precondition: ev.ok() && ev.has_ground_truth.
 std::string ErrorSvg(const ScenarioEvaluation& ev);
 
+/// The SVG plot rendered as a PNG image at its own size in pixels (librsvg onto cairo): the
+/// file's bytes. Throws std::runtime_error with librsvg's or cairo's reason when it cannot.
+std::string SvgToPng(const std::string& svg);
+
 /// Writes report_dir/summary.md, results.json, <label>_map.svg for every evaluated scenario and
-/// <label>_error.svg for those with ground truth. Creates report_dir (and parents); each file is
-/// written to a temporary and renamed when complete. Returns the paths written. Throws
-/// std::runtime_error naming the path when a file cannot be written.
+/// <label>_error.svg for those with ground truth, each plot also as .png (SvgToPng). Creates
+/// report_dir (and parents); each file is written to a temporary and renamed when complete. Returns
+/// the paths written. Throws std::runtime_error naming the path when a file cannot be written.
 std::vector<std::string> WriteReport(const std::string& report_dir,
                                      const std::vector<ScenarioEvaluation>& evals);
 
