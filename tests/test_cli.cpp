@@ -317,7 +317,8 @@ std::string IndoorScenarioYaml(const std::string& map_layers) {
            "anchor:\n  crs: EPSG:32632\n" +
            Fmt("  easting_m: %.3f\n  northing_m: %.3f\n", kIndoorEasting, kIndoorNorthing) +
            "  yaw_deg: 0.0\n  z_m: 0.0\n"
-           "map:\n" + map_layers;
+           "map:\n" +
+           map_layers;
 }
 
 /// Replaces the folder `s` with the indoor scenario mapped by two GeoJSON layers: plan.geojson
@@ -353,10 +354,14 @@ void WriteIndoorPcdScenario(const fs::path& s) {
     for (int i = 0; i <= 200; ++i) {
         for (int j = 0; j <= 30; ++j, ++n) points += Fmt("%.2f %.2f 0\n", 0.1 * i, -1.5 + 0.1 * j);
     }
-    WriteFile(s / "floor.pcd", "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
-                               "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-                               "WIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n"
-                               "POINTS " + std::to_string(n) + "\nDATA ascii\n" + points);
+    WriteFile(s / "floor.pcd",
+              "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
+              "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+              "WIDTH " +
+                  std::to_string(n) +
+                  "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n"
+                  "POINTS " +
+                  std::to_string(n) + "\nDATA ascii\n" + points);
     WriteFile(s / "scenario.yaml", IndoorScenarioYaml("  - {path: floor.pcd, format: pcd}\n"));
 }
 
@@ -685,7 +690,8 @@ std::vector<BadInputCase> BadInputCases() {
          {R"(plan\.geojson:5: )"}},
         {"GeoJsonPlanOnlyWalls",
          IndoorGeoJson([](const fs::path& s) {
-             RegexReplace(s / "plan.geojson", R"re("Type": "(Corridor|Room)")re", R"("Type": "Wall")");
+             RegexReplace(s / "plan.geojson", R"re("Type": "(Corridor|Room)")re",
+                          R"("Type": "Wall")");
          }),
          kExitBadInput,
          {R"(plan\.geojson: the floor plan has no walkable polygon)"}},
@@ -696,18 +702,18 @@ std::vector<BadInputCase> BadInputCases() {
          kExitBadInput,
          {R"(scenario\.yaml:\d*:? ?map\[1\]: .*needs role .* and floor_z_m)"}},
         {"GeoJsonLayerWithoutRole",
-         IndoorGeoJson([](const fs::path& s) {
-             Replace(s / "scenario.yaml", "role: walkways, ", "");
-         }),
+         IndoorGeoJson(
+             [](const fs::path& s) { Replace(s / "scenario.yaml", "role: walkways, ", ""); }),
          kExitBadInput,
          {R"(scenario\.yaml:\d*:? ?map\[0\]: .*needs role .* and floor_z_m)"}},
 
         // ---- indoor3d point-cloud / OctoMap layers (floor.pcd) ----
         {"PcdNoPoints",
          IndoorPcd([](const fs::path& s) {
-             WriteFile(s / "floor.pcd", "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
-                                        "COUNT 1 1 1\nWIDTH 0\nHEIGHT 1\n"
-                                        "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA ascii\n");
+             WriteFile(s / "floor.pcd",
+                       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                       "COUNT 1 1 1\nWIDTH 0\nHEIGHT 1\n"
+                       "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA ascii\n");
          }),
          kExitBadInput,
          {R"(floor\.pcd: PCD file has no points)"},
@@ -848,9 +854,9 @@ std::vector<BadInputCase> BadInputCases() {
         // (-o naming a folder with one scenario writes <name>.tum into it, as with several.)
         {"CovarianceIsAFolder",
          [](const CaseDirs& c) {
-             return std::vector<std::string>{"correct", c.scenario.string(), "-o",
-                                             c.output.string(), "--covariance",
-                                             c.out_dir.string()};
+             return std::vector<std::string>{"correct",      c.scenario.string(),
+                                             "-o",           c.output.string(),
+                                             "--covariance", c.out_dir.string()};
          },
          kExitBadInput,
          {R"(: --covariance: is a folder)"}},
@@ -1159,7 +1165,8 @@ TEST_F(CliOnFailure, EstimateWritesTheInputUnchanged) {
         RunProgram(kCli, Correct(c, {"--on-failure", "estimate"}), c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     EXPECT_EQ(r.exit_code, kExitSolver);
-    const driftcorr::Trajectory est = driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
+    const driftcorr::Trajectory est =
+        driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
     const driftcorr::Trajectory out = driftcorr::io::ReadTum(c.output.string());
     ASSERT_EQ(out.size(), est.size());
     for (std::size_t i = 0; i < est.size(); ++i) {
@@ -1170,12 +1177,13 @@ TEST_F(CliOnFailure, EstimateWritesTheInputUnchanged) {
 TEST_F(CliOnFailure, WriteWritesTheResultAndPerPoseCovariance) {
     const CaseDirs c = WrongAnchor("OnFailureWrite");
     const fs::path cov = c.out_dir / "poses.txt";
-    const RunResult r = RunProgram(
-        kCli, Correct(c, {"--on-failure", "write", "--covariance", cov.string()}),
-        c.out_dir.parent_path());
+    const RunResult r =
+        RunProgram(kCli, Correct(c, {"--on-failure", "write", "--covariance", cov.string()}),
+                   c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     EXPECT_EQ(r.exit_code, kExitSolver);
-    const driftcorr::Trajectory est = driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
+    const driftcorr::Trajectory est =
+        driftcorr::io::ReadTum((c.scenario / "estimate.tum").string());
     const driftcorr::Trajectory out = driftcorr::io::ReadTum(c.output.string());
     ASSERT_EQ(out.size(), est.size());
     double moved_m = 0.0;
@@ -1212,8 +1220,9 @@ protected:
     /// `driftcorr correct <scenario>/estimate.tum --osm <scenario>/map.osm --anchor ...`.
     static std::vector<std::string> CorrectFile(const CaseDirs& c, const std::string& trajectory,
                                                 const std::vector<std::string>& extra) {
-        std::vector<std::string> args = {"correct", trajectory, "--osm",
-                                         (c.scenario / "map.osm").string(), "-o", c.output.string()};
+        std::vector<std::string> args = {"correct", trajectory,
+                                         "--osm",   (c.scenario / "map.osm").string(),
+                                         "-o",      c.output.string()};
         args.insert(args.end(), extra.begin(), extra.end());
         return args;
     }
@@ -1241,10 +1250,13 @@ TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
     const CaseDirs c = MakeCase("FileAndAnchor");
     const fs::path via_scenario = c.out_dir.parent_path() / "via_scenario.tum";
     ASSERT_EQ(RunProgram(kCli, {"correct", c.scenario.string(), "-o", via_scenario.string()},
-                         c.out_dir.parent_path()).exit_code, kExitOk);
-    const RunResult r = RunProgram(
-        kCli, CorrectFile(c, (c.scenario / "estimate.tum").string(),
-                          {"--anchor", "48.98,8.39,0", "--frame", "enu"}), c.out_dir.parent_path());
+                         c.out_dir.parent_path())
+                  .exit_code,
+              kExitOk);
+    const RunResult r = RunProgram(kCli,
+                                   CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                                               {"--anchor", "48.98,8.39,0", "--frame", "enu"}),
+                                   c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     ASSERT_EQ(r.exit_code, kExitOk);
     ExpectSameNumbers(ReadFile(c.output), ReadFile(via_scenario), 1e-6);
@@ -1256,9 +1268,9 @@ TEST_F(CliFormats, TrajectoryWithOsmAndAnchorMatchesTheScenario) {
 TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
     const CaseDirs c = MakeCase("SwappedAnchor");
     const std::string estimate = (c.scenario / "estimate.tum").string();
-    const RunResult swapped = RunProgram(
-        kCli, CorrectFile(c, estimate, {"--anchor", "8.39,48.98,0", "--frame", "enu"}),
-        c.out_dir.parent_path());
+    const RunResult swapped =
+        RunProgram(kCli, CorrectFile(c, estimate, {"--anchor", "8.39,48.98,0", "--frame", "enu"}),
+                   c.out_dir.parent_path());
     SCOPED_TRACE(swapped.out + swapped.err);
     EXPECT_EQ(swapped.exit_code, kExitBadInput);
     EXPECT_NE(swapped.err.find("from the nearest road of the map"), std::string::npos);
@@ -1266,9 +1278,9 @@ TEST_F(CliFormats, AnAnchorFarFromTheMapIsBadInputBeforeTheSolve) {
     EXPECT_EQ(swapped.out.find("solver"), std::string::npos) << "refused before the solve";
     EXPECT_FALSE(fs::exists(c.output));
 
-    const RunResult far = RunProgram(
-        kCli, CorrectFile(c, estimate, {"--anchor", "48.5,8.39,0", "--frame", "enu"}),
-        c.out_dir.parent_path());
+    const RunResult far =
+        RunProgram(kCli, CorrectFile(c, estimate, {"--anchor", "48.5,8.39,0", "--frame", "enu"}),
+                   c.out_dir.parent_path());
     SCOPED_TRACE(far.out + far.err);
     EXPECT_EQ(far.exit_code, kExitBadInput);
     EXPECT_NE(far.err.find("check the anchor and the map file"), std::string::npos);
@@ -1321,9 +1333,8 @@ TEST_F(CliFormats, ScaleOnTheCommandLine) {
 TEST_F(CliFormats, GroundTruthOnTheCommandLineGivesTheErrors) {
     const CaseDirs c = MakeCase("GroundTruthFlag");
     const std::string gt = (c.scenario / "ground_truth.tum").string();
-    const RunResult via_scenario =
-        RunProgram(kCli, {"correct", c.scenario.string(), "-o", c.output.string()},
-                   c.out_dir.parent_path());
+    const RunResult via_scenario = RunProgram(
+        kCli, {"correct", c.scenario.string(), "-o", c.output.string()}, c.out_dir.parent_path());
     ASSERT_EQ(via_scenario.exit_code, kExitOk) << via_scenario.err;
     const RunResult r = RunProgram(
         kCli,
@@ -1342,12 +1353,12 @@ TEST_F(CliFormats, GroundTruthOnTheCommandLineGivesTheErrors) {
     EXPECT_EQ(ate_line(r.out, "estimate"), ate_line(via_scenario.out, "estimate"));
     EXPECT_EQ(ate_line(r.out, "corrected"), ate_line(via_scenario.out, "corrected"));
 
-    const RunResult overwrite = RunProgram(
-        kCli,
-        {"correct", (c.scenario / "estimate.tum").string(), "--osm",
-         (c.scenario / "map.osm").string(), "-o", gt, "--anchor", "48.98,8.39,0", "--frame", "enu",
-         "--ground-truth", gt},
-        c.out_dir.parent_path());
+    const RunResult overwrite =
+        RunProgram(kCli,
+                   {"correct", (c.scenario / "estimate.tum").string(), "--osm",
+                    (c.scenario / "map.osm").string(), "-o", gt, "--anchor", "48.98,8.39,0",
+                    "--frame", "enu", "--ground-truth", gt},
+                   c.out_dir.parent_path());
     EXPECT_EQ(overwrite.exit_code, kExitBadInput);
     EXPECT_NE(overwrite.err.find("destroy an input"), std::string::npos) << overwrite.err;
     EXPECT_EQ(RunProgram(kCli,
@@ -1363,15 +1374,15 @@ TEST_F(CliFormats, GroundTruthOnTheCommandLineGivesTheErrors) {
 // names the flag, not the scenario key.
 TEST_F(CliFormats, FailureAdviceNamesTheFlagsTheUserGave) {
     const CaseDirs c = MakeCase("AdviceInFlags");
-    const RunResult r = RunProgram(
-        kCli,
-        CorrectFile(c, (c.scenario / "estimate.tum").string(),
-                    {"--anchor", "48.98,8.39,40", "--frame", "enu"}),
-        c.out_dir.parent_path());
+    const RunResult r = RunProgram(kCli,
+                                   CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                                               {"--anchor", "48.98,8.39,40", "--frame", "enu"}),
+                                   c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     EXPECT_EQ(r.exit_code, kExitSolver);
-    EXPECT_NE((r.out + r.err).find("check the yaw and the position of --anchor, or give --anchor "
-                         "LAT,LON,auto"),
+    EXPECT_NE((r.out + r.err)
+                  .find("check the yaw and the position of --anchor, or give --anchor "
+                        "LAT,LON,auto"),
               std::string::npos);
     EXPECT_EQ((r.out + r.err).find("yaw_deg"), std::string::npos);
 }
@@ -1380,11 +1391,11 @@ TEST_F(CliFormats, FailureAdviceNamesTheFlagsTheUserGave) {
 // asking whether the axes are those of the frame.
 TEST_F(CliFormats, AWrongFrameIsBadInputBeforeTheSolve) {
     const CaseDirs c = MakeCase("WrongFrame");
-    const RunResult r = RunProgram(
-        kCli,
-        CorrectFile(c, (c.scenario / "estimate.tum").string(),
-                    {"--anchor", "48.98,8.39,0", "--frame", "kitti_camera"}),
-        c.out_dir.parent_path());
+    const RunResult r =
+        RunProgram(kCli,
+                   CorrectFile(c, (c.scenario / "estimate.tum").string(),
+                               {"--anchor", "48.98,8.39,0", "--frame", "kitti_camera"}),
+                   c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     EXPECT_EQ(r.exit_code, kExitBadInput);
     EXPECT_NE(r.err.find("frame: with frame kitti_camera the estimate's height spans"),
@@ -1425,13 +1436,15 @@ TEST_F(CliFormats, PositionsOnlyTumSaysTheHeadingCameFromTheMotion) {
     WriteFile(traj, positions);
     const fs::path geojson = c.out_dir / "tracks.geojson";
     const RunResult r = RunProgram(
-        kCli, CorrectFile(c, traj.string(), {"--anchor", "48.98,8.39,0", "--frame", "enu",
-                                             "--geojson", geojson.string()}),
+        kCli,
+        CorrectFile(c, traj.string(),
+                    {"--anchor", "48.98,8.39,0", "--frame", "enu", "--geojson", geojson.string()}),
         c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     ASSERT_EQ(r.exit_code, kExitOk);
     EXPECT_NE(r.out.find("heading    from the direction of motion (the estimate has no "
-                         "orientation"), std::string::npos);
+                         "orientation"),
+              std::string::npos);
     // evo's TUM reader: 8 space-separated numbers a line, no header, no trailing space.
     const std::string tum = ReadFile(c.output);
     const std::regex line_re(R"(-?\d+\.\d+( -?\d+\.\d+){7})");
@@ -1461,8 +1474,9 @@ TEST_F(CliFormats, EurocCsvNeedsNoFrameAndAnchorMayBeAuto) {
     }
     const fs::path traj = c.out_dir.parent_path() / "leica0.csv";
     WriteFile(traj, csv);
-    const RunResult r = RunProgram(kCli, CorrectFile(c, traj.string(), {"--anchor", "48.98,8.39,auto"}),
-                                   c.out_dir.parent_path());
+    const RunResult r =
+        RunProgram(kCli, CorrectFile(c, traj.string(), {"--anchor", "48.98,8.39,auto"}),
+                   c.out_dir.parent_path());
     SCOPED_TRACE(r.out + r.err);
     ASSERT_EQ(r.exit_code, kExitOk);
     EXPECT_NE(r.out.find("anchor     estimated yaw"), std::string::npos);
@@ -1479,17 +1493,23 @@ TEST_F(CliFormats, MissingOrBadOptionsAreNamed) {
     };
     const std::vector<Bad> cases = {
         {{"--anchor", "48.98,8.39,0"}, kExitBadInput, "estimate.tum: --frame: missing"},
-        {{"--anchor", "48.98,8.39", "--frame", "enu"}, kExitBadInput, "--anchor: expected LAT,LON,YAW"},
-        {{"--anchor", "48.98,east,0", "--frame", "enu"}, kExitBadInput,
+        {{"--anchor", "48.98,8.39", "--frame", "enu"},
+         kExitBadInput,
+         "--anchor: expected LAT,LON,YAW"},
+        {{"--anchor", "48.98,east,0", "--frame", "enu"},
+         kExitBadInput,
          "--anchor: longitude 'east' is not a number"},
         {{"--frame", "enu"}, kExitUsage, "missing --anchor"},
-        {{"--anchor", "1,2,0", "--crs", "EPSG:banana", "--frame", "enu"}, kExitBadInput,
+        {{"--anchor", "1,2,0", "--crs", "EPSG:banana", "--frame", "enu"},
+         kExitBadInput,
          "--crs: unknown CRS spelling"},
-        {{"--anchor", "48.98,8.39,0", "--frame", "enu", "--format", "gpx"}, kExitBadInput,
+        {{"--anchor", "48.98,8.39,0", "--frame", "enu", "--format", "gpx"},
+         kExitBadInput,
          "--format: unknown format 'gpx'"},
     };
     for (const Bad& b : cases) {
-        const RunResult r = RunProgram(kCli, CorrectFile(c, traj, b.extra), c.out_dir.parent_path());
+        const RunResult r =
+            RunProgram(kCli, CorrectFile(c, traj, b.extra), c.out_dir.parent_path());
         EXPECT_EQ(r.exit_code, b.code) << r.err;
         EXPECT_NE(r.err.find(b.message), std::string::npos) << r.err;
         EXPECT_TRUE(FolderEntries(c.out_dir).empty());
@@ -1505,10 +1525,10 @@ TEST_F(CliFormats, PbfThatIsTruncatedOrNotPbfIsBadInputNamingTheFile) {
     for (const std::string& content :
          {std::string("\x00\x00\x00\x0d\x0a\x09OSMHe", 11), std::string("PK\x03\x04 a zip file")}) {
         WriteFile(pbf, content);
-        const RunResult r = RunProgram(
-            kCli, {"correct", traj, "--osm", pbf.string(), "--anchor", "48.98,8.39,0", "--frame",
-                   "enu", "-o", c.output.string()},
-            c.out_dir.parent_path());
+        const RunResult r = RunProgram(kCli,
+                                       {"correct", traj, "--osm", pbf.string(), "--anchor",
+                                        "48.98,8.39,0", "--frame", "enu", "-o", c.output.string()},
+                                       c.out_dir.parent_path());
         EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
         EXPECT_NE(r.err.find(pbf.string() + ": is neither OSM XML"), std::string::npos) << r.err;
         EXPECT_TRUE(FolderEntries(c.out_dir).empty());
@@ -1524,14 +1544,15 @@ TEST_F(CliFormats, ManyScenariosOnThreadsOneBadLineDoesNotStopTheOthers) {
     const fs::path manifest = root / "manifest.txt";
     WriteFile(manifest, "# drives\nsecond\n\nno_such_scenario\n");
     const fs::path out = root / "batch_out";
-    const RunResult r = RunProgram(
-        kCli, {"correct", c.scenario.string(), "--manifest", manifest.string(), "-o", out.string(),
-               "-j", "2", "--geojson", out.string()},
-        root);
+    const RunResult r = RunProgram(kCli,
+                                   {"correct", c.scenario.string(), "--manifest", manifest.string(),
+                                    "-o", out.string(), "-j", "2", "--geojson", out.string()},
+                                   root);
     SCOPED_TRACE(r.out + r.err);
     EXPECT_EQ(r.exit_code, kExitBadInput);
-    EXPECT_NE(r.out.find("no_such_scenario                 bad input (" + manifest.string() + ":4)"),
-              std::string::npos);
+    EXPECT_NE(
+        r.out.find("no_such_scenario                 bad input (" + manifest.string() + ":4)"),
+        std::string::npos);
     EXPECT_NE(r.out.find("2 of 3 scenarios corrected and written"), std::string::npos);
     const std::vector<std::string> expected = {"scenario.geojson", "scenario.tum", "second.geojson",
                                                "second.tum"};
@@ -1542,8 +1563,10 @@ TEST_F(CliFormats, ManyScenariosOnThreadsOneBadLineDoesNotStopTheOthers) {
 
     // The same two good scenarios one at a time give the same files.
     const fs::path out1 = root / "batch_out_j1";
-    const RunResult r1 = RunProgram(kCli, {"correct", c.scenario.string(), (root / "second").string(),
-                                           "-o", out1.string(), "-j", "1"}, root);
+    const RunResult r1 = RunProgram(kCli,
+                                    {"correct", c.scenario.string(), (root / "second").string(),
+                                     "-o", out1.string(), "-j", "1"},
+                                    root);
     EXPECT_EQ(r1.exit_code, kExitOk) << r1.out << r1.err;
     EXPECT_EQ(ReadFile(out1 / "second.tum"), ReadFile(out / "second.tum"));
 }
@@ -1552,10 +1575,13 @@ TEST_F(CliFormats, BatchUsageErrors) {
     const CaseDirs c = MakeCase("BatchUsage");
     const std::string s = c.scenario.string();
     const fs::path root = c.out_dir.parent_path();
-    EXPECT_EQ(RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string(), "-j", "0"}, root)
-                  .exit_code, kExitUsage);
-    EXPECT_EQ(RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string(), "--osm", "m.osm"},
-                         root).exit_code, kExitUsage);
+    EXPECT_EQ(
+        RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string(), "-j", "0"}, root).exit_code,
+        kExitUsage);
+    EXPECT_EQ(
+        RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string(), "--osm", "m.osm"}, root)
+            .exit_code,
+        kExitUsage);
     // Two scenarios whose outputs would collide: bad input before any work.
     const RunResult r = RunProgram(kCli, {"correct", s, s, "-o", (root / "o").string()}, root);
     EXPECT_EQ(r.exit_code, kExitBadInput);
@@ -1608,8 +1634,10 @@ std::vector<std::array<double, 3>> Room(double scale) {
         for (double x = 0.05; x < 6.0; x += 0.1) p.push_back({x, y, 0.0}), p.push_back({x, y, 2.7});
     }
     for (double z = 0.0; z < 2.7; z += 0.1) {
-        for (double x = 0.0; x < 6.0; x += 0.1) p.push_back({x, -0.05, z}), p.push_back({x, 5.05, z});
-        for (double y = 0.0; y < 5.0; y += 0.1) p.push_back({-0.05, y, z}), p.push_back({6.05, y, z});
+        for (double x = 0.0; x < 6.0; x += 0.1)
+            p.push_back({x, -0.05, z}), p.push_back({x, 5.05, z});
+        for (double y = 0.0; y < 5.0; y += 0.1)
+            p.push_back({-0.05, y, z}), p.push_back({6.05, y, z});
     }
     for (auto& q : p) q = {q[0] * scale, q[1] * scale, q[2] * scale};
     return p;
@@ -1637,7 +1665,8 @@ TEST(CliMap, BadRawMapsAreNamedWithWhatWasFound) {
     fs::create_directories(dir);
     std::vector<std::array<double, 3>> wall;
     for (double z = 0.0; z < 3.0; z += 0.1) {
-        for (double x = 0.0; x < 8.0; x += 0.1) wall.push_back({x, 0.0, z}), wall.push_back({x, 0.1, z});
+        for (double x = 0.0; x < 8.0; x += 0.1)
+            wall.push_back({x, 0.0, z}), wall.push_back({x, 0.1, z});
     }
     WritePcd(dir / "wall.pcd", wall);
     WritePcd(dir / "room_mm.pcd", Room(1000.0));
@@ -1648,21 +1677,28 @@ TEST(CliMap, BadRawMapsAreNamedWithWhatWasFound) {
         std::string message;
     };
     const std::vector<Case> cases = {
-        {{"map", "extract", (dir / "wall.pcd").string(), "-o", out}, kExitBadInput,
+        {{"map", "extract", (dir / "wall.pcd").string(), "-o", out},
+         kExitBadInput,
          "wall.pcd: no walkable surface: the largest horizontal surface with 1.80 m free above "
          "it is "},
-        {{"map", "extract", (dir / "room_mm.pcd").string(), "-o", out}, kExitBadInput,
+        {{"map", "extract", (dir / "room_mm.pcd").string(), "-o", out},
+         kExitBadInput,
          "room_mm.pcd: the cloud spans 6"},
-        {{"map", "extract", (dir / "room_mm.pcd").string(), "-o", out}, kExitBadInput,
+        {{"map", "extract", (dir / "room_mm.pcd").string(), "-o", out},
+         kExitBadInput,
          "not a building in metres (millimetres or centimetres?"},
         {{"map", "extract", (dir / "none.pcd").string(), "-o", out}, kExitBadInput, "none.pcd"},
         {{"map", "extract", (dir / "wall.pcd").string(), "-o", (dir / "walk.txt").string()},
-         kExitBadInput, "written as .pcd or .ply"},
+         kExitBadInput,
+         "written as .pcd or .ply"},
         {{"map", "extract", (dir / "wall.pcd").string(), "-o", out, "--lifts", "1,2,3"},
-         kExitBadInput, "--lifts: a shaft is x0,y0,x1,y1"},
-        {{"map", "extract", (dir / "wall.pcd").string()}, kExitUsage,
+         kExitBadInput,
+         "--lifts: a shaft is x0,y0,x1,y1"},
+        {{"map", "extract", (dir / "wall.pcd").string()},
+         kExitUsage,
          "-o walkable.pcd|.ply is required"},
-        {{"map", "carve", (dir / "wall.pcd").string(), "-o", out}, kExitUsage,
+        {{"map", "carve", (dir / "wall.pcd").string(), "-o", out},
+         kExitUsage,
          "expected 'extract'"},
     };
     for (const Case& c : cases) {
@@ -1676,8 +1712,9 @@ TEST(CliMap, BadRawMapsAreNamedWithWhatWasFound) {
 // A fresh synthetic building scenario (datasets/synth_building) in `dir`.
 void MakeBuildingScenario(const fs::path& dir) {
     fs::remove_all(dir);
-    const RunResult g = RunProgram(DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario",
-                                   {dir.string()}, fs::path(DRIFTCORR_TEST_TMPDIR));
+    const RunResult g =
+        RunProgram(DRIFTCORR_BINARY_DIR "/datasets/driftcorr_make_building_scenario",
+                   {dir.string()}, fs::path(DRIFTCORR_TEST_TMPDIR));
     ASSERT_EQ(g.exit_code, 0) << g.err;
 }
 
@@ -1700,11 +1737,10 @@ TEST(CliMap, AWalkThatStartsOffTheWalkableSurfaceIsBadInput) {
 TEST(CliMap, RawBuildingScanGivesTheWalkableSurfaceAndTheSameCorrection) {
     const fs::path dir = fs::path(DRIFTCORR_TEST_TMPDIR) / "raw_building";
     ASSERT_NO_FATAL_FAILURE(MakeBuildingScenario(dir));
-    const RunResult x =
-        RunProgram(kCli,
-                   {"map", "extract", (dir / "building_raw.pcd").string(), "-o",
-                    (dir / "walkable.pcd").string(), "--lifts", "50,17.5,52,19.5"},
-                   dir);
+    const RunResult x = RunProgram(kCli,
+                                   {"map", "extract", (dir / "building_raw.pcd").string(), "-o",
+                                    (dir / "walkable.pcd").string(), "--lifts", "50,17.5,52,19.5"},
+                                   dir);
     ASSERT_EQ(x.exit_code, kExitOk) << x.err;
     std::printf("%s", x.out.c_str());
     // The layer line for the scenario, with the shaft the generator declares in its own scenarios.

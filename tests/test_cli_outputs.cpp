@@ -75,8 +75,9 @@ protected:
     static void SetUpTestSuite() {
         root_ = driftcorr::test::FreshProcessDir("test_cli_outputs");
         base_ = root_ / "valid_scenario";
-        generated_ = driftcorr::test::GenerateRoadScenario(base_.string(), "--duration-s 60") == 0 &&
-                     fs::exists(base_ / "scenario.yaml");
+        generated_ =
+            driftcorr::test::GenerateRoadScenario(base_.string(), "--duration-s 60") == 0 &&
+            fs::exists(base_ / "scenario.yaml");
     }
     static void TearDownTestSuite() {
         const auto* suite = ::testing::UnitTest::GetInstance()->current_test_suite();
@@ -177,9 +178,10 @@ TEST_F(CliOutputs, TrajectoryFileWithOsmRefusesToOverwriteItself) {
     const std::string traj = (scenario_ / "estimate.tum").string();
     const std::string anchor = lat[1].str() + "," + lon[1].str() + "," + yaw[1].str();
     for (const std::string& out : {traj, (scenario_ / "map.osm").string()}) {
-        const Shell r = RunShell(Join({kCli, "correct", traj, "--osm", (scenario_ / "map.osm").string(),
-                                  "--anchor", anchor, "--frame", "enu", "-q", "-o", out}),
-                            dir_);
+        const Shell r =
+            RunShell(Join({kCli, "correct", traj, "--osm", (scenario_ / "map.osm").string(),
+                           "--anchor", anchor, "--frame", "enu", "-q", "-o", out}),
+                     dir_);
         EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
         EXPECT_NE(r.err.find("-o: is "), std::string::npos) << r.err;
     }
@@ -209,9 +211,9 @@ TEST_F(CliOutputs, DeviceAndFifoAreWrittenInPlaceNotReplaced) {
     const fs::path fifo = dir_ / "out" / "fifo", copy = dir_ / "copy.tum";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
     r = RunShell("cat " + Quote(fifo.string()) + " > " + Quote(copy.string()) + " & " +
-                Join({kCli, "correct", scenario_.string(), "-q", "-o", fifo.string()}) +
-                "; code=$?; wait; exit $code",
-            dir_);
+                     Join({kCli, "correct", scenario_.string(), "-q", "-o", fifo.string()}) +
+                     "; code=$?; wait; exit $code",
+                 dir_);
     ASSERT_EQ(r.exit_code, kExitOk) << r.err;
     ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
     EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
@@ -238,8 +240,8 @@ TEST_F(CliOutputs, AFullStandardOutputIsAnErrorNotASuccess) {
     EXPECT_NE(r.err.find("standard output: write failed"), std::string::npos) << r.err;
 
     const Shell s = RunShell(Join({kCli, "stream", scenario_.string(), "-q"}) + " < " +
-                            Quote((scenario_ / "estimate.tum").string()) + " > /dev/full",
-                        dir_);
+                                 Quote((scenario_ / "estimate.tum").string()) + " > /dev/full",
+                             dir_);
     EXPECT_EQ(s.exit_code, kExitBadInput) << s.err;
     EXPECT_NE(s.err.find("standard output: write failed"), std::string::npos) << s.err;
     EXPECT_EQ(s.err.find("poses corrected"), std::string::npos) << s.err;
@@ -249,9 +251,10 @@ TEST_F(CliOutputs, AFileSizeLimitIsReportedWithItsReason) {
     const fs::path out = dir_ / "out" / "c.tum";
     const Shell r = Correct({"-o", out.string()}, "");
     ASSERT_EQ(r.exit_code, kExitOk) << r.err;
-    const Shell limited = RunShell("ulimit -f 8; exec " + Join({kCli, "correct", scenario_.string(), "-q",
-                                                          "-o", (dir_ / "out" / "d.tum").string()}),
-                              dir_);
+    const Shell limited =
+        RunShell("ulimit -f 8; exec " + Join({kCli, "correct", scenario_.string(), "-q", "-o",
+                                              (dir_ / "out" / "d.tum").string()}),
+                 dir_);
     EXPECT_EQ(limited.exit_code, kExitBadInput) << limited.err;
     EXPECT_NE(limited.err.find("File too large"), std::string::npos) << limited.err;
     EXPECT_FALSE(fs::exists(dir_ / "out" / "d.tum"));
@@ -276,8 +279,8 @@ TEST_F(CliOutputs, NanosecondTimestampsAreRefusedNamingFileAndLine) {
     EXPECT_NE(r.err.find("nanoseconds"), std::string::npos) << r.err;
 
     const Shell s = RunShell(Join({kCli, "stream", scenario_.string(), "-q"}) + " < " +
-                            Quote((scenario_ / "estimate.tum").string()),
-                        dir_);
+                                 Quote((scenario_ / "estimate.tum").string()),
+                             dir_);
     EXPECT_EQ(s.exit_code, kExitBadInput) << s.err;
     EXPECT_NE(s.err.find("standard input:1: timestamp"), std::string::npos) << s.err;
     EXPECT_EQ(PoseLines(s.out), 0u);
@@ -286,11 +289,10 @@ TEST_F(CliOutputs, NanosecondTimestampsAreRefusedNamingFileAndLine) {
 TEST_F(CliOutputs, SigtermEndsTheStreamWithItsSummaryAndExit143) {
     // The poses, then an input that stays open (blank lines, which the stream skips, until the
     // stream has gone and the pipe breaks): the stream waits for more until SIGTERM.
-    const std::string command =
-        "(cat " + Quote((scenario_ / "estimate.tum").string()) +
-        "; while sleep 0.2; do echo || exit 0; done) | " +
-        Join({kCli, "stream", scenario_.string(), "--sync"}) +
-        " & pid=$!; sleep 5; kill -TERM $pid; wait $pid";
+    const std::string command = "(cat " + Quote((scenario_ / "estimate.tum").string()) +
+                                "; while sleep 0.2; do echo || exit 0; done) | " +
+                                Join({kCli, "stream", scenario_.string(), "--sync"}) +
+                                " & pid=$!; sleep 5; kill -TERM $pid; wait $pid";
     const Shell r = RunShell(command, dir_);
     EXPECT_EQ(r.exit_code, 143) << r.err;
     EXPECT_NE(r.err.find("SIGTERM"), std::string::npos) << r.err;
@@ -354,13 +356,13 @@ TEST_F(CliOutputs, VerdictThresholdsAreParameters) {
     // every change of speed an input jump, and the same correction degraded; a misspelt key is
     // refused by name.
     WriteFile(dir_ / "narrow.yaml", "verdict: {max_accel_mps2: 0.01}\n");
-    const Shell r = Correct({"-o", (dir_ / "out" / "c.tum").string(), "--config",
-                             (dir_ / "narrow.yaml").string()});
+    const Shell r = Correct(
+        {"-o", (dir_ / "out" / "c.tum").string(), "--config", (dir_ / "narrow.yaml").string()});
     EXPECT_EQ(r.exit_code, kExitOk) << r.err;
     EXPECT_NE(r.out.find("verdict    degraded"), std::string::npos) << r.out;
     WriteFile(dir_ / "typo.yaml", "verdict: {scale_plausible_mni: 0.9}\n");
-    const Shell t = Correct({"-o", (dir_ / "out" / "d.tum").string(), "--config",
-                             (dir_ / "typo.yaml").string()});
+    const Shell t = Correct(
+        {"-o", (dir_ / "out" / "d.tum").string(), "--config", (dir_ / "typo.yaml").string()});
     EXPECT_EQ(t.exit_code, kExitBadInput) << t.err;
     EXPECT_NE(t.err.find("verdict.scale_plausible_mni"), std::string::npos) << t.err;
 }

@@ -345,8 +345,8 @@ TEST(HeadingChangeBiasTerm, ZeroAtTruthAndDerivativesMatch) {
         for (int k = 0; k < 3; ++k) {
             Eigen::Vector3d xp = x, xm = x, gp, gm;
             xp[k] += kStep, xm[k] -= kStep;
-            const double num = (t.Evaluate(xp, &gp, nullptr) - t.Evaluate(xm, &gm, nullptr)) /
-                               (2 * kStep);
+            const double num =
+                (t.Evaluate(xp, &gp, nullptr) - t.Evaluate(xm, &gm, nullptr)) / (2 * kStep);
             EXPECT_PRED2(Close, g[k], num) << "trial " << trial;
             for (int r = 0; r < 3; ++r) {
                 EXPECT_PRED2(Close, h(r, k), (gp[r] - gm[r]) / (2 * kStep)) << "trial " << trial;
@@ -373,7 +373,8 @@ TEST(ScaleRangeTerm, FreeInsideGaussianOutside) {
         t.Evaluate(Vector1d(s), &g, &h);
         Vector1d gp, gm;
         const double num = (t.Evaluate(Vector1d(s + kStep), &gp, nullptr) -
-                            t.Evaluate(Vector1d(s - kStep), &gm, nullptr)) / (2 * kStep);
+                            t.Evaluate(Vector1d(s - kStep), &gm, nullptr)) /
+                           (2 * kStep);
         EXPECT_PRED2(Close, g[0], num) << s;
         EXPECT_PRED2(Close, h[0], (gp[0] - gm[0]) / (2 * kStep)) << s;
     }
@@ -642,8 +643,8 @@ TEST(ScaleRandomWalkRobust, MatchesGaussianNearZeroAndCentralDifferences) {
                 1e-3 * gauss.Evaluate(small, nullptr, nullptr));
     const Eigen::Vector2d far(1.0, 1.4);  // 40 sigma
     EXPECT_LT(robust.Evaluate(far, nullptr, nullptr), 0.05 * gauss.Evaluate(far, nullptr, nullptr));
-    for (const Eigen::Vector2d& x : {Eigen::Vector2d(0.9, 1.1), Eigen::Vector2d(1.2, 1.15),
-                                    Eigen::Vector2d(1.0, 1.03)}) {
+    for (const Eigen::Vector2d& x :
+         {Eigen::Vector2d(0.9, 1.1), Eigen::Vector2d(1.2, 1.15), Eigen::Vector2d(1.0, 1.03)}) {
         Eigen::Vector2d g;
         Eigen::Matrix2d h;
         robust.Evaluate(x, &g, &h);
@@ -653,7 +654,8 @@ TEST(ScaleRandomWalkRobust, MatchesGaussianNearZeroAndCentralDifferences) {
             xp[k] += eps;
             xm[k] -= eps;
             Eigen::Vector2d gp, gm;
-            const double fd = (robust.Evaluate(xp, &gp, nullptr) - robust.Evaluate(xm, &gm, nullptr)) / (2 * eps);
+            const double fd =
+                (robust.Evaluate(xp, &gp, nullptr) - robust.Evaluate(xm, &gm, nullptr)) / (2 * eps);
             EXPECT_NEAR(g[k], fd, 1e-5 * (1.0 + std::abs(fd)));
             const Eigen::Vector2d hfd = (gp - gm) / (2 * eps);
             EXPECT_NEAR((h.col(k) - hfd).norm(), 0.0, 1e-4 * (1.0 + hfd.norm()));
@@ -678,11 +680,13 @@ void ExpectDerivativesMatch(const Term& term, const Vec& x, double tol) {
         xp[k] += eps;
         xm[k] -= eps;
         Vec gp, gm;
-        const double fd = (term.Evaluate(xp, &gp, nullptr) - term.Evaluate(xm, &gm, nullptr)) / (2 * eps);
+        const double fd =
+            (term.Evaluate(xp, &gp, nullptr) - term.Evaluate(xm, &gm, nullptr)) / (2 * eps);
         EXPECT_NEAR(g[k], fd, tol * (1.0 + std::abs(fd))) << "gradient " << k;
         const Vec hfd = (gp - gm) / (2 * eps);
         for (int r = 0; r < x.size(); ++r) {
-            EXPECT_NEAR(h(r, k), hfd[r], tol * (1.0 + std::abs(hfd[r]))) << "hessian " << r << "," << k;
+            EXPECT_NEAR(h(r, k), hfd[r], tol * (1.0 + std::abs(hfd[r])))
+                << "hessian " << r << "," << k;
         }
     }
 }
@@ -746,10 +750,10 @@ TEST(Linearisation, RobustSpeedAndScaleTerms) {
         ExpectLinearisationMatches<driftcorr::SpeedChangeTerm, driftcorr::SpeedVector,
                                    driftcorr::SpeedMatrix>(speed, xv, 1e-5);
         const Eigen::Vector2d x2(1.0 + 0.05 * u(rng), 1.0 + 0.05 * u(rng));
-        ExpectLinearisationMatches<driftcorr::RandomWalkTerm, Eigen::Vector2d,
-                                   Eigen::Matrix2d>(walk, x2, 1e-5);
-        ExpectLinearisationMatches<driftcorr::RandomWalkTerm, Eigen::Vector2d,
-                                   Eigen::Matrix2d>(robust_walk, x2, 1e-5);
+        ExpectLinearisationMatches<driftcorr::RandomWalkTerm, Eigen::Vector2d, Eigen::Matrix2d>(
+            walk, x2, 1e-5);
+        ExpectLinearisationMatches<driftcorr::RandomWalkTerm, Eigen::Vector2d, Eigen::Matrix2d>(
+            robust_walk, x2, 1e-5);
     }
     // At r = 0 the Cauchy weight is the Gaussian's: information * J J^T is the exact Hessian.
     driftcorr::StepVector at = driftcorr::StepVector::Zero();

@@ -63,7 +63,8 @@ protected:
         WriteFields(dir / "estimate.tum", est);
         if (edit_yaml) {
             std::ifstream in(dir / "scenario.yaml");
-            std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+            std::string text((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
             edit_yaml(text);
             std::ofstream(dir / "scenario.yaml") << text;
         }
@@ -87,7 +88,8 @@ TEST_F(Degenerate, AllPosesEqual) {
     EXPECT_TRUE(HasWarning(run.result, "does not move"));
     // Pose 0 (fixed) is the ground truth 1.5 m right of the centre line; the map may pull the
     // stationary poses towards the centre line, but no farther than that lane offset.
-    for (const auto& p : run.result.corrected.p_en) EXPECT_LT((p - run.estimate.p_en[0]).norm(), 2.0);
+    for (const auto& p : run.result.corrected.p_en)
+        EXPECT_LT((p - run.estimate.p_en[0]).norm(), 2.0);
 }
 
 TEST_F(Degenerate, StraightLineThatDisagreesWithTheMap) {
@@ -108,7 +110,8 @@ TEST_F(Degenerate, StraightLineThatDisagreesWithTheMap) {
 // odometry alone, with a warning. The generator's map spans lat 48.9755..48.9845.
 TEST_F(Degenerate, MapCoversNoneOfTheDrive) {
     try {
-        Run("far_map", [](Lines&) {},
+        Run(
+            "far_map", [](Lines&) {},
             [](std::string& yaml) {
                 const std::size_t at = yaml.find("lat_deg: 48.98");
                 ASSERT_NE(at, std::string::npos);
@@ -116,8 +119,7 @@ TEST_F(Degenerate, MapCoversNoneOfTheDrive) {
             });
         FAIL() << "expected InputError";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("from the nearest road of the map"),
-                  std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("from the nearest road of the map"), std::string::npos)
             << e.what();
     }
     const pipeline::CorrectionRun run = Run(

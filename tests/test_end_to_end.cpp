@@ -64,11 +64,12 @@ TEST_P(SyntheticRoad, DriftIsRemoved) {
 
 INSTANTIATE_TEST_SUITE_P(
     Seeds, SyntheticRoad,
-    ::testing::Values(SyntheticCase{"default_seed42", ""},
-                      SyntheticCase{"short_steps_seed7",
-                                    "--seed 7 --scale-error 0.93 --heading-bias-deg-per-sqrt-s 0.003"},
-                      SyntheticCase{"long_steps_seed11",
-                                    "--seed 11 --scale-error 1.05 --heading-bias-deg-per-sqrt-s 0.003"}),
+    ::testing::Values(
+        SyntheticCase{"default_seed42", ""},
+        SyntheticCase{"short_steps_seed7",
+                      "--seed 7 --scale-error 0.93 --heading-bias-deg-per-sqrt-s 0.003"},
+        SyntheticCase{"long_steps_seed11",
+                      "--seed 11 --scale-error 1.05 --heading-bias-deg-per-sqrt-s 0.003"}),
     [](const auto& p) { return std::string(p.param.name); });
 
 // The corrected trajectory written in the estimate's own frame maps back onto the solver's
@@ -93,9 +94,9 @@ TEST(EndToEnd, OutputFrameRoundTrip) {
 
 struct KittiCase {
     const char* folder;
-    double max_ate_m;            ///< acceptance: corrected ATE at most this
-    double final_ratio;          ///< acceptance: corrected final <= ratio * estimate final (0: none)
-    bool no_worse_than_estimate; ///< acceptance: ATE no worse than the estimate's
+    double max_ate_m;    ///< acceptance: corrected ATE at most this
+    double final_ratio;  ///< acceptance: corrected final <= ratio * estimate final (0: none)
+    bool no_worse_than_estimate;  ///< acceptance: ATE no worse than the estimate's
 };
 
 void PrintTo(const KittiCase& c, std::ostream* os) { *os << c.folder; }
@@ -225,10 +226,9 @@ TEST(DoNoHarm, AnInputThatExplainsTheDataBetterIsKeptAndDegraded) {
     ASSERT_EQ(run.result.covariance.status, CovarianceStatus::kOk);
     ASSERT_EQ(run.result.covariance.poses.size(), run.result.corrected.size());
     EXPECT_EQ(run.verdict.level, VerdictLevel::kDegraded);
-    EXPECT_TRUE(std::any_of(run.verdict.reasons.begin(), run.verdict.reasons.end(),
-                            [](const std::string& r) {
-                                return r.find("worse than the input") != std::string::npos;
-                            }));
+    EXPECT_TRUE(std::any_of(
+        run.verdict.reasons.begin(), run.verdict.reasons.end(),
+        [](const std::string& r) { return r.find("worse than the input") != std::string::npos; }));
 
     pipeline::PipelineConfig off;
     off.corrector.keep_agreeing_input = false;
@@ -318,8 +318,8 @@ TEST(DecidedFreedoms, TheScaleWalkIsKeptOnlyWhereTheScaleChanges) {
     const pipeline::CorrectionRun a = pipeline::RunCorrection(steady, decide);
     ASSERT_TRUE(a.result.scale_walk.has_value() && a.after);
     EXPECT_EQ(a.result.scale_walk->kept, ScaleWalkDecision::Kept::kOneScale)
-        << a.result.scale_walk->nll_one_scale << " vs " << a.result.scale_walk->nll_refined
-        << " + " << a.result.scale_walk->price_refined;
+        << a.result.scale_walk->nll_one_scale << " vs " << a.result.scale_walk->nll_refined << " + "
+        << a.result.scale_walk->price_refined;
     const pipeline::CorrectionRun a_walk = pipeline::RunCorrection(steady, walk);
     ASSERT_TRUE(a_walk.after);
     EXPECT_LE(a.after->ate_m, 1.05 * a_walk.after->ate_m + 0.1);
@@ -329,8 +329,8 @@ TEST(DecidedFreedoms, TheScaleWalkIsKeptOnlyWhereTheScaleChanges) {
     const pipeline::CorrectionRun b = pipeline::RunCorrection(changing, decide);
     ASSERT_TRUE(b.result.scale_walk.has_value() && b.after);
     EXPECT_NE(b.result.scale_walk->kept, ScaleWalkDecision::Kept::kOneScale)
-        << b.result.scale_walk->nll_one_scale << " vs " << b.result.scale_walk->nll_refined
-        << " + " << b.result.scale_walk->price_refined;
+        << b.result.scale_walk->nll_one_scale << " vs " << b.result.scale_walk->nll_refined << " + "
+        << b.result.scale_walk->price_refined;
     const pipeline::CorrectionRun b_one = pipeline::RunCorrection(changing, one);
     ASSERT_TRUE(b_one.after);
     EXPECT_LE(b.after->ate_m, 1.05 * b_one.after->ate_m + 0.1);
@@ -351,7 +351,8 @@ TEST(DoNoHarm, AccurateLidarOdometryComesBackAsItWas) {
 // on MUMPS's fill-reducing ordering. With METIS (MUMPS's automatic choice) the two runs below
 // differed in all 2760 poses, three tries out of three.
 TEST(Reproducible, TheSameDriveTwiceGivesTheSameBits) {
-    const std::string dir = std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti05_cvo_stereo_geometric";
+    const std::string dir =
+        std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti05_cvo_stereo_geometric";
     if (!fs::exists(dir + "/scenario.yaml")) {
         GTEST_SKIP() << "real data not present: " << dir;
     }
@@ -409,8 +410,8 @@ std::vector<std::vector<double>> ReadNumbers(const std::string& path) {
 TEST(HcuWalkGenerator, DeterministicAndEveryWalkChangesFloor) {
     const std::string src = std::string(DRIFTCORR_SHARED_DATASETS) + "/hcu_eight";
     if (!fs::exists(src + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << src;
-    const std::string script =
-        "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) + "/datasets/ipin21/make_hcu_walks.py ";
+    const std::string script = "/usr/bin/python3 " + std::string(DRIFTCORR_SOURCE_DIR) +
+                               "/datasets/ipin21/make_hcu_walks.py ";
     const std::string a = TmpDir("hcu_gen_a"), b = TmpDir("hcu_gen_b");
     ASSERT_EQ(std::system((script + src + " " + a + " --seeds 1-4 > /dev/null").c_str()), 0);
     ASSERT_EQ(std::system((script + src + " " + b + " --seeds 1-4 > /dev/null").c_str()), 0);
@@ -500,9 +501,11 @@ TEST(EndToEndIndoor, LiftRideMisreadByTheBarometerEndsOnTheRightFloor) {
     without.indoor_corrector.restart_height_gains.clear();
     const pipeline::CorrectionRun b = pipeline::RunCorrection(walk, without);
     ASSERT_TRUE(a.after && b.after);
-    std::printf("with the floor hypotheses: right floor %.1f %%, ATE %.2f m; without: %.1f %%, "
-                "%.2f m\n", 100.0 * a.after->floor_accuracy, a.after->ate_m,
-                100.0 * b.after->floor_accuracy, b.after->ate_m);
+    std::printf(
+        "with the floor hypotheses: right floor %.1f %%, ATE %.2f m; without: %.1f %%, "
+        "%.2f m\n",
+        100.0 * a.after->floor_accuracy, a.after->ate_m, 100.0 * b.after->floor_accuracy,
+        b.after->ate_m);
     EXPECT_LT(b.after->floor_accuracy, 0.9) << "the walk must mislead the nearest-floor choice";
     EXPECT_GE(a.after->floor_accuracy, 0.99);
     EXPECT_LT(a.after->ate_m, b.after->ate_m);
@@ -801,7 +804,8 @@ namespace {
 TEST(EndToEndIndoor, SyntheticBuildingSameResultFromPcdPlyOctomap) {
     const std::string dir = TmpDir("building");
     const std::string cmd = std::string(DRIFTCORR_BINARY_DIR) +
-                            "/datasets/driftcorr_make_building_scenario " + dir + " > /dev/null 2>&1";
+                            "/datasets/driftcorr_make_building_scenario " + dir +
+                            " > /dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     std::vector<double> ates;
     for (const char* yaml :
@@ -810,7 +814,8 @@ TEST(EndToEndIndoor, SyntheticBuildingSameResultFromPcdPlyOctomap) {
             pipeline::RunCorrection(dir + "/" + yaml, pipeline::PipelineConfig{});
         ASSERT_TRUE(Usable(run.result.status)) << yaml << ": " << run.result.message;
         ASSERT_TRUE(run.before && run.after);
-        EXPECT_GE(run.before->max_m, 5.0) << yaml << ": the walk must drift for the test to mean anything";
+        EXPECT_GE(run.before->max_m, 5.0)
+            << yaml << ": the walk must drift for the test to mean anything";
         EXPECT_LE(run.after->ate_m, 0.5) << yaml;
         EXPECT_EQ(run.after->floor_accuracy, 1.0) << yaml;
         ates.push_back(run.after->ate_m);

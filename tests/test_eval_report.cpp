@@ -47,9 +47,9 @@ protected:
         fs::remove(root_ / "broken" / "estimate.tum");
 
         std::vector<EvalProgress> progress;
-        evals_ = EvaluateScenarios({(root_ / "synth").string(), (root_ / "broken").string(),
-                                    (root_ / "no_gt").string()},
-                                   EvalConfig{}, [&](const EvalProgress& p) { progress.push_back(p); });
+        evals_ = EvaluateScenarios(
+            {(root_ / "synth").string(), (root_ / "broken").string(), (root_ / "no_gt").string()},
+            EvalConfig{}, [&](const EvalProgress& p) { progress.push_back(p); });
         progress_count_ = progress.size();
         report_ = root_ / "report";
         written_ = WriteReport(report_.string(), evals_);
@@ -77,8 +77,10 @@ TEST_F(EvalReport, EveryScenarioIsEvaluatedOrReportedAsFailed) {
         ASSERT_TRUE(m.mean_map_distance_m.has_value());
     }
     // driftcorr corrects the 60 s drive (tolerance: better than the estimate's ATE).
-    EXPECT_LT(good.Find(Method::kDriftcorr)->metrics->ate_m, good.Find(Method::kEstimate)->metrics->ate_m);
-    EXPECT_LT(good.Find(Method::kOnline)->metrics->ate_m, good.Find(Method::kEstimate)->metrics->ate_m);
+    EXPECT_LT(good.Find(Method::kDriftcorr)->metrics->ate_m,
+              good.Find(Method::kEstimate)->metrics->ate_m);
+    EXPECT_LT(good.Find(Method::kOnline)->metrics->ate_m,
+              good.Find(Method::kEstimate)->metrics->ate_m);
 
     const ScenarioEvaluation& broken = evals_[1];
     EXPECT_FALSE(broken.ok());
@@ -111,11 +113,11 @@ TEST_F(EvalReport, SummaryHasARowPerScenarioWithTheFailureAndTheMissingGroundTru
 
 TEST_F(EvalReport, ResultsJsonHasTheExpectedKeysAndBalancedBrackets) {
     const std::string json = ReadFile(report_ / "results.json");
-    for (const char* key : {"\"scenarios\"", "\"label\": \"synth\"", "\"status\": \"failed\"",
-                            "\"has_ground_truth\": false", "\"estimate\"", "\"paper\"",
-                            "\"driftcorr\"", "\"ate_m\"", "\"final_m\"", "\"p90_m\"", "\"drift_pct\"",
-                            "\"wall_s\"", "\"poses_per_s\"", "\"speed_ratio_paper_over_driftcorr\"",
-                            "\"any_failed\": true"}) {
+    for (const char* key :
+         {"\"scenarios\"", "\"label\": \"synth\"", "\"status\": \"failed\"",
+          "\"has_ground_truth\": false", "\"estimate\"", "\"paper\"", "\"driftcorr\"", "\"ate_m\"",
+          "\"final_m\"", "\"p90_m\"", "\"drift_pct\"", "\"wall_s\"", "\"poses_per_s\"",
+          "\"speed_ratio_paper_over_driftcorr\"", "\"any_failed\": true"}) {
         EXPECT_NE(json.find(key), std::string::npos) << key;
     }
     // JSON-ish: balanced braces and brackets outside strings, no NaN/inf literals.
@@ -124,8 +126,10 @@ TEST_F(EvalReport, ResultsJsonHasTheExpectedKeysAndBalancedBrackets) {
     for (std::size_t i = 0; i < json.size(); ++i) {
         const char c = json[i];
         if (in_string) {
-            if (c == '\\') ++i;
-            else if (c == '"') in_string = false;
+            if (c == '\\')
+                ++i;
+            else if (c == '"')
+                in_string = false;
             continue;
         }
         if (c == '"') in_string = true;

@@ -478,8 +478,8 @@ TEST_F(IndoorLoaderTest, GroupsByFloorAndReprojects) {
     // where, not a map whose inside is whatever the rasteriser makes of it.
     std::ostringstream bow;
     bow.precision(12);
-    bow << "[[" << e0 << "," << n0 << "],[" << e0 + 10 << "," << n0 + 10 << "],[" << e0 + 10
-        << "," << n0 << "],[" << e0 << "," << n0 + 10 << "],[" << e0 << "," << n0 << "]]";
+    bow << "[[" << e0 << "," << n0 << "],[" << e0 + 10 << "," << n0 + 10 << "],[" << e0 + 10 << ","
+        << n0 << "],[" << e0 << "," << n0 + 10 << "],[" << e0 << "," << n0 << "]]";
     const std::string crossed =
         Write("crossed.geojson",
               Collection(kCrs32632, PolygonFeature("\"Room\"", sq(20, 0, 30, 10)) + ",\n" +

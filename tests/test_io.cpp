@@ -435,9 +435,8 @@ std::string Replace(std::string text, const std::string& from, const std::string
 TEST(Scenario, YawAutoAndPositionSearch) {
     const fs::path dir = TestDir() / "auto_scenario";
     fs::create_directories(dir);
-    WriteText(dir / "scenario.yaml",
-              Replace(kGoodScenario, "  yaw_deg: -30.5\n",
-                      "  yaw_deg: AUTO\n  position_search_m: 25\n"));
+    WriteText(dir / "scenario.yaml", Replace(kGoodScenario, "  yaw_deg: -30.5\n",
+                                             "  yaw_deg: AUTO\n  position_search_m: 25\n"));
     const Scenario s = LoadScenario(dir.string());
     EXPECT_FALSE(s.anchor.yaw_deg.has_value());
     EXPECT_EQ(s.anchor.position_search_m, 25.0);
@@ -829,8 +828,10 @@ TEST(ScenarioWarnings, UnknownKeysAreReportedWithLine) {
                                             "colour: blue\n";
     const driftcorr::io::Scenario s = driftcorr::io::LoadScenario(dir.string());
     ASSERT_EQ(s.warnings.size(), 3u);
-    EXPECT_NE(s.warnings[0].find("scenario.yaml:11: colour: unknown key"), std::string::npos) << s.warnings[0];
-    EXPECT_NE(s.warnings[1].find("scenario.yaml:7: anchor.alt_n: unknown key"), std::string::npos) << s.warnings[1];
+    EXPECT_NE(s.warnings[0].find("scenario.yaml:11: colour: unknown key"), std::string::npos)
+        << s.warnings[0];
+    EXPECT_NE(s.warnings[1].find("scenario.yaml:7: anchor.alt_n: unknown key"), std::string::npos)
+        << s.warnings[1];
     EXPECT_NE(s.warnings[2].find("map[0].widht: unknown key"), std::string::npos) << s.warnings[2];
     fs::remove_all(dir);
 }
@@ -845,7 +846,8 @@ namespace {
 
 TEST(TrajectoryFormats, TumWithPositionsOnlyHasNoOrientation) {
     const fs::path dir = TestDir();
-    const std::string path = WriteText(dir / "p.tum", "# t x y z\n0 0 0 0\n0.1 1 0 0\n0.2 2 0.5 0\n");
+    const std::string path =
+        WriteText(dir / "p.tum", "# t x y z\n0 0 0 0\n0.1 1 0 0\n0.2 2 0.5 0\n");
     const Trajectory traj = ReadTum(path);
     ASSERT_EQ(traj.size(), 3u);
     EXPECT_FALSE(traj.HasOrientation());
@@ -861,7 +863,8 @@ TEST(TrajectoryFormats, EurocStateGroundtruthLayout) {
     const std::string path = WriteText(
         dir / "data.csv",
         "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], "
-        "q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1]\n"
+        "q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad "
+        "s^-1]\n"
         "1403636579763555584,4.688319,-1.786938,0.783338,0.534108,-0.153029,-0.827383,-0.082152,"
         "-0.027876,0.033207,0.800006,-0.003172\n"
         "1403636579768555520,4.688177,-1.786770,0.787350,0.534640,-0.152990,-0.826976,-0.082863,"
@@ -884,23 +887,25 @@ TEST(TrajectoryFormats, EurocStateGroundtruthLayout) {
 
 TEST(TrajectoryFormats, EurocPositionsOnlyAndPlainCsv) {
     const fs::path dir = TestDir();
-    const std::string leica = WriteText(
-        dir / "leica.csv", "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m]\n"
-                           "1000000000,0,0,0\n1100000000,1,0,0\n1200000000,2,0,0\n");
+    const std::string leica = WriteText(dir / "leica.csv",
+                                        "#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m]\n"
+                                        "1000000000,0,0,0\n1100000000,1,0,0\n1200000000,2,0,0\n");
     const Trajectory l = ReadCsv(leica, false);
     EXPECT_FALSE(l.HasOrientation());
     EXPECT_DOUBLE_EQ(l.t_s[2], 1.2);
     // Plain CSV: any column order, units in brackets, extra columns ignored.
-    const std::string plain = WriteText(
-        dir / "plain.csv", "x [m], y [m], z [m], speed, t [s], qx, qy, qz, qw\n"
-                           "0,0,0,1,0.0,0,0,0,2\n1,0,0,1,0.5,0,0,0,1\n2,1,0,1,1.0,0,0,1,1\n");
+    const std::string plain =
+        WriteText(dir / "plain.csv",
+                  "x [m], y [m], z [m], speed, t [s], qx, qy, qz, qw\n"
+                  "0,0,0,1,0.0,0,0,0,2\n1,0,0,1,0.5,0,0,0,1\n2,1,0,1,1.0,0,0,1,1\n");
     EXPECT_EQ(DetectTrajectoryFormat(plain), TrajectoryFormat::kCsv);
     const Trajectory p = ReadCsv(plain, false);
     ASSERT_EQ(p.size(), 3u);
     EXPECT_DOUBLE_EQ(p.t_s[1], 0.5);
     EXPECT_EQ(p.p_frame[2], Eigen::Vector3d(2, 1, 0));
     EXPECT_NEAR(p.q_frame_body[0].w(), 1.0, 1e-12);  // normalised
-    const std::string ns = WriteText(dir / "ns.csv", "timestamp_ns,tx,ty,tz\n5,0,0,0\n10,1,0,0\n15,2,0,0\n");
+    const std::string ns =
+        WriteText(dir / "ns.csv", "timestamp_ns,tx,ty,tz\n5,0,0,0\n10,1,0,0\n15,2,0,0\n");
     EXPECT_DOUBLE_EQ(ReadCsv(ns, false).t_s[2], 15e-9);
 }
 

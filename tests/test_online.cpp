@@ -121,8 +121,8 @@ TEST_F(OnlineSynthetic, IntermediateSolvesMoveOnlyTheCausalOutput) {
     }
     const double causal_with = ComputeMetrics(with.causal, *run_->ground_truth).ate_m;
     const double causal_without = ComputeMetrics(without.causal, *run_->ground_truth).ate_m;
-    std::printf("synthetic causal ATE: %.3f m with intermediate solves, %.3f m without\n", causal_with,
-                causal_without);
+    std::printf("synthetic causal ATE: %.3f m with intermediate solves, %.3f m without\n",
+                causal_with, causal_without);
     double moved = 0.0;
     for (std::size_t i = 0; i < with.causal.size(); ++i) {
         moved = std::max(moved, (with.causal.p_en[i] - without.causal.p_en[i]).norm());
@@ -200,8 +200,9 @@ TEST_F(OnlineSynthetic, InputAtRealTimePaceIsNeverHeldBack) {
     EXPECT_GT(st.requests, 0u);
 }
 
-// Without back-pressure (max_lag_epochs 0) a burst outruns the solver: the worker skips to the newest pose instead
-// of solving every request in turn, and the outputs say how old their correction is.
+// Without back-pressure (max_lag_epochs 0) a burst outruns the solver: the worker skips to the
+// newest pose instead of solving every request in turn, and the outputs say how old their
+// correction is.
 TEST_F(OnlineSynthetic, BurstSkipsAheadAndReportsTheAge) {
     const PlanarTrajectory& est = run_->estimate;
     OnlineConfig cfg;

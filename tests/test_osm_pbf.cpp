@@ -3,15 +3,14 @@
 // input naming the file. PBF files are written here with libosmium's own writer.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <osmium/builder/attr.hpp>
 #include <osmium/builder/osm_object_builder.hpp>
 #include <osmium/io/pbf_input.hpp>
 #include <osmium/io/pbf_output.hpp>
 #include <osmium/io/xml_input.hpp>
-
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 
 #include "driftcorr/core/errors.h"
@@ -86,8 +85,7 @@ std::string WriteExtractPbf(const std::string& name) {
                              _tag("area", "yes"));
     osmium::builder::add_way(buffer, _id(12), _version(1), _nodes({2, 99}),
                              _tag("highway", "service"));
-    osmium::builder::add_way(buffer, _id(13), _version(1), _nodes({1, 2}),
-                             _tag("building", "yes"));
+    osmium::builder::add_way(buffer, _id(13), _version(1), _nodes({1, 2}), _tag("building", "yes"));
     const std::string path = (TempDir() / name).string();
     osmium::io::Writer writer{path, osmium::io::Header{}, osmium::io::overwrite::allow};
     writer(std::move(buffer));

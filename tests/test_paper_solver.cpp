@@ -19,8 +19,8 @@ TraversableField StraightRoadField(double half_width_m) {
     cfg.resolution_m = 0.25;
     cfg.margin_m = 30.0;
     cfg.truncation_m = 20.0;
-    return RasteriseRoads(net, Eigen::AlignedBox2d(Eigen::Vector2d(0, -10), Eigen::Vector2d(300, 10)),
-                          cfg);
+    return RasteriseRoads(
+        net, Eigen::AlignedBox2d(Eigen::Vector2d(0, -10), Eigen::Vector2d(300, 10)), cfg);
 }
 
 double MeanMapDistance(const PlanarTrajectory& t, const TraversableField& field) {
@@ -104,7 +104,8 @@ TEST(PaperSolver, ReducesMapDistanceOnADriftedStraightDrive) {
     EXPECT_LT(after, 0.75 * before) << "before " << before << " m, after " << after << " m";
     // Deterministic: the same input gives the same bytes.
     const CorrectionResult again = CorrectWithPaperMethod(est, &field, cfg);
-    for (std::size_t i = 0; i < est.size(); ++i) ASSERT_EQ(again.corrected.p_en[i], r.corrected.p_en[i]);
+    for (std::size_t i = 0; i < est.size(); ++i)
+        ASSERT_EQ(again.corrected.p_en[i], r.corrected.p_en[i]);
 }
 
 TEST(PaperSolver, WithoutMapReproducesTheEstimate) {

@@ -113,10 +113,9 @@ TEST(RoadCorridor, HeldTilesEqualTheWholeFieldAndTheRestMisses) {
     int inside = 0, missed = 0;
     for (int k = 0; k < 4000; ++k) {
         const Eigen::Vector3d p(ux(rng), uy(rng), 0.0);
-        const double to_l = std::min(std::abs(p.y()) + std::max(0.0, p.x() - 200.0) +
-                                         std::max(0.0, -p.x()),
-                                     std::abs(p.x()) + std::max(0.0, p.y() - 160.0) +
-                                         std::max(0.0, -p.y()));
+        const double to_l =
+            std::min(std::abs(p.y()) + std::max(0.0, p.x() - 200.0) + std::max(0.0, -p.x()),
+                     std::abs(p.x()) + std::max(0.0, p.y() - 160.0) + std::max(0.0, -p.y()));
         const auto q = corridor.Query(p);
         if (to_l <= 10.0) {  // well within a disc (taxicab >= Euclidean distance): a held tile
             ++inside;

@@ -193,7 +193,8 @@ TEST_F(StressVariantsTest, YawOffsetKeepsTheGroundTruthInItsPlaceInTheWorld) {
         const std::string name = "yaw_off_" + std::to_string(static_cast<int>(offset_deg));
         SCOPED_TRACE(name);
         const Loaded v = Load(Variant(name));
-        EXPECT_NEAR(v.scenario.anchor.yaw_deg.value(), input.scenario.anchor.yaw_deg.value() + offset_deg, 1e-9);
+        EXPECT_NEAR(v.scenario.anchor.yaw_deg.value(),
+                    input.scenario.anchor.yaw_deg.value() + offset_deg, 1e-9);
         EXPECT_EQ(*v.scenario.anchor.lat_deg, *input.scenario.anchor.lat_deg);
         EXPECT_EQ(*v.scenario.anchor.lon_deg, *input.scenario.anchor.lon_deg);
         EXPECT_TRUE(ReadBytes(kInput / "estimate.txt") ==

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -86,7 +86,8 @@ template <typename Read>
 void ExpectEachInputError(const fs::path& dir, const std::string& ext, const BadFiles& cases,
                           Read read) {
     for (std::size_t i = 0; i < cases.size(); ++i) {
-        const std::string path = WriteText(dir / ("case" + std::to_string(i) + ext), cases[i].first);
+        const std::string path =
+            WriteText(dir / ("case" + std::to_string(i) + ext), cases[i].first);
         ExpectInputError([&] { read(path); }, path, cases[i].second);
     }
 }
@@ -152,10 +153,13 @@ TEST(SurfaceReaders, UnreadableFilesAreInputErrors) {
 // VIEWPOINT are refused before PCL reads them.
 TEST(SurfaceReaders, PcdHeaderIsCheckedBeforePclSeesIt) {
     const fs::path dir = TestDir("pcd_header");
-    auto pcd = [&](const std::string& name, const std::string& fields, const std::string& viewpoint) {
-        return WriteText(dir / name, "VERSION 0.7\nFIELDS " + fields +
-                                         "\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
-                                         "VIEWPOINT " + viewpoint + "\nPOINTS 1\nDATA ascii\n1 2 3\n");
+    auto pcd = [&](const std::string& name, const std::string& fields,
+                   const std::string& viewpoint) {
+        return WriteText(dir / name,
+                         "VERSION 0.7\nFIELDS " + fields +
+                             "\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+                             "VIEWPOINT " +
+                             viewpoint + "\nPOINTS 1\nDATA ascii\n1 2 3\n");
     };
     EXPECT_EQ(ReadSurfacePointsPcd(pcd("ok.pcd", "x y z", "0 0 0 1 0 0 0")).size(), 1u);
     const std::string vtab = pcd("vtab.pcd", "x\vy z w", "0 0 0 1 0 0 0");
@@ -179,12 +183,15 @@ TEST(SurfaceReaders, PcdHeaderIsCheckedBeforePclSeesIt) {
 TEST(SurfaceReaders, PcdAsciiBodyIsCheckedBeforePclSeesIt) {
     const fs::path dir = TestDir("pcd_body");
     auto pcd = [&](const std::string& name, const std::string& body) {
-        return WriteText(dir / name, "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
-                                     "COUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n" + body);
+        return WriteText(dir / name,
+                         "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                         "COUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n" +
+                             body);
     };
     EXPECT_EQ(ReadSurfacePointsPcd(pcd("ok.pcd", "1 2 3\n\n4 5 6\n")).size(), 2u);
     const std::string few = pcd("few.pcd", "1 2 3\n");
-    ExpectInputError([&] { ReadSurfacePointsPcd(few); }, few, "1 point lines, the header declares 2");
+    ExpectInputError([&] { ReadSurfacePointsPcd(few); }, few,
+                     "1 point lines, the header declares 2");
     const std::string many = pcd("many.pcd", "1 2 3\n4 5 6\n7 8 9\n");
     ExpectInputError([&] { ReadSurfacePointsPcd(many); }, many, "more point lines than POINTS");
     const std::string short_line = pcd("short.pcd", "1 2 3\n4 5\n");
@@ -200,8 +207,9 @@ TEST(SurfaceReaders, PcdAsciiBodyIsCheckedBeforePclSeesIt) {
 TEST(SurfaceReaders, PcdCompressedSizesMustMatchTheHeader) {
     const fs::path dir = TestDir("pcd_lzf");
     auto pcd = [&](const std::string& name, std::uint32_t compressed, std::uint32_t uncompressed) {
-        std::string bytes = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-                            "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary_compressed\n";
+        std::string bytes =
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA binary_compressed\n";
         bytes.append(reinterpret_cast<const char*>(&compressed), 4);
         bytes.append(reinterpret_cast<const char*>(&uncompressed), 4);
         bytes += std::string(32, '\0');
@@ -264,11 +272,12 @@ TEST(SurfaceReaders, PlyInTheFormsWritersUseLoads) {
     const fs::path dir = TestDir("ply_forms");
     const Points want = {{1.5, -2.25, 3.0}, {4.0, 5.0, -6.5}};
     // ASCII with colours + alpha, an empty face element and PCL's camera (viewport 2 x 1).
-    const std::string rgba = "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-                             "property uchar alpha\n";
-    const std::string a = WriteText(
-        dir / "a.ply", PlyHeader("ascii", 2, kXyzFloat + rgba, kPclCamera) +
-                           "1.5 -2.25 3 255 0 0 255\n4 5 -6.5 0 255 0 128 \n0 0 0 2 1\n");
+    const std::string rgba =
+        "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        "property uchar alpha\n";
+    const std::string a =
+        WriteText(dir / "a.ply", PlyHeader("ascii", 2, kXyzFloat + rgba, kPclCamera) +
+                                     "1.5 -2.25 3 255 0 0 255\n4 5 -6.5 0 255 0 128 \n0 0 0 2 1\n");
     EXPECT_EQ(ReadSurfacePointsPly(a), want);
     // Double coordinates, both byte orders, with a face list after the vertices.
     for (const bool big : {false, true}) {
@@ -281,10 +290,10 @@ TEST(SurfaceReaders, PlyInTheFormsWritersUseLoads) {
         for (int k = 0; k < 3; ++k) AppendBinary<std::int32_t>(body, k % 2, big);
         const std::string name = big ? "be.ply" : "le.ply";
         const std::string path = WriteText(
-            dir / name,
-            PlyHeader(big ? "binary_big_endian" : "binary_little_endian", 2,
-                      std::string(kXyzDouble) + "property float intensity\n",
-                      "element face 1\nproperty list uchar int vertex_indices\n") + body);
+            dir / name, PlyHeader(big ? "binary_big_endian" : "binary_little_endian", 2,
+                                  std::string(kXyzDouble) + "property float intensity\n",
+                                  "element face 1\nproperty list uchar int vertex_indices\n") +
+                            body);
         EXPECT_EQ(ReadSurfacePointsPly(path), want) << name;
     }
 }
@@ -308,18 +317,26 @@ TEST(SurfaceReaders, PlyHeaderIsCheckedBeforePclSeesIt) {
     const BadFiles cases = {
         // found by fuzzing: the keyword after a blank reaches an assert in objInfoCallback
         {"ply\nformat ascii 1.0\n obj_info x\nelement vertex 2\n" + std::string(kXyzFloat) +
-             "end_header\n" + body, "single blanks"},
-        {PlyHeader("ascii", 2, kXyzFloat + std::string("property uchar blue\n")) + "0 0 0 1\n1 0 0 1\n",
+             "end_header\n" + body,
+         "single blanks"},
+        {PlyHeader("ascii", 2, kXyzFloat + std::string("property uchar blue\n")) +
+             "0 0 0 1\n1 0 0 1\n",
          "colour"},
-        {PlyHeader("ascii", 2, kXyzFloat + std::string("property uchar alpha\n")) + "0 0 0 1\n1 0 0 1\n",
+        {PlyHeader("ascii", 2, kXyzFloat + std::string("property uchar alpha\n")) +
+             "0 0 0 1\n1 0 0 1\n",
          "colour"},
-        {PlyHeader("ascii", 2, "property uchar green\n" + rgb + kXyzFloat) + body, "declared twice"},
+        {PlyHeader("ascii", 2, "property uchar green\n" + rgb + kXyzFloat) + body,
+         "declared twice"},
         {PlyHeader("ascii", 2, kXyzFloat + std::string("property list uchar float n\n")) +
-             "0 0 0 1 5\n1 0 0 1 5\n", "list property 'n' in the vertex"},
-        {PlyHeader("ascii", 2, kXyzFloat, "element range_grid 2\nproperty list uchar int vertex_indices\n") +
-             body + "1 0\n1 1\n", "range_grid"},
+             "0 0 0 1 5\n1 0 0 1 5\n",
+         "list property 'n' in the vertex"},
+        {PlyHeader("ascii", 2, kXyzFloat,
+                   "element range_grid 2\nproperty list uchar int vertex_indices\n") +
+             body + "1 0\n1 1\n",
+         "range_grid"},
         {"ply\nformat ascii 1.0\nobj_info num_cols 2\nobj_info num_rows 5\nelement vertex 2\n" +
-             std::string(kXyzFloat) + "end_header\n" + body, "num_cols"},
+             std::string(kXyzFloat) + "end_header\n" + body,
+         "num_cols"},
         {"ply\r\nformat ascii 1.0\r\n", "CR"},
         {PlyHeader("ascii", 2, "property float3 x\n"), "unknown property type 'float3'"},
         {PlyHeader("ascii", 2, kXyzFloat, "element vertex 1\n"), "declared twice"},
@@ -357,10 +374,13 @@ TEST(SurfaceReaders, PlyBodyIsCheckedBeforePclSeesIt) {
         {le + le_points + "xy", "2 bytes after the last element"},
         {le_face + le_points + std::string("\x05\x00\x00\x00\x00", 5), "ends in element 'face'"},
         {PlyHeader("binary_little_endian", 2, kXyzFloat,
-                   "element face 1\nproperty list char int vertex_indices\n") + negative_count,
+                   "element face 1\nproperty list char int vertex_indices\n") +
+             negative_count,
          "negative count -3"},
-        {PlyHeader("ascii", 2, kXyzFloat, kPclCamera) + "0 0 0\n1 0 0\n0 0 0 5 3\n", "viewport 5 x 3"},
-        {"ply\nformat ascii 1.0\nelement vertex 1\n" + std::string(kXyzFloat) + "end_header", "right after"},
+        {PlyHeader("ascii", 2, kXyzFloat, kPclCamera) + "0 0 0\n1 0 0\n0 0 0 5 3\n",
+         "viewport 5 x 3"},
+        {"ply\nformat ascii 1.0\nelement vertex 1\n" + std::string(kXyzFloat) + "end_header",
+         "right after"},
     };
     ExpectEachInputError(dir, ".ply", cases, [](const std::string& f) { ReadSurfacePointsPly(f); });
 }
@@ -420,7 +440,8 @@ TEST(SurfaceReaders, OctomapFullTreeFileIsCheckedBeforeOctomapReadsIt) {
         {"# Octomap OcTree file\nid OcTree\nres 0.1\n", "'data' line"},
         {"# Octomap OcTree binary file\nid OcTree\nres 0.1\ndata\n", "first line"},
     };
-    ExpectEachInputError(dir, ".ot", cases, [](const std::string& f) { ReadFloorVoxelsOctomap(f); });
+    ExpectEachInputError(dir, ".ot", cases,
+                         [](const std::string& f) { ReadFloorVoxelsOctomap(f); });
 }
 
 // OctoMap's header reader skips from the "data" token to the next newline. With none after it (a
@@ -432,8 +453,10 @@ TEST(SurfaceReaders, OctomapBinaryDataWithoutNewlineAfterTheDataTokenIsAnInputEr
     for (int level = 0; level < 15; ++level) tree += std::string("\x03\x00", 2);
     tree += std::string("\x02\x00", 2);
     auto file = [&](const std::string& name, const std::string& size, const std::string& sep) {
-        return WriteText(dir / name, "# Octomap OcTree binary file\n# (comment)\n#\nid OcTree\n"
-                                     "size " + size + "\nres 0.1\ndata" + sep + tree);
+        return WriteText(dir / name,
+                         "# Octomap OcTree binary file\n# (comment)\n#\nid OcTree\n"
+                         "size " +
+                             size + "\nres 0.1\ndata" + sep + tree);
     };
     EXPECT_EQ(ReadFloorVoxelsOctomap(file("newline.bt", "17", "\n")).size(), 1u);
     const std::string tab = file("vtab.bt", "17", "\v");
@@ -481,7 +504,7 @@ TEST(SurfaceReaders, OctomapFloorVoxelsAreOccupiedWithFreeOrUnknownAbove) {
         std::string first_line;
         std::getline(std::ifstream(path), first_line);
         EXPECT_EQ(first_line, std::string(name) == "floor.bt" ? "# Octomap OcTree binary file"
-                                                               : "# Octomap OcTree file");
+                                                              : "# Octomap OcTree file");
         const Points floor = ReadSurfacePoints(path);
         ASSERT_EQ(floor.size(), 100u);
         const auto [low, high] = CountFloorLevels(floor, 0.3, 0.0, 0.1);
@@ -674,8 +697,8 @@ std::vector<Eigen::Vector3d> ReadTumPositions(const fs::path& path) {
 }
 
 const char* const kScenarioFiles[] = {
-    "building.pcd",     "building.ply", "building.bt",   "building.ot",
-    "ground_truth.tum", "estimate.tum", "scenario.yaml", "scenario_octomap.yaml",
+    "building.pcd",     "building.ply",     "building.bt",   "building.ot",
+    "ground_truth.tum", "estimate.tum",     "scenario.yaml", "scenario_octomap.yaml",
     "scenario_ot.yaml", "scenario_ply.yaml"};
 
 TEST(SynthBuilding, SameSeedSameBytes) {

@@ -157,7 +157,7 @@ struct WindowCase {
     std::size_t first, last;
     bool fix_height;
     unsigned seed;
-    bool all_terms = false;  ///< also the robust step length and the speed-continuity terms
+    bool all_terms = false;       ///< also the robust step length and the speed-continuity terms
     bool boundary_prior = false;  ///< pose first-1 a variable under a PosePriorTerm
     bool prior_scale = false;     ///< the prior joint with the scale of pose first-1's segment
 };
@@ -200,7 +200,7 @@ protected:
         if (GetParam().all_terms) {
             model_.step_robust_k = 3.0;
             model_.accel_sigma_mps2 = 2.0;
-            model_.heading_bias_segment_s = 1.0;  // several bias segments in 6 s
+            model_.heading_bias_segment_s = 1.0;                    // several bias segments in 6 s
             model_.scale_range_min = model_.scale_range_max = 1.0;  // every scale off the range
         } else {
             model_.heading_bias_segment_s = 0.0;  // the heading change without a bias
@@ -333,7 +333,8 @@ TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
     for (const auto& block : p.Blocks()) {
         ++seen[static_cast<int>(block->family())];
         const auto cost = [&](const std::vector<double>& xx) {
-            return block->Evaluate(p.Context(xx.data()), block->Gather(xx.data()), nullptr, nullptr);
+            return block->Evaluate(p.Context(xx.data()), block->Gather(xx.data()), nullptr,
+                                   nullptr);
         };
         BlockVector g;
         BlockMatrix h;
@@ -361,9 +362,9 @@ TEST_P(WindowDerivatives, EveryTermBlockMatchesCentralDifferences) {
             }
         }
     }
-    for (TermFamily f : {TermFamily::kStepLength, TermFamily::kStepDirection,
-                         TermFamily::kHeadingChange, TermFamily::kHeadingPreservation,
-                         TermFamily::kMapDistance, TermFamily::kScaleWalk}) {
+    for (TermFamily f :
+         {TermFamily::kStepLength, TermFamily::kStepDirection, TermFamily::kHeadingChange,
+          TermFamily::kHeadingPreservation, TermFamily::kMapDistance, TermFamily::kScaleWalk}) {
         EXPECT_GT(seen[static_cast<int>(f)], 0) << ToString(f) << ": no block in the window";
     }
     EXPECT_EQ(seen[static_cast<int>(TermFamily::kHeightChange)] > 0, !c.fix_height);
@@ -599,7 +600,9 @@ TEST(WindowProblem, WindowAfterTheStartUsesFixedEarlierPosesAndScales) {
     std::vector<double> x(p.NumVariables());
     p.InitialPoint(x.data());
     const double f0 = p.Objective(x.data());
-    auto objective = [&] { return WindowProblem(s, nullptr, model, 12, 25, free).Objective(x.data()); };
+    auto objective = [&] {
+        return WindowProblem(s, nullptr, model, 12, 25, free).Objective(x.data());
+    };
     s.poses[5].p.x() += 1.0;
     EXPECT_EQ(objective(), f0);
     s.poses[11].p.x() += 0.1;
@@ -661,8 +664,8 @@ TEST(WindowProblem, BoundaryPriorMakesPoseFirstMinusOneAVariable) {
     TrajectoryState s = StateFrom(Curve(), model, true);
     const PosePriorTerm prior = PriorOn(s, 11);
     WindowProblem fixed(s, nullptr, model, 12, 25, std::vector<std::uint8_t>(14, 0));
-    WindowProblem p(s, nullptr, model, 12, 25, std::vector<std::uint8_t>(14, 0),
-                    WindowUse::kSolve, prior);
+    WindowProblem p(s, nullptr, model, 12, 25, std::vector<std::uint8_t>(14, 0), WindowUse::kSolve,
+                    prior);
     EXPECT_EQ(p.NumVariables(), fixed.NumVariables() + 4);
     EXPECT_EQ(p.PoseVar(11, 0), 0);
     EXPECT_EQ(p.PoseVar(10, 3), -1);
@@ -685,10 +688,9 @@ TEST(WindowProblem, BoundaryPriorMakesPoseFirstMinusOneAVariable) {
     const Eigen::MatrixXd without = DenseGaussNewtonHessian(zero, x.data());
     EXPECT_LT(((with - without).topLeftCorner(4, 4) - prior.information).cwiseAbs().maxCoeff(),
               1e-9);
-    EXPECT_LT((with - without).bottomRightCorner(with.rows() - 4, with.cols() - 4)
-                  .cwiseAbs()
-                  .maxCoeff(),
-              1e-12);
+    EXPECT_LT(
+        (with - without).bottomRightCorner(with.rows() - 4, with.cols() - 4).cwiseAbs().maxCoeff(),
+        1e-12);
     // Store moves pose 11 as well.
     x[0] += 0.7;
     p.Store(x.data());
@@ -822,11 +824,11 @@ TEST(WindowProblem, StoreWritesTheSolutionBack) {
     WindowProblem p(s, nullptr, model, 3, 7, std::vector<std::uint8_t>(5, 0));
     std::vector<double> x(p.NumVariables());
     p.InitialPoint(x.data());
-    x[0] += 1.5;                     // pose 3 x
-    x[4 * 4 + 3] -= 0.2;             // pose 7 yaw
+    x[0] += 1.5;          // pose 3 x
+    x[4 * 4 + 3] -= 0.2;  // pose 7 yaw
     ASSERT_FALSE(s.bias_segment.empty());
     x[p.ScaleVar(s.scale_segment[7])] = 1.07;  // last scale of the window
-    x[p.BiasVar(s.bias_segment[7])] = 0.01;     // its heading-rate bias
+    x[p.BiasVar(s.bias_segment[7])] = 0.01;    // its heading-rate bias
     p.Store(x.data());
     EXPECT_EQ(s.poses[3].p.x(), x[0]);
     EXPECT_EQ(s.poses[7].yaw_rad, x[19]);

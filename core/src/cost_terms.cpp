@@ -347,8 +347,8 @@ double MapDistanceTerm::Evaluate(double d, const Eigen::Vector3d& grad_d,
     const double c2 = giveup_m * giveup_m;
     const double k = weight / (sigma_m * sigma_m);
     const double e = std::exp(-d * d / (2.0 * c2));
-    const double rho_d = k * d * e;                         // d rho / d d
-    const double rho_dd = k * e * (1.0 - d * d / c2);       // d2 rho / d d2
+    const double rho_d = k * d * e;                    // d rho / d d
+    const double rho_dd = k * e * (1.0 - d * d / c2);  // d2 rho / d d2
     if (grad) *grad = rho_d * grad_d;
     if (hess) *hess = rho_dd * grad_d * grad_d.transpose() + rho_d * hess_d;
     return k * c2 * (1.0 - e);

@@ -58,8 +58,9 @@ PlanarTrajectory ToPlanar(const Trajectory& traj, FrameAxes axes, const PlanarAn
         for (std::size_t i = 0; i < n; ++i) {
             const Eigen::Vector3d f = FrameToUvh(axes, traj.q_frame_body[i] * fwd_body);
             // A forward axis pointing straight up or down has no heading; keep the previous one.
-            const double yaw_frame = (f.head<2>().norm() > 1e-9) ? std::atan2(f.y(), f.x())
-                                     : (i > 0 ? out.yaw_rad[i - 1] - anchor.yaw_rad : 0.0);
+            const double yaw_frame = (f.head<2>().norm() > 1e-9)
+                                         ? std::atan2(f.y(), f.x())
+                                         : (i > 0 ? out.yaw_rad[i - 1] - anchor.yaw_rad : 0.0);
             out.yaw_rad[i] = yaw_frame + anchor.yaw_rad;
         }
     }

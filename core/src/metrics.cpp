@@ -23,7 +23,8 @@ double PathLength(const PlanarTrajectory& t) {
 
 std::vector<double> DistanceTravelled(const PlanarTrajectory& gt) {
     std::vector<double> s(gt.size(), 0.0);
-    for (std::size_t i = 1; i < s.size(); ++i) s[i] = s[i - 1] + (gt.p_en[i] - gt.p_en[i - 1]).norm();
+    for (std::size_t i = 1; i < s.size(); ++i)
+        s[i] = s[i - 1] + (gt.p_en[i] - gt.p_en[i - 1]).norm();
     return s;
 }
 
@@ -71,7 +72,8 @@ ErrorMetrics ComputeMetrics(const PlanarTrajectory& traj, const PlanarTrajectory
     m.mean_m = sum / e.size();
     m.final_m = e.back();
     std::vector<double> sorted = e;
-    const std::size_t k = std::min(sorted.size() - 1, std::size_t(std::ceil(0.9 * sorted.size())) - 1);
+    const std::size_t k =
+        std::min(sorted.size() - 1, std::size_t(std::ceil(0.9 * sorted.size())) - 1);
     std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
     m.p90_m = sorted[k];
     m.floor_accuracy = double(on_floor) / e.size();

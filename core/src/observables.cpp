@@ -39,7 +39,8 @@ std::vector<double> HeadingsFromSteps(const PlanarTrajectory& traj, double stati
 
 std::vector<double> UnwrappedHeadings(const PlanarTrajectory& traj, double stationary_m) {
     std::vector<double> yaw = traj.HasYaw() ? traj.yaw_rad : HeadingsFromSteps(traj, stationary_m);
-    for (std::size_t i = 1; i < yaw.size(); ++i) yaw[i] = yaw[i - 1] + AngleDiff(yaw[i], yaw[i - 1]);
+    for (std::size_t i = 1; i < yaw.size(); ++i)
+        yaw[i] = yaw[i - 1] + AngleDiff(yaw[i], yaw[i - 1]);
     return yaw;
 }
 
@@ -54,8 +55,7 @@ std::vector<StepObservation> ComputeObservations(const PlanarTrajectory& traj,
         o.dt_s = traj.t_s[i] - traj.t_s[i - 1];
         o.length_m = d.norm();
         o.stationary = o.length_m <= stationary_m;
-        o.direction_rad =
-            o.stationary ? 0.0 : AngleDiff(std::atan2(d.y(), d.x()), yaw[i - 1]);
+        o.direction_rad = o.stationary ? 0.0 : AngleDiff(std::atan2(d.y(), d.x()), yaw[i - 1]);
         o.dheading_rad = yaw[i] - yaw[i - 1];
         o.dup_m = traj.up_m[i] - traj.up_m[i - 1];
         if (o.stationary) o.length_m = 0.0;
@@ -83,8 +83,8 @@ std::size_t RepairSpeedEpisodes(std::vector<StepObservation>& obs, double max_ac
         time[i] = time[i - 1] + std::max(obs[i].dt_s, 0.0);
     }
     if (!(time[n - 1] > 0.0)) return 0;
-    const auto w = static_cast<std::size_t>(
-        std::max(1L, std::lround(window_s * double(n - 1) / time[n - 1])));
+    const auto w =
+        static_cast<std::size_t>(std::max(1L, std::lround(window_s * double(n - 1) / time[n - 1])));
     // Mean speed of steps a+1..b.
     auto speed = [&](std::size_t a, std::size_t b) {
         const double dt = time[b] - time[a];
@@ -113,7 +113,8 @@ std::size_t RepairSpeedEpisodes(std::vector<StepObservation>& obs, double max_ac
             if (o.repaired || !(o.dt_s > 0.0)) continue;
             const double u = t1 > t0 ? std::clamp((time[i] - t0) / (t1 - t0), 0.0, 1.0) : 0.0;
             const double v_ref = (1.0 - u) * v0 + u * v1;
-            if (!(v_ref > 0.0) || std::abs(o.length_m / o.dt_s - v_ref) <= deviation * v_ref) continue;
+            if (!(v_ref > 0.0) || std::abs(o.length_m / o.dt_s - v_ref) <= deviation * v_ref)
+                continue;
             o.observed_length_m = o.length_m;
             o.length_m = v_ref * o.dt_s;
             o.repaired = true;

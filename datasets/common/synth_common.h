@@ -1,6 +1,7 @@
 #pragma once
 // What the synthetic scenario generators (synth_road, synth_building) share: the random sources,
 // 2D rotation, command-line parsing and atomic file writing.
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -10,8 +11,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace driftcorr::synth {
 
@@ -48,7 +47,8 @@ private:
 #if defined(__GNUC__)
 __attribute__((format(printf, 1, 2)))
 #endif
-std::string Format(const char* fmt, ...);
+std::string
+Format(const char* fmt, ...);
 
 /// `v` turned by yaw_rad (counter-clockwise).
 Eigen::Vector2d Rotate(double yaw_rad, const Eigen::Vector2d& v);

@@ -45,14 +45,14 @@ void PrintUsage(std::FILE* stream) {
 }
 
 std::string ParseArgs(int argc, char** argv, Options& opt) {
-    std::string error = ParseGeneratorArgs(argc, argv, opt.out_dir, [&](const std::string& flag,
-                                                                        const char* value) {
-        return ApplySeedOrNumberFlag(
-            flag, value, opt.drift.seed,
-            {{"--heading-bias-deg-per-sqrt-s", &opt.drift.heading_bias_deg_per_sqrt_s},
-             {"--scale-error", &opt.drift.scale_error},
-             {"--duration-s", &opt.drive.duration_s}});
-    });
+    std::string error = ParseGeneratorArgs(
+        argc, argv, opt.out_dir, [&](const std::string& flag, const char* value) {
+            return ApplySeedOrNumberFlag(
+                flag, value, opt.drift.seed,
+                {{"--heading-bias-deg-per-sqrt-s", &opt.drift.heading_bias_deg_per_sqrt_s},
+                 {"--scale-error", &opt.drift.scale_error},
+                 {"--duration-s", &opt.drive.duration_s}});
+        });
     if (error.empty()) error = opt.drift.Validate();
     if (error.empty()) error = opt.drive.Validate();
     return error;
@@ -126,5 +126,6 @@ int main(int argc, char** argv) {
     Options opt;
     return GeneratorMain(
         argc, argv, "driftcorr_make_road_scenario", PrintUsage,
-        [&opt](int n, char** args) { return ParseArgs(n, args, opt); }, [&opt] { return Run(opt); });
+        [&opt](int n, char** args) { return ParseArgs(n, args, opt); },
+        [&opt] { return Run(opt); });
 }

@@ -208,7 +208,8 @@ void RunInProcesses(std::size_t count, int jobs,
     while (next < count || !running.empty()) {
         if (next < count && running.size() < slots) {
             int fds[2];
-            if (pipe(fds) != 0) throw std::runtime_error("pipe: " + std::string(std::strerror(errno)));
+            if (pipe(fds) != 0)
+                throw std::runtime_error("pipe: " + std::string(std::strerror(errno)));
             std::fflush(nullptr);
             const pid_t pid = fork();
             if (pid < 0) throw std::runtime_error("fork: " + std::string(std::strerror(errno)));

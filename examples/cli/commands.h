@@ -79,8 +79,9 @@ struct ProcessOutcome {
 /// at a time, and calls done(i, outcome) in the parent as each one ends (code -1 and a note if
 /// it died by a signal). Processes, not threads: Ipopt 3.11's linear solver MUMPS is not
 /// thread-safe, so threads in one process take turns in every Ipopt solve (a final solve with an
-/// active corridor constraint; optim/ipopt_solver.h), and a crash stays with its item. Call it while the process has no other threads; `work`
-/// must not throw. Throws std::runtime_error when a process cannot be started.
+/// active corridor constraint; optim/ipopt_solver.h), and a crash stays with its item. Call it
+/// while the process has no other threads; `work` must not throw. Throws std::runtime_error when a
+/// process cannot be started.
 void RunInProcesses(std::size_t count, int jobs,
                     const std::function<ProcessOutcome(std::size_t)>& work,
                     const std::function<void(std::size_t, const ProcessOutcome&)>& done);

@@ -100,8 +100,8 @@ struct Args {
     /// '/'): the same command then works whatever number of scenarios a glob matched.
     bool Batch() const {
         std::error_code ec;
-        const bool folder = !output.empty() && (output.back() == '/' ||
-                                                std::filesystem::is_directory(output, ec));
+        const bool folder =
+            !output.empty() && (output.back() == '/' || std::filesystem::is_directory(output, ec));
         return inputs.size() > 1 || !manifest.empty() || (folder && osm.empty());
     }
 };
@@ -146,16 +146,28 @@ std::string CheckModes(const Args& a) {
 }
 
 bool ParseArgs(int argc, char** argv, Args& a, std::string& err) {
-    const OptionTable table{
-        {{"--quiet", &a.quiet}, {"-q", &a.quiet}},
-        {{"-o", &a.output}, {"--output", &a.output}, {"--config", &a.config},
-         {"--geojson", &a.geojson}, {"--solver", &a.solver}, {"--covariance", &a.covariance},
-         {"--on-failure", &a.on_failure}, {"--manifest", &a.manifest}, {"-j", &a.jobs},
-         {"--jobs", &a.jobs}, {"--osm", &a.osm}, {"--anchor", &a.anchor}, {"--crs", &a.crs},
-         {"--scale", &a.scale}, {"--frame", &a.frame}, {"--format", &a.format},
-         {"--rate-hz", &a.rate_hz}, {"--heading", &a.heading},
-         {"--ground-truth", &a.ground_truth}, {"--times", &a.times},
-         {"--ground-truth-times", &a.ground_truth_times}}};
+    const OptionTable table{{{"--quiet", &a.quiet}, {"-q", &a.quiet}},
+                            {{"-o", &a.output},
+                             {"--output", &a.output},
+                             {"--config", &a.config},
+                             {"--geojson", &a.geojson},
+                             {"--solver", &a.solver},
+                             {"--covariance", &a.covariance},
+                             {"--on-failure", &a.on_failure},
+                             {"--manifest", &a.manifest},
+                             {"-j", &a.jobs},
+                             {"--jobs", &a.jobs},
+                             {"--osm", &a.osm},
+                             {"--anchor", &a.anchor},
+                             {"--crs", &a.crs},
+                             {"--scale", &a.scale},
+                             {"--frame", &a.frame},
+                             {"--format", &a.format},
+                             {"--rate-hz", &a.rate_hz},
+                             {"--heading", &a.heading},
+                             {"--ground-truth", &a.ground_truth},
+                             {"--times", &a.times},
+                             {"--ground-truth-times", &a.ground_truth_times}}};
     auto positional = [&a](const std::string& arg) -> std::string {
         a.inputs.push_back(arg);
         return "";
@@ -194,8 +206,9 @@ ProgressCallback MakeProgress(bool quiet) {
 }
 
 void PrintMetricsRow(std::FILE* out, const char* label, const ErrorMetrics& m, bool floors) {
-    std::fprintf(out, "  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
-                label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
+    std::fprintf(out,
+                 "  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
+                 label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
     if (floors) std::fprintf(out, "   right floor %5.1f %%", 100.0 * m.floor_accuracy);
     std::fprintf(out, "\n");
 }
@@ -206,20 +219,22 @@ void PrintAnchorFit(std::FILE* out, const pipeline::CorrectionRun& run) {
     const AnchorFitResult& f = *run.anchor_fit;
     const auto& a = run.scenario.anchor;
     const bool estimated = !a.yaw_deg || a.position_search_m > 0.0;
-    std::fprintf(out, "anchor     %s yaw %.2f deg, start (%.1f, %.1f) m: the first %.0f m lie RMS %.2f m "
-                "from the map (%.0f %% beyond reach)", estimated ? "estimated" : "given",
-                RadToDeg(run.anchor.yaw_rad), run.anchor.origin_en.x(), run.anchor.origin_en.y(),
-                f.lead_path_m, estimated ? f.best.rms_m : f.given.rms_m,
-                100.0 * (estimated ? f.best.off_share : f.given.off_share));
+    std::fprintf(
+        out,
+        "anchor     %s yaw %.2f deg, start (%.1f, %.1f) m: the first %.0f m lie RMS %.2f m "
+        "from the map (%.0f %% beyond reach)",
+        estimated ? "estimated" : "given", RadToDeg(run.anchor.yaw_rad), run.anchor.origin_en.x(),
+        run.anchor.origin_en.y(), f.lead_path_m, estimated ? f.best.rms_m : f.given.rms_m,
+        100.0 * (estimated ? f.best.off_share : f.given.off_share));
     if (!estimated && (f.best.dyaw_rad != 0.0 || f.best.offset_en.norm() > 0.0)) {
         std::fprintf(out, "; best other start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
-                    RadToDeg(f.best.dyaw_rad), f.best.offset_en.x(), f.best.offset_en.y(),
-                    f.best.rms_m);
+                     RadToDeg(f.best.dyaw_rad), f.best.offset_en.x(), f.best.offset_en.y(),
+                     f.best.rms_m);
     }
     if (f.runner_up) {
         std::fprintf(out, "; next distinct start %+.1f deg, (%.1f, %.1f) m: RMS %.2f m",
-                    RadToDeg(f.runner_up->dyaw_rad), f.runner_up->offset_en.x(),
-                    f.runner_up->offset_en.y(), f.runner_up->rms_m);
+                     RadToDeg(f.runner_up->dyaw_rad), f.runner_up->offset_en.x(),
+                     f.runner_up->offset_en.y(), f.runner_up->rms_m);
     }
     std::fprintf(out, "\n");
 }
@@ -287,7 +302,7 @@ void PrintFloorHypotheses(std::FILE* out, const CorrectionResult& r) {
     for (const CorrectionResult::FloorHypothesis& h : r.floor_hypotheses) {
         const bool gains = h.gain_nll != 0.0 || h.against_gain_nll != 0.0;
         std::fprintf(out, "floors     the change from %.1f m ending at %.0f s onto %.1f m: NLL ",
-                    h.from_m, h.t_s, h.tried_m);
+                     h.from_m, h.t_s, h.tried_m);
         if (std::isnan(h.nll)) {
             std::fprintf(out, "failed");
         } else {
@@ -339,25 +354,26 @@ void PrintAgreement(std::FILE* out, const CorrectionResult& r) {
                      agrees && r.input_kept ? ": the map cannot tell it wrong" : "");
         label = "          ";
     }
-    std::fprintf(out, "%s NLL %.1f, the correction's %.1f%s: %s\n", label, r.input_nll,
-                 r.nll, r.input_nll_lower ? " (the input explains the data better)" : "",
+    std::fprintf(out, "%s NLL %.1f, the correction's %.1f%s: %s\n", label, r.input_nll, r.nll,
+                 r.input_nll_lower ? " (the input explains the data better)" : "",
                  r.input_kept ? "written unchanged" : "corrected");
 }
 
 void PrintVerdict(std::FILE* out, const Verdict& v) {
     std::fprintf(out, "verdict    %s", ToString(v.level).c_str());
-    std::fprintf(out, " (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
-                v.scale_min, v.scale_max, v.input_jumps, 100.0 * v.off_map_share);
+    std::fprintf(
+        out, " (corrected / estimated path %.2f..%.2f, %zu input jump(s), %.0f %% off the map)\n",
+        v.scale_min, v.scale_max, v.input_jumps, 100.0 * v.off_map_share);
     for (const std::string& r : v.reasons) std::fprintf(out, "  %s\n", r.c_str());
 }
 
 void PrintHeading(std::FILE* out, const pipeline::CorrectionRun& run) {
     if (!run.heading_from_motion) return;
     std::fprintf(out, "heading    from the direction of motion (%s)\n",
-                run.estimate_frame.HasOrientation()
-                    ? "heading: motion; the orientations are turned by the heading correction"
-                    : "the estimate has no orientation; each written orientation is the corrected "
-                      "heading alone, no roll or pitch");
+                 run.estimate_frame.HasOrientation()
+                     ? "heading: motion; the orientations are turned by the heading correction"
+                     : "the estimate has no orientation; each written orientation is the corrected "
+                       "heading alone, no roll or pitch");
 }
 
 // The process's peak resident memory so far [MB] (Linux reports ru_maxrss in KiB).
@@ -373,42 +389,48 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
     const bool indoor = run.scenario.mode == io::ScenarioMode::kIndoor3d;
     const double total = run.timings.load_s + run.timings.map_s + run.timings.solve_s;
     std::fprintf(out, "scenario   %s (%s), %zu poses\n", run.scenario.name.c_str(),
-                io::ToString(run.scenario.mode).c_str(), run.estimate.size());
+                 io::ToString(run.scenario.mode).c_str(), run.estimate.size());
     PrintHeading(out, run);
-    std::fprintf(out, indoor ? "map        %zu walkways on the walk's floor, %.1f km, field %zu cells\n"
-                       : "map        %zu roads, %.1f km, field %zu cells\n", run.network.roads.size(),
-                run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
+    std::fprintf(out,
+                 indoor ? "map        %zu walkways on the walk's floor, %.1f km, field %zu cells\n"
+                        : "map        %zu roads, %.1f km, field %zu cells\n",
+                 run.network.roads.size(), run.network.TotalLengthM() / 1000.0, run.map_grid_cells);
     if (solver == pipeline::Solver::kPaper) {
         std::fprintf(out, "solver     paper: %s (%s)\n", ToString(r.status).c_str(),
-                    r.message.c_str());
+                     r.message.c_str());
     } else {
-        std::fprintf(out, "solver     %s (%s); %zu windows, %d solver iterations, %zu poses on hard corridor,"
-                    " scale %.3f..%.3f\n", ToString(r.status).c_str(), r.message.c_str(),
-                    r.windows, r.iterations, r.constrained_poses, r.scale_min, r.scale_max);
+        std::fprintf(
+            out,
+            "solver     %s (%s); %zu windows, %d solver iterations, %zu poses on hard corridor,"
+            " scale %.3f..%.3f\n",
+            ToString(r.status).c_str(), r.message.c_str(), r.windows, r.iterations,
+            r.constrained_poses, r.scale_min, r.scale_max);
         PrintStarts(out, r);
         PrintFreedoms(out, r);
         PrintFloorHypotheses(out, r);
     }
-    std::fprintf(out, "time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
-                " incremental %.3f, refine %.3f); peak memory %.0f MB\n", total, run.timings.load_s,
-                run.timings.map_s, run.timings.solve_s,
-                run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
-                r.refine_s, PeakMemoryMb());
+    std::fprintf(out,
+                 "time       %.3f s (load %.3f, map %.3f, correction %.3f = %.0f poses/s:"
+                 " incremental %.3f, refine %.3f); peak memory %.0f MB\n",
+                 total, run.timings.load_s, run.timings.map_s, run.timings.solve_s,
+                 run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
+                 r.refine_s, PeakMemoryMb());
     PrintGlobalScale(out, run);
     if (run.anchor_fit) PrintAnchorFit(out, run);
     PrintAgreement(out, r);
     if (run.before) {
-        std::fprintf(out, "errors     against the ground truth, horizontal (East, North; the height "
-                          "is not counted), no re-alignment:\n");
+        std::fprintf(out,
+                     "errors     against the ground truth, horizontal (East, North; the height "
+                     "is not counted), no re-alignment:\n");
         PrintMetricsRow(out, "estimate", *run.before, indoor);
     }
     if (run.after) PrintMetricsRow(out, "corrected", *run.after, indoor);
     PrintVerdict(out, run.verdict);
-    if (!written.empty()) std::fprintf(out, "wrote      %s\n", written == "-" ? "standard output" : written.c_str());
+    if (!written.empty())
+        std::fprintf(out, "wrote      %s\n", written == "-" ? "standard output" : written.c_str());
 }
 
-std::vector<GeoPoint> ToGeo(const pipeline::WorldFrame& w,
-                                       const driftcorr::PlanarTrajectory& t) {
+std::vector<GeoPoint> ToGeo(const pipeline::WorldFrame& w, const driftcorr::PlanarTrajectory& t) {
     std::vector<GeoPoint> out;
     for (const auto& p : t.p_en) out.push_back(w.ToGeo(p));
     return out;
@@ -481,7 +503,8 @@ double AnchorNumber(const std::string& text, const char* what) {
 io::AnchorSpec ParseAnchorOption(const Args& a) {
     std::vector<std::string> parts;
     std::size_t pos = 0;
-    for (std::size_t comma; (comma = a.anchor.find(',', pos)) != std::string::npos; pos = comma + 1) {
+    for (std::size_t comma; (comma = a.anchor.find(',', pos)) != std::string::npos;
+         pos = comma + 1) {
         parts.push_back(a.anchor.substr(pos, comma - pos));
     }
     parts.push_back(a.anchor.substr(pos));
@@ -494,7 +517,8 @@ io::AnchorSpec ParseAnchorOption(const Args& a) {
     io::AnchorSpec anchor;
     if (grid) {
         if (NormaliseCrsName(a.crs).empty()) {
-            throw InputError("", 0, "--crs", "unknown CRS spelling '" + a.crs + "' (e.g. EPSG:32632)");
+            throw InputError("", 0, "--crs",
+                             "unknown CRS spelling '" + a.crs + "' (e.g. EPSG:32632)");
         }
         anchor.crs = a.crs;
         anchor.easting_m = AnchorNumber(parts[0], "easting");
@@ -524,8 +548,9 @@ io::TrajectorySource SourceFromOptions(const Args& a, const std::string& path,
     if (!a.format.empty()) {
         format = io::ParseTrajectoryFormat(a.format);
         if (!format) {
-            throw InputError("", 0, "--format",
-                             "unknown format '" + a.format + "' (expected tum | csv | euroc | kitti)");
+            throw InputError(
+                "", 0, "--format",
+                "unknown format '" + a.format + "' (expected tum | csv | euroc | kitti)");
         }
     } else {
         format = io::DetectTrajectoryFormat(src.path);
@@ -567,8 +592,8 @@ io::Scenario ScenarioFromOptions(const Args& a) {
     s.mode = io::ScenarioMode::kRoad2d;
     s.estimate = SourceFromOptions(a, a.inputs.front(), a.times, "--times");
     if (!a.ground_truth.empty()) {
-        s.ground_truth = SourceFromOptions(a, a.ground_truth, a.ground_truth_times,
-                                           "--ground-truth-times");
+        s.ground_truth =
+            SourceFromOptions(a, a.ground_truth, a.ground_truth_times, "--ground-truth-times");
     } else if (!a.ground_truth_times.empty()) {
         throw InputError("", 0, "--ground-truth-times", "only with --ground-truth");
     }
@@ -605,9 +630,8 @@ void CheckOutputs(const OutputPaths& out, const Args& a, const io::Scenario& sce
     std::vector<io::InputFile> inputs = io::InputFiles(scenario);
     if (!a.config.empty()) inputs.push_back({"the --config file", a.config});
     if (!a.manifest.empty()) inputs.push_back({"the --manifest file", a.manifest});
-    CheckOutputsAgainstInputs({{"-o", out.tum}, {"--geojson", out.geojson},
-                               {"--covariance", out.covariance}},
-                              inputs);
+    CheckOutputsAgainstInputs(
+        {{"-o", out.tum}, {"--geojson", out.geojson}, {"--covariance", out.covariance}}, inputs);
 }
 
 /// Per-vertex timestamps [s] as GeoJSON's coordinateProperties (the togeojson convention).
@@ -626,15 +650,16 @@ void WriteGeoJson(const std::string& path, const pipeline::CorrectionRun& run, b
     std::vector<io::GeoTrack> tracks = {
         {"estimate", ToGeo(world, run.estimate), {TimesProperty(run.estimate.t_s)}}};
     if (with_result) {
-        tracks.push_back({"corrected", ToGeo(world, run.result.corrected),
-                          CorrectedProperties(run)});
+        tracks.push_back(
+            {"corrected", ToGeo(world, run.result.corrected), CorrectedProperties(run)});
         tracks.back().json_properties.push_back(TimesProperty(run.result.corrected.t_s));
     } else {
         tracks.front().json_properties.push_back(
             {"verdict", io::JsonString(ToString(run.verdict.level))});
     }
     if (run.ground_truth) {
-        tracks.push_back({"ground_truth", ToGeo(world, *run.ground_truth),
+        tracks.push_back({"ground_truth",
+                          ToGeo(world, *run.ground_truth),
                           {TimesProperty(run.ground_truth->t_s)}});
     }
     io::WriteGeoJsonTracks(path, tracks);
@@ -695,14 +720,16 @@ int RunSingle(const Args& a) {
     pipeline::CorrectionRun run =
         pipeline::RunCorrection(std::move(scenario), cfg, MakeProgress(a.quiet));
     for (std::string& reason : run.verdict.reasons) reason = InFlagTerms(reason, a);
-    for (const std::string& w : run.scenario.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
-    for (const std::string& w : run.result.warnings) std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
+    for (const std::string& w : run.scenario.warnings)
+        std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
+    for (const std::string& w : run.result.warnings)
+        std::fprintf(stderr, "driftcorr: warning: %s\n", w.c_str());
     const Written written = WriteOutputs(run, a.on_failure, out);
     // With -o - (or /dev/stdout) the trajectory has standard output; the summary goes to stderr.
-    std::FILE* report = ResolveOutput(a.output).kind == OutputTarget::Kind::kDescriptor &&
-                                a.output != "/dev/stderr"
-                            ? stderr
-                            : stdout;
+    std::FILE* report =
+        ResolveOutput(a.output).kind == OutputTarget::Kind::kDescriptor && a.output != "/dev/stderr"
+            ? stderr
+            : stdout;
     PrintSummary(report, run, written == Written::kNothing ? "" : a.output, cfg.solver);
     const bool failed = run.verdict.level == VerdictLevel::kFailed;
     if (written == Written::kNothing) {
@@ -744,7 +771,8 @@ std::vector<BatchItem> BatchItems(const Args& a) {
         items.push_back({a.inputs[i], "argument " + std::to_string(i + 1), ""});
     }
     if (!a.manifest.empty()) {
-        for (const ManifestEntry& e : ReadManifest(a.manifest)) items.push_back({e.path, e.where, ""});
+        for (const ManifestEntry& e : ReadManifest(a.manifest))
+            items.push_back({e.path, e.where, ""});
     }
     std::map<std::string, std::string> seen;
     for (BatchItem& item : items) {
@@ -765,18 +793,20 @@ void PrepareFolder(const std::string& dir, const char* option) {
     if (!std::filesystem::is_directory(dir, ec)) {
         throw InputError(dir, 0, option, "is not a folder and cannot be created");
     }
-    if (::access(dir.c_str(), W_OK) != 0) throw InputError(dir, 0, option, "folder is not writable");
+    if (::access(dir.c_str(), W_OK) != 0)
+        throw InputError(dir, 0, option, "folder is not writable");
 }
 
 /// One scenario of a batch: its exit code and the lines to print for it.
 ProcessOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg,
-                              const BatchItem& item) {
+                                const BatchItem& item) {
     namespace fs = std::filesystem;
     const auto t0 = std::chrono::steady_clock::now();
     const auto join = [](const std::string& dir, const std::string& file) {
         return dir.empty() ? std::string() : (fs::path(dir) / file).string();
     };
-    const OutputPaths out{join(a.output, item.name + ".tum"), join(a.geojson, item.name + ".geojson"),
+    const OutputPaths out{join(a.output, item.name + ".tum"),
+                          join(a.geojson, item.name + ".geojson"),
                           join(a.covariance, item.name + ".cov.txt")};
     ProcessOutcome o;
     try {
@@ -786,19 +816,22 @@ ProcessOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& c
         const Written written = WriteOutputs(run, a.on_failure, out);
         const bool failed = run.verdict.level == VerdictLevel::kFailed;
         o.code = failed || written == Written::kNothing ? kExitSolver : kExitOk;
-        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        o.text = Format("%-32s %-8s %6zu poses %7.1f s%s  %s\n", item.name.c_str(),
-                        ToString(run.verdict.level).c_str(), run.estimate.size(), s,
-                        run.heading_from_motion ? "  heading from motion" : "",
-                        written == Written::kNothing  ? "nothing written"
-                        : written == Written::kEstimate ? ("estimate unchanged -> " + out.tum).c_str()
-                                                        : ("-> " + out.tum).c_str());
+        const double s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        o.text =
+            Format("%-32s %-8s %6zu poses %7.1f s%s  %s\n", item.name.c_str(),
+                   ToString(run.verdict.level).c_str(), run.estimate.size(), s,
+                   run.heading_from_motion ? "  heading from motion" : "",
+                   written == Written::kNothing    ? "nothing written"
+                   : written == Written::kEstimate ? ("estimate unchanged -> " + out.tum).c_str()
+                                                   : ("-> " + out.tum).c_str());
         for (const std::string& r : run.verdict.reasons) o.text += "    " + r + "\n";
         for (const std::string& w : run.scenario.warnings) o.text += "    warning: " + w + "\n";
         for (const std::string& w : run.result.warnings) o.text += "    warning: " + w + "\n";
     } catch (const InputError& e) {
         o.code = kExitBadInput;
-        o.text = Format("%-32s bad input (%s): %s\n", item.name.c_str(), item.where.c_str(), e.what());
+        o.text =
+            Format("%-32s bad input (%s): %s\n", item.name.c_str(), item.where.c_str(), e.what());
     } catch (const std::exception& e) {
         o.code = kExitInternal;
         o.text = Format("%-32s internal error (%s): %s\n", item.name.c_str(), item.where.c_str(),
@@ -826,8 +859,7 @@ int RunBatch(const Args& a) {
     std::size_t done = 0;
     const auto t0 = std::chrono::steady_clock::now();
     RunInProcesses(
-        items.size(), jobs,
-        [&](std::size_t i) { return CorrectOneOfMany(a, cfg, items[i]); },
+        items.size(), jobs, [&](std::size_t i) { return CorrectOneOfMany(a, cfg, items[i]); },
         [&](std::size_t i, const ProcessOutcome& o) {
             codes[i] = o.code < 0 ? kExitInternal : o.code;
             std::printf("[%zu/%zu] %s", ++done, items.size(),

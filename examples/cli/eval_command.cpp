@@ -120,7 +120,8 @@ eval::EvalProgressCallback MakeEvalProgress(bool quiet) {
                                  std::to_string(p.scenario_count) + " " + p.label;
         if (!tty) {
             const std::string key = head + " " + p.stage;
-            if (key != last && p.stage != "done") std::fprintf(stderr, "%s: %s\n", head.c_str(), p.stage.c_str());
+            if (key != last && p.stage != "done")
+                std::fprintf(stderr, "%s: %s\n", head.c_str(), p.stage.c_str());
             last = key;
             return;
         }
@@ -159,14 +160,16 @@ int RunEvalCommand(int argc, char** argv) {
     if (!args.report_dir.empty()) {
         try {
             eval::WriteReport(args.report_dir, evals);
-            std::printf("wrote      %s/ (summary.md, results.json, plots)\n", args.report_dir.c_str());
+            std::printf("wrote      %s/ (summary.md, results.json, plots)\n",
+                        args.report_dir.c_str());
         } catch (const std::exception& e) {
             std::fprintf(stderr, "driftcorr: cannot write the report: %s\n", e.what());
             return kExitInternal;
         }
     }
-    const bool any_failed = std::any_of(evals.begin(), evals.end(),
-                                        [](const eval::ScenarioEvaluation& e) { return e.AnyFailed(); });
+    const bool any_failed =
+        std::any_of(evals.begin(), evals.end(),
+                    [](const eval::ScenarioEvaluation& e) { return e.AnyFailed(); });
     if (any_failed) {
         std::fprintf(stderr, "driftcorr: %zu of %zu scenario(s) failed (see the table)\n",
                      static_cast<std::size_t>(std::count_if(

@@ -57,7 +57,8 @@ int CheckStandardOutput(int code) {
     const bool flushed = std::fflush(stdout) == 0;
     const int err = errno;
     if (flushed && !std::ferror(stdout)) return code;
-    std::fprintf(stderr, "driftcorr: standard output: write failed (%s): what was printed there "
+    std::fprintf(stderr,
+                 "driftcorr: standard output: write failed (%s): what was printed there "
                  "(the summary, the verdict, the poses) is lost\n",
                  err ? std::strerror(err) : "an earlier write failed");
     return code == driftcorr::cli::kExitOk ? driftcorr::cli::kExitBadInput : code;

@@ -157,7 +157,8 @@ int Extract(const std::string& input, const std::string& output, WalkableSurface
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     double voxel_m = 0.0;
-    const std::vector<Eigen::Vector3d> cloud = pipeline::SurfaceIo().read_raw_points(input, &voxel_m);
+    const std::vector<Eigen::Vector3d> cloud =
+        pipeline::SurfaceIo().read_raw_points(input, &voxel_m);
     // An OctoMap is binned at its own voxel size unless --resolution says otherwise.
     if (voxel_m > 0.0 && !resolution_given) cfg.resolution_m = voxel_m;
     const auto t1 = Clock::now();

@@ -260,10 +260,11 @@ private:
         }
     }
     static void ReportCausal(const CausalCheck& c) {
-        std::fprintf(stderr,
-                     "driftcorr stream: causal outputs against the smoothed trajectory: RMS %.2f m, "
-                     "max %.2f m (the input: RMS %.2f m)\n",
-                     c.causal_rms_m, c.causal_max_m, c.input_rms_m);
+        std::fprintf(
+            stderr,
+            "driftcorr stream: causal outputs against the smoothed trajectory: RMS %.2f m, "
+            "max %.2f m (the input: RMS %.2f m)\n",
+            c.causal_rms_m, c.causal_max_m, c.input_rms_m);
         if (c.floor_apart_share > 0.0) {
             std::fprintf(
                 stderr,
@@ -320,7 +321,7 @@ private:
     std::size_t skipped_ = 0;
     bool outside_ = false;
     std::optional<double> start_scale_;  ///< of the last output (OnlineConfig start scales)
-    std::vector<double> latency_s_;  ///< per output line: read to written and flushed [s]
+    std::vector<double> latency_s_;      ///< per output line: read to written and flushed [s]
 };
 
 // SIGINT / SIGTERM end the input: the reading thread is interrupted (the signal is passed on to
@@ -400,7 +401,8 @@ int RunStream(const StreamArgs& a) {
     online.synchronous = a.sync;
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
-    StreamSession session(setup, online, pipeline::VerdictFor(setup.scenario, cfg), a.status_column);
+    StreamSession session(setup, online, pipeline::VerdictFor(setup.scenario, cfg),
+                          a.status_column);
     if (!a.quiet) {
         // Poses a producer writes before this line wait in the pipe and arrive as one burst.
         std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",

@@ -95,7 +95,8 @@ void PutInPlace(const std::string& tmp_path, const OutputTarget& target, const s
         if (std::rename(tmp_path.c_str(), target.path.c_str()) != 0) {
             const int err = errno;
             std::remove(tmp_path.c_str());
-            throw OutputError(path, "", "cannot rename " + tmp_path + " into place: " + Reason(err));
+            throw OutputError(path, "",
+                              "cannot rename " + tmp_path + " into place: " + Reason(err));
         }
         return;
     }
@@ -168,8 +169,9 @@ OutputTarget ResolveOutput(const std::string& path) {
     }
     struct stat st = link;
     if (S_ISLNK(link.st_mode) && ::stat(path.c_str(), &st) != 0) {
-        throw OutputError(path, "", "is a symbolic link to a file that does not exist (" +
-                                        Reason(errno) + "); give the target's path");
+        throw OutputError(path, "",
+                          "is a symbolic link to a file that does not exist (" + Reason(errno) +
+                              "); give the target's path");
     }
     if (S_ISREG(st.st_mode)) {
         if (!S_ISLNK(link.st_mode)) return {OutputTarget::Kind::kFile, path};
@@ -179,8 +181,8 @@ OutputTarget ResolveOutput(const std::string& path) {
         return {OutputTarget::Kind::kFile, resolved.string()};
     }
     if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return {OutputTarget::Kind::kInPlace, path};
-    const char* what = S_ISDIR(st.st_mode)   ? "a folder"
-                       : S_ISBLK(st.st_mode) ? "a block device"
+    const char* what = S_ISDIR(st.st_mode)    ? "a folder"
+                       : S_ISBLK(st.st_mode)  ? "a block device"
                        : S_ISSOCK(st.st_mode) ? "a socket"
                                               : "not a regular file";
     throw OutputError(path, "", std::string("is ") + what + ", expected an output file path");
@@ -209,8 +211,8 @@ AtomicFile::AtomicFile(const std::string& path)
     : path_(path), target_(ResolveOutput(path)), tmp_path_(TemporaryPathFor(target_)) {
     const int fd = ::open(tmp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0) {
-        throw OutputError(path, "", "cannot create output file (" + tmp_path_ + "): " +
-                                        Reason(errno));
+        throw OutputError(path, "",
+                          "cannot create output file (" + tmp_path_ + "): " + Reason(errno));
     }
     buffer_ = std::make_unique<Buffer>(fd);
     out_ = std::make_unique<std::ostream>(buffer_.get());

@@ -213,8 +213,8 @@ std::optional<Eigen::Vector2d> RingSelfCrossing(const std::vector<Eigen::Vector2
             }
             if (orient(a, b, c) * orient(a, b, e) < 0 && orient(c, e, a) * orient(c, e, b) < 0) {
                 const Eigen::Vector2d r = b - a, s = e - c;
-                const double t = ((c - a).x() * s.y() - (c - a).y() * s.x()) /
-                                 (r.x() * s.y() - r.y() * s.x());
+                const double t =
+                    ((c - a).x() * s.y() - (c - a).y() * s.x()) / (r.x() * s.y() - r.y() * s.x());
                 return Eigen::Vector2d(a + t * r);
             }
         }

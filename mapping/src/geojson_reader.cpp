@@ -216,7 +216,6 @@ GeoJsonLayer ParseGeoJson(const std::string& text, const std::string& path) {
     }
 }
 
-
 GeoJsonLayer ReadGeoJson(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(path, 0, "", "cannot open the GeoJSON file");

@@ -228,7 +228,8 @@ void MergeCappedDistanceTransform(const GridSpec& spec, const std::vector<std::u
             Edt1d(row, int(nx), d.data(), v.data(), z.data());
             float* out = exact.data() + std::size_t(j) * nx;
             for (std::size_t i = 0; i < nx; ++i) {
-                out[i] = std::min(ceiling_m, out[i] < kInf ? out[i] : ToMetres(d[i], res) + offset_m);
+                out[i] =
+                    std::min(ceiling_m, out[i] < kInf ? out[i] : ToMetres(d[i], res) + offset_m);
             }
         }
     }

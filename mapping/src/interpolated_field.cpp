@@ -207,8 +207,8 @@ std::optional<FieldSample> InterpolatedField::QueryBilinear(const Eigen::Vector3
     }
     FieldSample out;
     out.value = val;
-    out.gradient = Eigen::Vector3d(grad.x() / s.resolution_m, grad.y() / s.resolution_m,
-                                   grad.z() / s.dz());
+    out.gradient =
+        Eigen::Vector3d(grad.x() / s.resolution_m, grad.y() / s.resolution_m, grad.z() / s.dz());
     return out;
 }
 

@@ -6,6 +6,11 @@
 // path itself (libosmium would fetch an "http:" name with curl) and the file is named in every
 // error. libosmium decodes the blobs on its shared thread pool; each call has its own Reader, so
 // concurrent calls from several threads are independent.
+#include <cstdint>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <osmium/handler.hpp>
 #include <osmium/io/pbf_input.hpp>
 #include <osmium/osm/node.hpp>
@@ -13,12 +18,6 @@
 #include <osmium/visitor.hpp>
 #include <protozero/exception.hpp>
 #include <protozero/pbf_reader.hpp>
-
-#include <cstdint>
-#include <exception>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 
 #include "driftcorr/core/check.h"
@@ -41,9 +40,9 @@ std::string ReadWholeFile(const std::string& path) {
 }
 
 [[noreturn]] void NotPbf(const std::string& path, const std::string& why) {
-    throw InputError(path, 0, "",
-                     "is neither OSM XML (it does not start with '<') nor a valid OSM PBF file: " +
-                         why);
+    throw InputError(
+        path, 0, "",
+        "is neither OSM XML (it does not start with '<') nor a valid OSM PBF file: " + why);
 }
 
 // Walks the file's blob sequence as libosmium will: a 4-byte big-endian BlobHeader size (at most
@@ -56,7 +55,9 @@ void CheckBlobHeaders(const std::string& bytes, const std::string& path) {
     std::size_t off = 0;
     while (off < bytes.size()) {
         if (bytes.size() - off < 4) NotPbf(path, "the file ends inside a blob header's size");
-        const auto byte = [&](std::size_t k) { return std::uint32_t(std::uint8_t(bytes[off + k])); };
+        const auto byte = [&](std::size_t k) {
+            return std::uint32_t(std::uint8_t(bytes[off + k]));
+        };
         const std::uint32_t n = byte(0) << 24 | byte(1) << 16 | byte(2) << 8 | byte(3);
         off += 4;
         if (n == 0 || n > kMaxHeader || bytes.size() - off < n) {
@@ -103,9 +104,10 @@ public:
         if (!node.visible()) return;  // a deleted node in a history file has no location
         const osmium::Location loc = node.location();
         if (!loc.valid()) {
-            throw InputError(path_, 0, "", "node " + std::to_string(node.id()) +
-                                               ": location is missing or outside [-90, 90] x "
-                                               "[-180, 180] degrees");
+            throw InputError(path_, 0, "",
+                             "node " + std::to_string(node.id()) +
+                                 ": location is missing or outside [-90, 90] x "
+                                 "[-180, 180] degrees");
         }
         nodes_[node.id()] = LatLon{loc.lat(), loc.lon()};
         ++report_.nodes_total;
@@ -139,7 +141,8 @@ OsmRoads ReadOsmPbf(const std::string& path) {
     RoadsHandler handler(path);
     try {
         osmium::io::File file(bytes.data(), bytes.size(), "pbf");
-        osmium::io::Reader reader(file, osmium::osm_entity_bits::node | osmium::osm_entity_bits::way);
+        osmium::io::Reader reader(file,
+                                  osmium::osm_entity_bits::node | osmium::osm_entity_bits::way);
         osmium::apply(reader, handler);
         reader.close();
     } catch (const InputError&) {

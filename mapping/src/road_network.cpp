@@ -17,20 +17,20 @@ namespace {
 // generous enough for a vehicle in its lane (the centre line is mapped, the car drives beside it).
 const std::map<std::string, double>& VehicleTable() {
     static const std::map<std::string, double> kTable = {
-        {"motorway", 8.0},      {"motorway_link", 5.0}, {"trunk", 7.0},
-        {"trunk_link", 5.0},    {"primary", 6.5},       {"primary_link", 5.0},
+        {"motorway", 8.0},      {"motorway_link", 5.0},  {"trunk", 7.0},
+        {"trunk_link", 5.0},    {"primary", 6.5},        {"primary_link", 5.0},
         {"secondary", 6.0},     {"secondary_link", 4.5}, {"tertiary", 5.5},
-        {"tertiary_link", 4.5}, {"unclassified", 4.5},  {"residential", 4.5},
-        {"living_street", 4.0}, {"service", 3.5},       {"road", 4.5},
+        {"tertiary_link", 4.5}, {"unclassified", 4.5},   {"residential", 4.5},
+        {"living_street", 4.0}, {"service", 3.5},        {"road", 4.5},
         {"track", 3.0},         {"busway", 4.0}};
     return kTable;
 }
 
 const std::map<std::string, double>& PedestrianTable() {
     static const std::map<std::string, double> kTable = {
-        {"footway", 1.5},       {"path", 1.5},    {"cycleway", 1.5},     {"steps", 1.5},
-        {"pedestrian", 4.0},    {"corridor", 1.5}, {"bridleway", 1.5},  {"living_street", 4.0},
-        {"residential", 4.5},   {"service", 3.5}, {"track", 3.0},       {"unclassified", 4.5}};
+        {"footway", 1.5},     {"path", 1.5},     {"cycleway", 1.5},  {"steps", 1.5},
+        {"pedestrian", 4.0},  {"corridor", 1.5}, {"bridleway", 1.5}, {"living_street", 4.0},
+        {"residential", 4.5}, {"service", 3.5},  {"track", 3.0},     {"unclassified", 4.5}};
     return kTable;
 }
 
@@ -199,8 +199,9 @@ GridSpec SubGrid(const GridSpec& grid, int i0, int i1, int j0, int j1) {
 TraversableField::Tile MakeTile(const RoadNetwork& network, const GridSpec& grid, int tile_cells,
                                 int ti, int tj, const RoadFieldConfig& config) {
     const int keep = 2;
-    const int work = keep + int(std::ceil((config.truncation_m + config.resolution_m) /
-                                          config.resolution_m)) + 1;
+    const int work =
+        keep + int(std::ceil((config.truncation_m + config.resolution_m) / config.resolution_m)) +
+        1;
     const auto [ki0, ki1] = Span(ti * tile_cells, (ti + 1) * tile_cells, keep, grid.nx);
     const auto [kj0, kj1] = Span(tj * tile_cells, (tj + 1) * tile_cells, keep, grid.ny);
     const auto [wi0, wi1] = Span(ti * tile_cells, (ti + 1) * tile_cells, work, grid.nx);
@@ -211,7 +212,8 @@ TraversableField::Tile MakeTile(const RoadNetwork& network, const GridSpec& grid
     TraversableField::Tile tile;
     tile.ti = ti;
     tile.tj = tj;
-    tile.centre = InterpolatedField(keep_spec, Crop(centre, work_spec, ki0 - wi0, kj0 - wj0, keep_spec));
+    tile.centre =
+        InterpolatedField(keep_spec, Crop(centre, work_spec, ki0 - wi0, kj0 - wj0, keep_spec));
     tile.corridor =
         InterpolatedField(keep_spec, Crop(corridor, work_spec, ki0 - wi0, kj0 - wj0, keep_spec));
     return tile;
@@ -223,7 +225,8 @@ TraversableField BuildTiles(const RoadNetwork& network, const GridSpec& grid,
                             const std::vector<std::pair<int, int>>& chosen, int tile_cells,
                             const RoadFieldConfig& config) {
     const double tile_side = tile_cells + 4.0;
-    const double work_side = tile_cells + 2.0 * (std::ceil(config.truncation_m / config.resolution_m) + 4.0);
+    const double work_side =
+        tile_cells + 2.0 * (std::ceil(config.truncation_m / config.resolution_m) + 4.0);
     const double mb = (double(chosen.size()) * tile_side * tile_side * 8.0 +
                        work_side * work_side * kPeakBytesPerSample) /
                       (1024.0 * 1024.0);
@@ -233,7 +236,8 @@ TraversableField BuildTiles(const RoadNetwork& network, const GridSpec& grid,
     CheckMemory(mb, what.str(), config);
     std::vector<TraversableField::Tile> tiles;
     tiles.reserve(chosen.size());
-    for (const auto& [ti, tj] : chosen) tiles.push_back(MakeTile(network, grid, tile_cells, ti, tj, config));
+    for (const auto& [ti, tj] : chosen)
+        tiles.push_back(MakeTile(network, grid, tile_cells, ti, tj, config));
     return TraversableField(grid, tile_cells, std::move(tiles), config.truncation_m);
 }
 
@@ -261,20 +265,23 @@ std::map<std::string, double> RoadClassConfig::Table() const {
         for (const auto& [k, v] : PedestrianTable()) table.emplace(k, v);
     }
     for (const auto& [k, v] : half_width_overrides_m) table[k] = v;
-    for (auto it = table.begin(); it != table.end();) it = it->second > 0 ? std::next(it) : table.erase(it);
+    for (auto it = table.begin(); it != table.end();)
+        it = it->second > 0 ? std::next(it) : table.erase(it);
     return table;
 }
 
 Eigen::AlignedBox2d RoadNetwork::Bounds() const {
     Eigen::AlignedBox2d box;
-    for (const auto& r : roads) for (const auto& p : r.points_en) box.extend(p);
+    for (const auto& r : roads)
+        for (const auto& p : r.points_en) box.extend(p);
     return box;
 }
 
 double RoadNetwork::TotalLengthM() const {
     double len = 0.0;
     for (const auto& r : roads) {
-        for (std::size_t i = 1; i < r.points_en.size(); ++i) len += (r.points_en[i] - r.points_en[i - 1]).norm();
+        for (std::size_t i = 1; i < r.points_en.size(); ++i)
+            len += (r.points_en[i] - r.points_en[i - 1]).norm();
     }
     return len;
 }
@@ -286,12 +293,19 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
     RoadNetwork net;
     net.missing_node_refs = osm.report.missing_node_refs;
     for (const OsmWay& way : osm.ways) {
-        if (way.is_area) { ++net.ways_area; continue; }
+        if (way.is_area) {
+            ++net.ways_area;
+            continue;
+        }
         auto it = table.find(way.highway);
         double hw = it != table.end() ? it->second : 0.0;
         if (it == table.end() && config.profile == "all") hw = config.default_half_width_m;
-        if (hw <= 0.0) { ++net.ways_excluded_by_class; continue; }
-        for (const GeoPoint& g : way.nodes) net.lon_lat_deg.extend(Eigen::Vector2d(g.lon_deg, g.lat_deg));
+        if (hw <= 0.0) {
+            ++net.ways_excluded_by_class;
+            continue;
+        }
+        for (const GeoPoint& g : way.nodes)
+            net.lon_lat_deg.extend(Eigen::Vector2d(g.lon_deg, g.lat_deg));
         RoadPolyline road{way.id, way.highway, hw, {}};
         road.points_en.reserve(way.nodes.size());
         for (const GeoPoint& g : way.nodes) road.points_en.push_back(to_en(g));
@@ -348,7 +362,8 @@ TraversableField RasteriseRoadCorridor(const RoadNetwork& network,
         for (int tj = j0; tj <= j1; ++tj) {
             for (int ti = i0; ti <= i1; ++ti) {
                 const Eigen::Vector2d lo(ti * tile_m, tj * tile_m);
-                const Eigen::Vector2d nearest = c.cwiseMax(lo).cwiseMin(lo + Eigen::Vector2d::Constant(tile_m));
+                const Eigen::Vector2d nearest =
+                    c.cwiseMax(lo).cwiseMin(lo + Eigen::Vector2d::Constant(tile_m));
                 if ((nearest - c).norm() <= d.radius_m) keep[std::size_t(tj) * tiles_x + ti] = 1;
             }
         }

@@ -104,7 +104,8 @@ std::optional<double> TraversableField::CorridorValue(const Eigen::Vector3d& p_e
     return tiles_[k].corridor.Value(p_enu);
 }
 
-std::optional<FieldSample> TraversableField::QueryCentreBilinear(const Eigen::Vector3d& p_enu) const {
+std::optional<FieldSample> TraversableField::QueryCentreBilinear(
+    const Eigen::Vector3d& p_enu) const {
     return QueryOne(p_enu, true, [](const InterpolatedField& f, const Eigen::Vector3d& p) {
         return f.QueryBilinear(p);
     });

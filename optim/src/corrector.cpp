@@ -501,10 +501,9 @@ void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField*
         result.agreement_threshold = AgreementThreshold(estimate, cfg);
     }
     if (!cfg.keep_agreeing_input) return;
-    const bool agrees =
-        result.agreement_poses > 0 &&
-        double(result.agreement_inside) / double(result.agreement_poses) >=
-            result.agreement_threshold;
+    const bool agrees = result.agreement_poses > 0 &&
+                        double(result.agreement_inside) / double(result.agreement_poses) >=
+                            result.agreement_threshold;
     if (result.input_nll_lower || agrees) KeepInput(estimate, result);
     // An input kept for its lower NLL lies in another basin than the correction: its covariance
     // is the model's curvature at the input, not the correction's. (An input kept for lying

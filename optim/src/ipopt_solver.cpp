@@ -3,7 +3,6 @@
 #include <IpIpoptApplication.hpp>
 #include <IpSolveStatistics.hpp>
 #include <IpTNLP.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <mutex>
@@ -62,8 +61,8 @@ public:
         }
         return true;
     }
-    bool eval_h(Index, const Number* x, bool, Number obj_factor, Index, const Number* lambda,
-                bool, Index, Index* rows, Index* cols, Number* values) override {
+    bool eval_h(Index, const Number* x, bool, Number obj_factor, Index, const Number* lambda, bool,
+                Index, Index* rows, Index* cols, Number* values) override {
         if (!values) {
             const auto& s = p_.HessianStructure();
             for (std::size_t k = 0; k < s.size(); ++k) rows[k] = s[k].first, cols[k] = s[k].second;
@@ -99,33 +98,54 @@ private:
 
 SolveStatus MapStatus(Ipopt::ApplicationReturnStatus s) {
     switch (s) {
-        case Ipopt::Solve_Succeeded: return SolveStatus::kSuccess;
-        case Ipopt::Solved_To_Acceptable_Level: return SolveStatus::kAcceptable;
+        case Ipopt::Solve_Succeeded:
+            return SolveStatus::kSuccess;
+        case Ipopt::Solved_To_Acceptable_Level:
+            return SolveStatus::kAcceptable;
         case Ipopt::Maximum_Iterations_Exceeded:
-        case Ipopt::Maximum_CpuTime_Exceeded: return SolveStatus::kMaxIterations;
-        case Ipopt::Infeasible_Problem_Detected: return SolveStatus::kInfeasible;
-        default: return SolveStatus::kFailed;
+        case Ipopt::Maximum_CpuTime_Exceeded:
+            return SolveStatus::kMaxIterations;
+        case Ipopt::Infeasible_Problem_Detected:
+            return SolveStatus::kInfeasible;
+        default:
+            return SolveStatus::kFailed;
     }
 }
 
 std::string StatusName(Ipopt::ApplicationReturnStatus s) {
     switch (s) {
-        case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-        case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-        case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
-        case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
-        case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-        case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-        case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-        case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-        case Ipopt::Restoration_Failed: return "Restoration_Failed";
-        case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-        case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-        case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-        case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-        case Ipopt::Invalid_Option: return "Invalid_Option";
-        case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-        default: return "Ipopt_Internal_Error (" + std::to_string(static_cast<int>(s)) + ")";
+        case Ipopt::Solve_Succeeded:
+            return "Solve_Succeeded";
+        case Ipopt::Solved_To_Acceptable_Level:
+            return "Solved_To_Acceptable_Level";
+        case Ipopt::Infeasible_Problem_Detected:
+            return "Infeasible_Problem_Detected";
+        case Ipopt::Search_Direction_Becomes_Too_Small:
+            return "Search_Direction_Becomes_Too_Small";
+        case Ipopt::Diverging_Iterates:
+            return "Diverging_Iterates";
+        case Ipopt::User_Requested_Stop:
+            return "User_Requested_Stop";
+        case Ipopt::Feasible_Point_Found:
+            return "Feasible_Point_Found";
+        case Ipopt::Maximum_Iterations_Exceeded:
+            return "Maximum_Iterations_Exceeded";
+        case Ipopt::Restoration_Failed:
+            return "Restoration_Failed";
+        case Ipopt::Error_In_Step_Computation:
+            return "Error_In_Step_Computation";
+        case Ipopt::Maximum_CpuTime_Exceeded:
+            return "Maximum_CpuTime_Exceeded";
+        case Ipopt::Not_Enough_Degrees_Of_Freedom:
+            return "Not_Enough_Degrees_Of_Freedom";
+        case Ipopt::Invalid_Problem_Definition:
+            return "Invalid_Problem_Definition";
+        case Ipopt::Invalid_Option:
+            return "Invalid_Option";
+        case Ipopt::Invalid_Number_Detected:
+            return "Invalid_Number_Detected";
+        default:
+            return "Ipopt_Internal_Error (" + std::to_string(static_cast<int>(s)) + ")";
     }
 }
 

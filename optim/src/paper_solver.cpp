@@ -17,9 +17,9 @@ double Course(const Eigen::Vector2d& d) { return std::atan2(d.y(), d.x()); }
 struct Epoch {
     Eigen::Vector2d p_prev;
     double up_m = 0.0;
-    double course_prev_rad = 0.0;   // corrected course of the previous step (unwrapped)
-    double dcourse_obs_rad = 0.0;   // observed course change
-    double length_m = 0.0;          // observed step length
+    double course_prev_rad = 0.0;  // corrected course of the previous step (unwrapped)
+    double dcourse_obs_rad = 0.0;  // observed course change
+    double length_m = 0.0;         // observed step length
 };
 
 // w_m min(d, h)^2 / 2 sigma_m^2 on the bilinear grid, and its gradient in (x, y). Zero outside
@@ -70,7 +70,8 @@ double EpochCost(const Epoch& e, const TraversableField* field, const PaperSolve
     // the sideways component, zero, so the (x_b, y_b) gradient is exact.
     StepVector xs = x;
     xs[kYawA] = course;
-    cost += StepLengthTerm{e.length_m, 0.0, c.step_sigma_m, c.step_weight}.Evaluate(xs, &g, nullptr);
+    cost +=
+        StepLengthTerm{e.length_m, 0.0, c.step_sigma_m, c.step_weight}.Evaluate(xs, &g, nullptr);
     grad += Eigen::Vector2d(g[kXb], g[kYb]);
 
     Eigen::Vector2d g_map;
@@ -113,9 +114,10 @@ std::optional<ParamProblem> PaperSolverConfig::FindProblem() const {
                             "step_sigma_m^2 must be < 2)",
                             "learning_rate"};
     }
-    const double turn_k = (turn_weight / (turn_sigma_rad * turn_sigma_rad) +
-                           preservation_weight / (preservation_sigma_rad * preservation_sigma_rad)) /
-                          (min_step_m * min_step_m);
+    const double turn_k =
+        (turn_weight / (turn_sigma_rad * turn_sigma_rad) +
+         preservation_weight / (preservation_sigma_rad * preservation_sigma_rad)) /
+        (min_step_m * min_step_m);
     if (learning_rate * turn_k >= 2.0) {
         return ParamProblem{"min_step_m",
                             "too small for learning_rate and turn_sigma_rad (learning_rate * turn "
@@ -149,7 +151,8 @@ CorrectionResult CorrectWithPaperMethod(const PlanarTrajectory& estimate,
         const double dcourse = course_est[i] - course_est[i - 1];
         const double predicted = course_corr[i - 1] + dcourse;
         // Start: the previous corrected pose composed with the observed step.
-        Eigen::Vector2d p = p_prev + length * Eigen::Vector2d(std::cos(predicted), std::sin(predicted));
+        Eigen::Vector2d p =
+            p_prev + length * Eigen::Vector2d(std::cos(predicted), std::sin(predicted));
         course_corr[i] = predicted;
         if (length >= config.min_step_m) {
             const Epoch e{p_prev, estimate.up_m[i], course_corr[i - 1], dcourse, length};

@@ -4,11 +4,16 @@ namespace driftcorr {
 
 std::string ToString(SolveStatus status) {
     switch (status) {
-        case SolveStatus::kSuccess: return "success";
-        case SolveStatus::kAcceptable: return "acceptable";
-        case SolveStatus::kMaxIterations: return "max_iterations";
-        case SolveStatus::kInfeasible: return "infeasible";
-        default: return "failed";
+        case SolveStatus::kSuccess:
+            return "success";
+        case SolveStatus::kAcceptable:
+            return "acceptable";
+        case SolveStatus::kMaxIterations:
+            return "max_iterations";
+        case SolveStatus::kInfeasible:
+            return "infeasible";
+        default:
+            return "failed";
     }
 }
 

@@ -44,9 +44,11 @@ void JudgeSolver(const CorrectionResult& r, Findings& f) {
         return;
     }
     if (r.input_kept && r.input_nll_lower) {
-        f.Degraded("the correction explains the odometry and the map worse than the input does "
-                   "(NLL " + FormatFixed(r.nll, 1) + " against " + FormatFixed(r.input_nll, 1) +
-                   "): the input is written unchanged, and nothing here vouches for it");
+        f.Degraded(
+            "the correction explains the odometry and the map worse than the input does "
+            "(NLL " +
+            FormatFixed(r.nll, 1) + " against " + FormatFixed(r.input_nll, 1) +
+            "): the input is written unchanged, and nothing here vouches for it");
     }
     if (r.refine_report.message.find("without hard constraints") != std::string::npos ||
         r.message.find("without hard constraints") != std::string::npos) {

@@ -29,7 +29,6 @@
 namespace driftcorr::python {
 namespace {
 
-
 py::list Strings(const std::vector<std::string>& items) {
     py::list out;
     for (const std::string& s : items) out.append(s);
@@ -253,8 +252,8 @@ public:
         d["verdict"] = py::none();
         d["reasons"] = py::list();
         if (usable) {
-            const OnlineVerdict v = JudgeOnline(reference_, causal_, &setup_->field, model_,
-                                                result, verdict_config_);
+            const OnlineVerdict v =
+                JudgeOnline(reference_, causal_, &setup_->field, model_, result, verdict_config_);
             d["verdict"] = ToString(v.verdict.level);
             d["reasons"] = Strings(v.verdict.reasons);
         }

@@ -4,7 +4,6 @@
 // Run: build/tests/bench_driftcorr [--benchmark_filter=...]. The correction benchmarks read the
 // real KITTI scenarios from ../shared/datasets and are skipped (with a message) when absent.
 #include <benchmark/benchmark.h>
-
 #include <sys/resource.h>
 
 #include <cmath>
@@ -27,14 +26,16 @@ RoadNetwork GridNetwork(int n) {
     RoadNetwork net;
     for (int k = 0; k < n; ++k) {
         RoadPolyline a{k, "residential", 4.5, {{0.0, 100.0 * k}, {100.0 * (n - 1), 100.0 * k}}};
-        RoadPolyline b{1000 + k, "residential", 4.5, {{100.0 * k, 0.0}, {100.0 * k, 100.0 * (n - 1)}}};
+        RoadPolyline b{
+            1000 + k, "residential", 4.5, {{100.0 * k, 0.0}, {100.0 * k, 100.0 * (n - 1)}}};
         net.roads.push_back(a);
         net.roads.push_back(b);
     }
     RoadPolyline arc{5000, "secondary", 6.0, {}};
     for (int i = 0; i <= 100; ++i) {
         const double t = M_PI * i / 100.0;
-        arc.points_en.emplace_back(50.0 * n + 40.0 * n * std::cos(t), 50.0 * n + 40.0 * n * std::sin(t));
+        arc.points_en.emplace_back(50.0 * n + 40.0 * n * std::cos(t),
+                                   50.0 * n + 40.0 * n * std::sin(t));
     }
     net.roads.push_back(arc);
     return net;
@@ -87,9 +88,11 @@ void BM_CorrectKitti(benchmark::State& state, const std::string& folder) {
     state.counters["peak_memory_mb"] = double(usage.ru_maxrss) / 1024.0;  // the process's so far
 }
 BENCHMARK_CAPTURE(BM_CorrectKitti, kitti00_cvo, std::string("kitti00_cvo_stereo_geometric"))
-    ->Unit(benchmark::kMillisecond)->Iterations(3);
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 BENCHMARK_CAPTURE(BM_CorrectKitti, kitti00_orb2, std::string("kitti00_orb2_longruidong"))
-    ->Unit(benchmark::kMillisecond)->Iterations(3);
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 // A car driving laps of a circular road (radius 160 m, 2 m steps at 10 Hz) on its centre line,
 // and the road's field.
@@ -153,8 +156,8 @@ void BM_WindowSolve(benchmark::State& state) {
     for (auto _ : state) {
         TrajectoryState s = start;
         WindowProblem p(s, &lap.field, cfg.model, 1, n - 1, std::vector<std::uint8_t>(n - 1, 0));
-        const SolveReport r = ipopt ? SolveWithIpopt(p, cfg.window_ipopt)
-                                    : SolveWithNewton(p, NewtonOptions{});
+        const SolveReport r =
+            ipopt ? SolveWithIpopt(p, cfg.window_ipopt) : SolveWithNewton(p, NewtonOptions{});
         if (!Usable(r.status)) state.SkipWithError(r.message.c_str());
         iterations = r.iterations;
         benchmark::DoNotOptimize(s);

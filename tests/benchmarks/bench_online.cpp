@@ -2,10 +2,9 @@
 // pushed through OnlineCorrector::Push at 100 Hz (threaded mode: the window solves run on the
 // worker, on the same core when pinned). Reports p50, p99 and max of the Push latency
 // (microseconds), the solve time per window (milliseconds), the share of poses returned without a
-// fresh solve, the worst correction age (epochs) and the back-pressure waits (seconds). The whole program, through a pipe and the
-// binary: tests/benchmarks/run_stream_bench.sh.
-// Run on one core: taskset -c 0 build/tests/bench_online
-// Skipped with a message when ../shared/datasets is absent.
+// fresh solve, the worst correction age (epochs) and the back-pressure waits (seconds). The whole
+// program, through a pipe and the binary: tests/benchmarks/run_stream_bench.sh. Run on one core:
+// taskset -c 0 build/tests/bench_online Skipped with a message when ../shared/datasets is absent.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

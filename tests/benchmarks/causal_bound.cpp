@@ -16,9 +16,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "scenario_list.h"
 #include "driftcorr/eval/evaluation.h"
 #include "driftcorr/pipeline/pipeline.h"
+#include "scenario_list.h"
 
 namespace {
 
@@ -45,10 +45,10 @@ void Evaluate(const std::string& dir) {
     const eval::MethodResult* online = ev.Find(eval::Method::kOnline);
     if (!ev.ok() || !ev.has_ground_truth || !batch || !batch->ok || !online || !online->ok) {
         std::printf("%-30s skipped: %s\n", ev.label.c_str(),
-                    !ev.ok()                 ? ev.error.c_str()
-                    : !ev.has_ground_truth   ? "no ground truth"
-                    : !batch || !batch->ok   ? "batch failed"
-                                             : "online failed");
+                    !ev.ok()               ? ev.error.c_str()
+                    : !ev.has_ground_truth ? "no ground truth"
+                    : !batch || !batch->ok ? "batch failed"
+                                           : "online failed");
         return;
     }
     // The same scenario, field and settings for the prefix solves.
@@ -87,15 +87,13 @@ void Evaluate(const std::string& dir) {
     }
     const double prefix = std::sqrt(s_prefix / count), onl = std::sqrt(s_online / count),
                  bat = std::sqrt(s_batch / count);
-    std::printf("%-30s %zu epochs (every %zu, %zu failed): RMS error batch %.2f | prefix-batch "
-                "last pose %.2f (x%.2f) | online causal %.2f (x%.2f)\n",
-                ps.scenario.name.c_str(), count, stride, failed, bat, prefix, prefix / bat, onl,
-                onl / bat);
+    std::printf(
+        "%-30s %zu epochs (every %zu, %zu failed): RMS error batch %.2f | prefix-batch "
+        "last pose %.2f (x%.2f) | online causal %.2f (x%.2f)\n",
+        ps.scenario.name.c_str(), count, stride, failed, bat, prefix, prefix / bat, onl, onl / bat);
     std::fflush(stdout);
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-    return driftcorr::bench::ForEachScenario(argc, argv, Evaluate);
-}
+int main(int argc, char** argv) { return driftcorr::bench::ForEachScenario(argc, argv, Evaluate); }

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "scenario_list.h"
 #include "driftcorr/pipeline/online.h"
+#include "scenario_list.h"
 
 namespace {
 
@@ -101,8 +101,8 @@ void Evaluate(const std::string& dir) {
             }
         }
         std::printf(" %s causal %7.2f (x%.2f; along %.2f cross %.2f) smoothed %7.2f |",
-                    sync ? "sync" : "fast", causal, causal / run.after->ate_m, c.along_m,
-                    c.cross_m, smooth);
+                    sync ? "sync" : "fast", causal, causal / run.after->ate_m, c.along_m, c.cross_m,
+                    smooth);
     }
     std::printf("\n");
     std::fflush(stdout);
@@ -110,6 +110,4 @@ void Evaluate(const std::string& dir) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-    return driftcorr::bench::ForEachScenario(argc, argv, Evaluate);
-}
+int main(int argc, char** argv) { return driftcorr::bench::ForEachScenario(argc, argv, Evaluate); }

@@ -45,17 +45,17 @@
 #include <vector>
 
 #include "driftcorr/core/angles.h"
-#include "scenario_list.h"
 #include "driftcorr/pipeline/pipeline.h"
+#include "scenario_list.h"
 
 namespace {
 
 using namespace driftcorr;
 
-constexpr double kChordM = 5.0;         // direction of travel measured over this much path
+constexpr double kChordM = 5.0;  // direction of travel measured over this much path
 // A straight keeps within this of the final direction [deg] (environment STRAIGHT_DEG).
 double kStraightDeg = 10.0;
-constexpr double kScaleWindowM = 500.0; // path before the straight for its scale
+constexpr double kScaleWindowM = 500.0;  // path before the straight for its scale
 // A new straight starts where the direction turned this much [deg] (environment TURN_DEG).
 double kTurnDeg = 30.0;
 // Indoors a straight also ends where the true height changed this much since the last cut [m]

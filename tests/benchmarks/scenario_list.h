@@ -12,10 +12,10 @@ template <typename Fn>
 int ForEachScenario(int argc, char** argv, Fn&& evaluate) {
     std::vector<std::string> dirs(argv + 1, argv + argc);
     if (dirs.empty()) {
-        for (const char* s : {"kitti00_cvo_stereo_geometric", "kitti05_cvo_stereo_geometric",
-                              "kitti07_cvo_stereo_geometric", "kitti00_gicp_frame2frame",
-                              "kitti05_gicp_frame2frame", "kitti07_gicp_frame2frame",
-                              "kitti00_orb2_longruidong"}) {
+        for (const char* s :
+             {"kitti00_cvo_stereo_geometric", "kitti05_cvo_stereo_geometric",
+              "kitti07_cvo_stereo_geometric", "kitti00_gicp_frame2frame",
+              "kitti05_gicp_frame2frame", "kitti07_gicp_frame2frame", "kitti00_orb2_longruidong"}) {
             dirs.push_back(std::string(DRIFTCORR_SHARED_DATASETS) + "/" + s);
         }
     }

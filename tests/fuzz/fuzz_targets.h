@@ -120,8 +120,9 @@ inline void RunScenarioYaml(std::string_view input, const std::string& tmp_dir) 
         Require(!s.map.empty(), "scenario without map layers");
         Require(s.anchor.lat_deg.has_value() != s.anchor.crs.has_value(),
                 "anchor must be geographic xor grid");
-        Require((!s.anchor.yaw_deg || std::isfinite(*s.anchor.yaw_deg)) && std::isfinite(s.anchor.z_m),
-                "anchor yaw/z not finite");
+        Require(
+            (!s.anchor.yaw_deg || std::isfinite(*s.anchor.yaw_deg)) && std::isfinite(s.anchor.z_m),
+            "anchor yaw/z not finite");
         if (s.anchor.lat_deg) {
             Require(std::abs(*s.anchor.lat_deg) <= 90.0 && std::abs(*s.anchor.lon_deg) <= 180.0,
                     "anchor lat/lon out of range");

@@ -1,13 +1,12 @@
 #include "driftcorr/eval/evaluation.h"
 
-#include "driftcorr/optim/online_corrector.h"
-
 #include <chrono>
 #include <exception>
 #include <filesystem>
 #include <map>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/optim/online_corrector.h"
 
 namespace driftcorr::eval {
 namespace {
@@ -67,10 +66,9 @@ MethodResult RunOnline(const pipeline::PreparedScenario& ps, const pipeline::Pip
     }
     const CorrectionResult smoothed = online.Finish();
     if (Usable(smoothed.status)) {
-        r.verdict =
-            JudgeOnline(est, causal, &ps.field, oc.corrector.model, smoothed,
-                        pipeline::VerdictFor(ps.scenario, base))
-                .verdict;
+        r.verdict = JudgeOnline(est, causal, &ps.field, oc.corrector.model, smoothed,
+                                pipeline::VerdictFor(ps.scenario, base))
+                        .verdict;
     }
     r.wall_s = Since(t0);
     r.poses_per_s = est.size() / std::max(1e-9, r.wall_s);
@@ -139,10 +137,14 @@ void Measure(MethodResult& r, const pipeline::PreparedScenario& ps) {
 
 std::string ToString(Method method) {
     switch (method) {
-        case Method::kEstimate: return "estimate";
-        case Method::kPaper: return "paper";
-        case Method::kDriftcorr: return "driftcorr";
-        case Method::kOnline: return "online";
+        case Method::kEstimate:
+            return "estimate";
+        case Method::kPaper:
+            return "paper";
+        case Method::kDriftcorr:
+            return "driftcorr";
+        case Method::kOnline:
+            return "online";
     }
     return "unknown";
 }

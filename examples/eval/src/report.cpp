@@ -38,16 +38,20 @@ std::string JsonString(const std::string& s) {
     std::string out = "\"";
     for (const char ch : s) {
         const unsigned char c = static_cast<unsigned char>(ch);
-        if (c == '"') out += "\\\"";
-        else if (c == '\\') out += "\\\\";
-        else if (c == '\n') out += "\\n";
-        else if (c == '\t') out += "\\t";
+        if (c == '"')
+            out += "\\\"";
+        else if (c == '\\')
+            out += "\\\\";
+        else if (c == '\n')
+            out += "\\n";
+        else if (c == '\t')
+            out += "\\t";
         else if (c < 0x20) {
             char buf[8];
             std::snprintf(buf, sizeof(buf), "\\u%04x", static_cast<unsigned>(c));
             out += buf;
-        }
-        else out += ch;
+        } else
+            out += ch;
     }
     return out + "\"";
 }
@@ -55,11 +59,16 @@ std::string JsonString(const std::string& s) {
 std::string XmlEscape(const std::string& s) {
     std::string out;
     for (const char c : s) {
-        if (c == '&') out += "&amp;";
-        else if (c == '<') out += "&lt;";
-        else if (c == '>') out += "&gt;";
-        else if (c == '"') out += "&quot;";
-        else out += c;
+        if (c == '&')
+            out += "&amp;";
+        else if (c == '<')
+            out += "&lt;";
+        else if (c == '>')
+            out += "&gt;";
+        else if (c == '"')
+            out += "&quot;";
+        else
+            out += c;
     }
     return out;
 }
@@ -68,9 +77,12 @@ std::string XmlEscape(const std::string& s) {
 std::string MdCell(const std::string& s) {
     std::string out;
     for (const char c : s) {
-        if (c == '|') out += "\\|";
-        else if (c == '\n') out += ' ';
-        else out += c;
+        if (c == '|')
+            out += "\\|";
+        else if (c == '\n')
+            out += ' ';
+        else
+            out += c;
     }
     return out;
 }
@@ -89,10 +101,14 @@ std::vector<Method> Columns(const std::vector<ScenarioEvaluation>& evals) {
 
 const char* MethodColour(Method m) {
     switch (m) {
-        case Method::kEstimate: return "#d62728";   // red
-        case Method::kPaper: return "#ff7f0e";      // orange
-        case Method::kDriftcorr: return "#1f77b4";  // blue
-        case Method::kOnline: return "#2ca02c";     // green
+        case Method::kEstimate:
+            return "#d62728";  // red
+        case Method::kPaper:
+            return "#ff7f0e";  // orange
+        case Method::kDriftcorr:
+            return "#1f77b4";  // blue
+        case Method::kOnline:
+            return "#2ca02c";  // green
     }
     return "#9467bd";
 }
@@ -139,10 +155,12 @@ std::string ConsoleCell(const MethodResult* r, bool has_gt, bool timed) {
     } else if (r->metrics) {
         s = Fmt("%8.2f", r->metrics->ate_m) + Fmt(" %8.2f", r->metrics->final_m);
     } else {
-        s = Fmt("map %4.2f", r->mean_map_distance_m.value_or(NAN)) + Fmt("%9s", has_gt ? "" : "(no GT)");
+        s = Fmt("map %4.2f", r->mean_map_distance_m.value_or(NAN)) +
+            Fmt("%9s", has_gt ? "" : "(no GT)");
     }
     if (timed) {
-        s += r && r->ok ? Fmt(" %8.2f", r->wall_s) + Fmt(" %8.0f", r->poses_per_s) : Fmt("%18s", "");
+        s +=
+            r && r->ok ? Fmt(" %8.2f", r->wall_s) + Fmt(" %8.0f", r->poses_per_s) : Fmt("%18s", "");
     }
     return s;
 }
@@ -175,9 +193,11 @@ std::string FormatTable(const std::vector<ScenarioEvaluation>& evals) {
         for (const Method m : cols) {
             const MethodResult* r = ev.Find(m);
             out << " | " << ConsoleCell(r, ev.has_ground_truth, m != Method::kEstimate);
-            if (r && !r->ok) notes.push_back(ev.label + ": " + ToString(m) + " failed: " + r->message);
+            if (r && !r->ok)
+                notes.push_back(ev.label + ": " + ToString(m) + " failed: " + r->message);
         }
-        if (!ev.has_ground_truth) notes.push_back(ev.label + ": no ground truth; mean map distance [m] shown");
+        if (!ev.has_ground_truth)
+            notes.push_back(ev.label + ": no ground truth; mean map distance [m] shown");
         out << "\n";
     }
     for (const ScenarioEvaluation& ev : evals) {
@@ -218,8 +238,8 @@ namespace {
 
 std::vector<std::string> MdMethodHeaders(Method m) {
     const std::string n = ToString(m);
-    std::vector<std::string> h = {n + " ATE [m]", "final [m]", "max [m]", "p90 [m]", "drift [%]",
-                                  "right floor [%]", "map [m]"};
+    std::vector<std::string> h = {n + " ATE [m]", "final [m]",       "max [m]", "p90 [m]",
+                                  "drift [%]",    "right floor [%]", "map [m]"};
     if (m != Method::kEstimate) {
         h.push_back("time [s]");
         h.push_back("poses/s");
@@ -265,9 +285,12 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
     const std::vector<Method> cols = Columns(evals);
     std::ostringstream out;
     out << "# driftcorr eval\n\n"
-        << "Horizontal errors against the ground truth, pose by pose, in the world East-North plane "
-           "through the scenario's anchor, without re-alignment (docs/FORMAT.md, \"Judging\"). ATE = RMS "
-           "error, final = error of the last pose, p90 = 90th percentile, drift = KITTI translational "
+        << "Horizontal errors against the ground truth, pose by pose, in the world East-North "
+           "plane "
+           "through the scenario's anchor, without re-alignment (docs/FORMAT.md, \"Judging\"). ATE "
+           "= RMS "
+           "error, final = error of the last pose, p90 = 90th percentile, drift = KITTI "
+           "translational "
            "drift over 100-800 m segments, right floor = share of poses within 1.5 m of the ground "
            "truth's height (indoor3d), map = mean distance of the poses to the nearest road "
            "centre line, time = solver wall time (map field and loading excluded, shared by all "
@@ -283,9 +306,11 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
     out << "\n";
     std::vector<std::string> failures, warnings;
     for (const ScenarioEvaluation& ev : evals) {
-        std::vector<std::string> row = {ev.label, ev.mode.empty() ? "?" : ev.mode,
-                                        ev.ok() ? std::to_string(ev.poses) : "-",
-                                        !ev.ok() ? "-" : ev.has_ground_truth ? "yes" : "**no** (time and map distance only)"};
+        std::vector<std::string> row = {
+            ev.label, ev.mode.empty() ? "?" : ev.mode, ev.ok() ? std::to_string(ev.poses) : "-",
+            !ev.ok()              ? "-"
+            : ev.has_ground_truth ? "yes"
+                                  : "**no** (time and map distance only)"};
         if (!ev.ok()) {
             row.push_back("**FAILED**: " + ev.error);
             failures.push_back("- **" + ev.label + "**: " + ev.error);
@@ -293,7 +318,9 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
             for (const Method m : cols) {
                 for (const std::string& c : MdMethodCells(ev, m)) row.push_back(c);
                 const MethodResult* r = ev.Find(m);
-                if (r && !r->ok) failures.push_back("- **" + ev.label + "**, " + ToString(m) + ": " + r->message);
+                if (r && !r->ok)
+                    failures.push_back("- **" + ev.label + "**, " + ToString(m) + ": " +
+                                       r->message);
                 if (!r) continue;
                 for (const std::string& w : r->warnings) {
                     warnings.push_back("- **" + ev.label + "**, " + ToString(m) + ": " + w);
@@ -317,14 +344,18 @@ std::string SummaryMarkdown(const std::vector<ScenarioEvaluation>& evals) {
         out << "\n";
     }
     if (const double ratio = SpeedRatioPaperOverDriftcorr(evals); ratio > 0.0) {
-        out << "## Speed\n\nPaper's method / driftcorr solver time, summed over the scenarios where "
-               "both ran: **" << Num(ratio, 2) << "** (" << (ratio > 1.0 ? "driftcorr is faster" : "the paper's method is faster") << ").\n\n";
+        out << "## Speed\n\nPaper's method / driftcorr solver time, summed over the scenarios "
+               "where "
+               "both ran: **"
+            << Num(ratio, 2) << "** ("
+            << (ratio > 1.0 ? "driftcorr is faster" : "the paper's method is faster") << ").\n\n";
     }
     out << "## Plots\n\n";
     for (const ScenarioEvaluation& ev : evals) {
         if (!ev.ok()) continue;
         out << "- " << ev.label << ": [map](" << PlotName(ev, "map") << ")";
-        if (ev.has_ground_truth) out << ", [error against distance](" << PlotName(ev, "error") << ")";
+        if (ev.has_ground_truth)
+            out << ", [error against distance](" << PlotName(ev, "error") << ")";
         out << "\n";
     }
     return out.str();
@@ -354,9 +385,9 @@ std::string ResultsJson(const std::vector<ScenarioEvaluation>& evals) {
         for (std::size_t j = 0; j < ev.methods.size(); ++j) {
             const MethodResult& r = ev.methods[j];
             o << (j ? ",\n" : "\n") << "        " << JsonString(ToString(r.method)) << ": {"
-              << "\"ok\": " << (r.ok ? "true" : "false") << ", \"message\": " << JsonString(r.message)
-              << ", \"wall_s\": " << JsonNum(r.wall_s) << ", \"poses_per_s\": " << JsonNum(r.poses_per_s)
-              << ", \"mean_map_distance_m\": "
+              << "\"ok\": " << (r.ok ? "true" : "false")
+              << ", \"message\": " << JsonString(r.message) << ", \"wall_s\": " << JsonNum(r.wall_s)
+              << ", \"poses_per_s\": " << JsonNum(r.poses_per_s) << ", \"mean_map_distance_m\": "
               << (r.mean_map_distance_m ? JsonNum(*r.mean_map_distance_m) : "null");
             if (r.verdict) {
                 o << ", \"verdict\": " << JsonString(ToString(r.verdict->level))
@@ -371,9 +402,11 @@ std::string ResultsJson(const std::vector<ScenarioEvaluation>& evals) {
                 const ErrorMetrics& m = *r.metrics;
                 o << ", \"ate_m\": " << JsonNum(m.ate_m) << ", \"final_m\": " << JsonNum(m.final_m)
                   << ", \"max_m\": " << JsonNum(m.max_m) << ", \"p90_m\": " << JsonNum(m.p90_m)
-                  << ", \"mean_m\": " << JsonNum(m.mean_m) << ", \"drift_pct\": " << JsonNum(m.drift_pct)
+                  << ", \"mean_m\": " << JsonNum(m.mean_m)
+                  << ", \"drift_pct\": " << JsonNum(m.drift_pct)
                   << ", \"path_length_m\": " << JsonNum(m.path_length_m);
-                if (ev.mode == "indoor3d") o << ", \"floor_accuracy\": " << JsonNum(m.floor_accuracy);
+                if (ev.mode == "indoor3d")
+                    o << ", \"floor_accuracy\": " << JsonNum(m.floor_accuracy);
             }
             o << "}";
         }
@@ -386,7 +419,8 @@ std::string ResultsJson(const std::vector<ScenarioEvaluation>& evals) {
     }
     o << (evals.empty() ? "],\n" : "\n  ],\n");
     const double ratio = SpeedRatioPaperOverDriftcorr(evals);
-    o << "  \"speed_ratio_paper_over_driftcorr\": " << (ratio > 0.0 ? JsonNum(ratio) : "null") << ",\n"
+    o << "  \"speed_ratio_paper_over_driftcorr\": " << (ratio > 0.0 ? JsonNum(ratio) : "null")
+      << ",\n"
       << "  \"any_failed\": " << (any_failed ? "true" : "false") << "\n}\n";
     return o.str();
 }
@@ -410,7 +444,8 @@ std::string MapSvg(const ScenarioEvaluation& ev) {
     const double scale = std::min(max_w / box.sizes().x(), max_h / box.sizes().y());  // px per m
     const double w = box.sizes().x() * scale, h = box.sizes().y() * scale;
     auto to_px = [&](const Eigen::Vector2d& p) {
-        return Eigen::Vector2d(m + (p.x() - box.min().x()) * scale, top + (box.max().y() - p.y()) * scale);
+        return Eigen::Vector2d(m + (p.x() - box.min().x()) * scale,
+                               top + (box.max().y() - p.y()) * scale);
     };
     std::ostringstream s;
     s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << Num(w + 2 * m, 0) << "\" height=\""
@@ -418,12 +453,13 @@ std::string MapSvg(const ScenarioEvaluation& ev) {
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       << "<text x=\"" << m << "\" y=\"22\" font-size=\"15\" font-weight=\"bold\">"
       << XmlEscape(ev.label + (ev.name.empty() ? "" : " (" + ev.name + ")")) << "</text>\n"
-      << "<defs><clipPath id=\"plot\"><rect x=\"" << m << "\" y=\"" << top << "\" width=\"" << Num(w, 1)
-      << "\" height=\"" << Num(h, 1) << "\"/></clipPath></defs>\n"
-      << "<rect x=\"" << m << "\" y=\"" << top << "\" width=\"" << Num(w, 1) << "\" height=\"" << Num(h, 1)
-      << "\" fill=\"#fafafa\" stroke=\"#888\"/>\n<g clip-path=\"url(#plot)\">\n";
+      << "<defs><clipPath id=\"plot\"><rect x=\"" << m << "\" y=\"" << top << "\" width=\""
+      << Num(w, 1) << "\" height=\"" << Num(h, 1) << "\"/></clipPath></defs>\n"
+      << "<rect x=\"" << m << "\" y=\"" << top << "\" width=\"" << Num(w, 1) << "\" height=\""
+      << Num(h, 1) << "\" fill=\"#fafafa\" stroke=\"#888\"/>\n<g clip-path=\"url(#plot)\">\n";
     // Roads at their width, light grey.
-    s << "<g fill=\"none\" stroke=\"#d4d4d4\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
+    s << "<g fill=\"none\" stroke=\"#d4d4d4\" stroke-linecap=\"round\" "
+         "stroke-linejoin=\"round\">\n";
     for (const RoadPolyline& road : ev.network.roads) {
         Eigen::AlignedBox2d rb;
         for (const auto& p : road.points_en) rb.extend(p);
@@ -434,7 +470,8 @@ std::string MapSvg(const ScenarioEvaluation& ev) {
     s << "</g>\n";
     // Tracks: ground truth below, methods above, ours last.
     if (ev.ground_truth) {
-        s << "<polyline fill=\"none\" stroke=\"#000\" stroke-width=\"3\" stroke-linejoin=\"round\" points=\""
+        s << "<polyline fill=\"none\" stroke=\"#000\" stroke-width=\"3\" stroke-linejoin=\"round\" "
+             "points=\""
           << PolylinePoints(ev.ground_truth->p_en, to_px) << "\"/>\n";
     }
     for (const MethodResult& r : ev.methods) {
@@ -456,8 +493,10 @@ std::string MapSvg(const ScenarioEvaluation& ev) {
     if (ev.ground_truth) legend.push_back({"#000", "ground truth (start: circle)"});
     for (const MethodResult& r : ev.methods) {
         std::string text = ToString(r.method);
-        if (!r.ok) text += ": failed";
-        else if (r.metrics) text += ", ATE " + Num(r.metrics->ate_m, 1) + " m";
+        if (!r.ok)
+            text += ": failed";
+        else if (r.metrics)
+            text += ", ATE " + Num(r.metrics->ate_m, 1) + " m";
         legend.push_back({MethodColour(r.method), text});
     }
     const double lx = m + 8, ly = top + 8, lh = 20.0 * legend.size() + 8;
@@ -465,16 +504,19 @@ std::string MapSvg(const ScenarioEvaluation& ev) {
       << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#888\"/>\n";
     for (std::size_t i = 0; i < legend.size(); ++i) {
         const double y = ly + 16 + 20.0 * i;
-        s << "<line x1=\"" << lx + 8 << "\" y1=\"" << y - 4 << "\" x2=\"" << lx + 34 << "\" y2=\"" << y - 4
-          << "\" stroke=\"" << legend[i].first << "\" stroke-width=\"" << (i == 0 ? 6 : 3) << "\"/>\n"
-          << "<text x=\"" << lx + 42 << "\" y=\"" << y << "\">" << XmlEscape(legend[i].second) << "</text>\n";
+        s << "<line x1=\"" << lx + 8 << "\" y1=\"" << y - 4 << "\" x2=\"" << lx + 34 << "\" y2=\""
+          << y - 4 << "\" stroke=\"" << legend[i].first << "\" stroke-width=\"" << (i == 0 ? 6 : 3)
+          << "\"/>\n"
+          << "<text x=\"" << lx + 42 << "\" y=\"" << y << "\">" << XmlEscape(legend[i].second)
+          << "</text>\n";
     }
     // Scale bar (bottom left) and north arrow (top right).
     const double bar_m = NiceStep(0.2 * box.sizes().x(), 1);
     const double bx = m + 14, by = top + h - 16, bw = bar_m * scale;
     s << "<rect x=\"" << bx - 6 << "\" y=\"" << by - 22 << "\" width=\"" << Num(bw + 12, 1)
       << "\" height=\"32\" fill=\"white\" fill-opacity=\"0.85\"/>\n"
-      << "<path d=\"M" << bx << "," << by - 5 << " v5 h" << Num(bw, 1) << " v-5\" fill=\"none\" stroke=\"#000\" stroke-width=\"2\"/>\n"
+      << "<path d=\"M" << bx << "," << by - 5 << " v5 h" << Num(bw, 1)
+      << " v-5\" fill=\"none\" stroke=\"#000\" stroke-width=\"2\"/>\n"
       << "<text x=\"" << Num(bx + bw / 2, 1) << "\" y=\"" << by - 9 << "\" text-anchor=\"middle\">"
       << Num(bar_m, 0) << " m</text>\n";
     const double nx = m + w - 24, ny = top + 14;
@@ -510,31 +552,34 @@ std::string ErrorSvg(const ScenarioEvaluation& ev) {
     s << "<g stroke=\"#e0e0e0\">\n";
     for (double x = 0; x <= x_top + 1e-9; x += x_step) {
         const double px = to_px({x, 0}).x();
-        s << "<line x1=\"" << Num(px, 1) << "\" y1=\"" << mt << "\" x2=\"" << Num(px, 1) << "\" y2=\"" << mt + ph << "\"/>\n";
+        s << "<line x1=\"" << Num(px, 1) << "\" y1=\"" << mt << "\" x2=\"" << Num(px, 1)
+          << "\" y2=\"" << mt + ph << "\"/>\n";
     }
     for (double y = 0; y <= y_top + 1e-9; y += y_step) {
         const double py = to_px({0, y}).y();
-        s << "<line x1=\"" << ml << "\" y1=\"" << Num(py, 1) << "\" x2=\"" << ml + pw << "\" y2=\"" << Num(py, 1) << "\"/>\n";
+        s << "<line x1=\"" << ml << "\" y1=\"" << Num(py, 1) << "\" x2=\"" << ml + pw << "\" y2=\""
+          << Num(py, 1) << "\"/>\n";
     }
     s << "</g>\n<g>\n";
     const int xd = x_step < 1 ? 1 : 0, yd = y_step < 0.1 ? 2 : y_step < 1 ? 1 : 0;
     for (double x = 0; x <= x_top + 1e-9; x += x_step) {
         const double px = to_px({x, 0}).x();
-        s << "<line x1=\"" << Num(px, 1) << "\" y1=\"" << mt + ph << "\" x2=\"" << Num(px, 1) << "\" y2=\""
-          << mt + ph + 5 << "\" stroke=\"#000\"/><text x=\"" << Num(px, 1) << "\" y=\"" << mt + ph + 19
-          << "\" text-anchor=\"middle\">" << Num(x, xd) << "</text>\n";
+        s << "<line x1=\"" << Num(px, 1) << "\" y1=\"" << mt + ph << "\" x2=\"" << Num(px, 1)
+          << "\" y2=\"" << mt + ph + 5 << "\" stroke=\"#000\"/><text x=\"" << Num(px, 1)
+          << "\" y=\"" << mt + ph + 19 << "\" text-anchor=\"middle\">" << Num(x, xd) << "</text>\n";
     }
     for (double y = 0; y <= y_top + 1e-9; y += y_step) {
         const double py = to_px({0, y}).y();
-        s << "<line x1=\"" << ml - 5 << "\" y1=\"" << Num(py, 1) << "\" x2=\"" << ml << "\" y2=\"" << Num(py, 1)
-          << "\" stroke=\"#000\"/><text x=\"" << ml - 8 << "\" y=\"" << Num(py + 4, 1)
+        s << "<line x1=\"" << ml - 5 << "\" y1=\"" << Num(py, 1) << "\" x2=\"" << ml << "\" y2=\""
+          << Num(py, 1) << "\" stroke=\"#000\"/><text x=\"" << ml - 8 << "\" y=\"" << Num(py + 4, 1)
           << "\" text-anchor=\"end\">" << Num(y, yd) << "</text>\n";
     }
     s << "</g>\n<rect x=\"" << ml << "\" y=\"" << mt << "\" width=\"" << pw << "\" height=\"" << ph
       << "\" fill=\"none\" stroke=\"#000\"/>\n"
       << "<text x=\"" << ml + pw / 2 << "\" y=\"" << H - 12 << "\" text-anchor=\"middle\">"
       << "distance travelled along the ground truth [m]</text>\n"
-      << "<text transform=\"translate(18," << mt + ph / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
+      << "<text transform=\"translate(18," << mt + ph / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">"
       << "horizontal error [m]</text>\n";
     // The uncertainty band of a method with per-pose covariance: from 0 to the radius of the
     // circle around the larger axis of each pose's 95 % ellipse, sqrt(5.991 * lambda_max).
@@ -558,24 +603,29 @@ std::string ErrorSvg(const ScenarioEvaluation& ev) {
         if (!r.ok || r.errors_m.size() != ev.distance_m.size()) continue;
         std::vector<Eigen::Vector2d> pts;
         pts.reserve(r.errors_m.size());
-        for (std::size_t i = 0; i < r.errors_m.size(); ++i) pts.emplace_back(ev.distance_m[i], r.errors_m[i]);
+        for (std::size_t i = 0; i < r.errors_m.size(); ++i)
+            pts.emplace_back(ev.distance_m[i], r.errors_m[i]);
         s << "<polyline fill=\"none\" stroke=\"" << MethodColour(r.method)
-          << "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" points=\"" << PolylinePoints(pts, to_px, 0.5)
-          << "\"/>\n";
+          << "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" points=\""
+          << PolylinePoints(pts, to_px, 0.5) << "\"/>\n";
     }
     // Legend, top left inside the plot.
     double ly = mt + 8;
-    s << "<rect x=\"" << ml + 8 << "\" y=\"" << ly << "\" width=\"290\" height=\"" << 20 * ev.methods.size() + 8
+    s << "<rect x=\"" << ml + 8 << "\" y=\"" << ly << "\" width=\"290\" height=\""
+      << 20 * ev.methods.size() + 8
       << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#888\"/>\n";
     for (const MethodResult& r : ev.methods) {
         ly += 20;
         std::string text = ToString(r.method);
-        if (!r.ok) text += ": failed";
-        else if (r.metrics) text += ", final " + Num(r.metrics->final_m, 1) + " m";
+        if (!r.ok)
+            text += ": failed";
+        else if (r.metrics)
+            text += ", final " + Num(r.metrics->final_m, 1) + " m";
         if (r.ok && !r.covariance.empty()) text += " (band: 95 %)";
-        s << "<line x1=\"" << ml + 16 << "\" y1=\"" << ly - 4 << "\" x2=\"" << ml + 42 << "\" y2=\"" << ly - 4
-          << "\" stroke=\"" << MethodColour(r.method) << "\" stroke-width=\"3\"/><text x=\"" << ml + 50
-          << "\" y=\"" << ly << "\">" << XmlEscape(text) << "</text>\n";
+        s << "<line x1=\"" << ml + 16 << "\" y1=\"" << ly - 4 << "\" x2=\"" << ml + 42 << "\" y2=\""
+          << ly - 4 << "\" stroke=\"" << MethodColour(r.method)
+          << "\" stroke-width=\"3\"/><text x=\"" << ml + 50 << "\" y=\"" << ly << "\">"
+          << XmlEscape(text) << "</text>\n";
     }
     s << "</svg>\n";
     return s.str();

@@ -1,5 +1,4 @@
 #include "driftcorr/io/scenario.h"
-#include "driftcorr/io/text_file.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -13,6 +12,7 @@
 #include <vector>
 
 #include "driftcorr/core/errors.h"
+#include "driftcorr/io/text_file.h"
 #include "driftcorr/mapping/geodesy.h"
 #include "parse_number.h"
 
@@ -107,11 +107,11 @@ public:
                          std::vector<std::string>& warnings) const {
         for (const auto& entry : node_) {
             const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "?";
-            const bool is_known = std::any_of(known.begin(), known.end(),
-                                              [&](const char* k) { return key == k; });
+            const bool is_known =
+                std::any_of(known.begin(), known.end(), [&](const char* k) { return key == k; });
             if (is_known) continue;
-            warnings.push_back(file_ + ":" + std::to_string(LineOf(entry.first)) + ": " +
-                               Key(key) + ": unknown key, ignored");
+            warnings.push_back(file_ + ":" + std::to_string(LineOf(entry.first)) + ": " + Key(key) +
+                               ": unknown key, ignored");
         }
     }
 
@@ -208,14 +208,15 @@ TrajectorySource ParseSource(const Block& block, const fs::path& dir,
                              std::vector<std::string>& warnings) {
     TrajectorySource src;
     src.path = ResolvePath(dir, block.String("path"));
-    src.format = ParseChoice<TrajectoryFormat>(
-        block, "format",
-        {{"kitti", TrajectoryFormat::kKitti}, {"tum", TrajectoryFormat::kTum},
-         {"csv", TrajectoryFormat::kCsv}, {"euroc", TrajectoryFormat::kEuroc}});
+    src.format = ParseChoice<TrajectoryFormat>(block, "format",
+                                               {{"kitti", TrajectoryFormat::kKitti},
+                                                {"tum", TrajectoryFormat::kTum},
+                                                {"csv", TrajectoryFormat::kCsv},
+                                                {"euroc", TrajectoryFormat::kEuroc}});
     block.WarnUnknownKeys({"path", "format", "rate_hz", "times", "heading"}, warnings);
     if (block.Has("heading")) {
-        src.heading_from_motion = ParseChoice<bool>(block, "heading",
-                                                    {{"orientation", false}, {"motion", true}});
+        src.heading_from_motion =
+            ParseChoice<bool>(block, "heading", {{"orientation", false}, {"motion", true}});
     }
     src.rate_hz = block.OptDouble("rate_hz");
     const std::optional<std::string> times = block.OptString("times");
@@ -287,9 +288,10 @@ AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::s
         ParseGridAnchor(block, anchor);
     }
     if (!block.Has("yaw_deg")) {
-        block.Fail("yaw_deg", "missing required key (the heading of the trajectory frame in "
-                              "East-North, degrees counter-clockwise, or `auto` to estimate it "
-                              "from the map)");
+        block.Fail("yaw_deg",
+                   "missing required key (the heading of the trajectory frame in "
+                   "East-North, degrees counter-clockwise, or `auto` to estimate it "
+                   "from the map)");
     }
     if (Lower(block.String("yaw_deg")) != "auto") anchor.yaw_deg = block.Double("yaw_deg");
     if (block.Has("scale")) {
@@ -301,8 +303,9 @@ AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::s
         block.Fail("position_search_m", "must be within [0, 1000] m");
     }
     if (mode == ScenarioMode::kIndoor3d && !block.Has("z_m")) {
-        block.Fail("z_m", "missing required key in indoor3d mode (the height of the trajectory "
-                          "frame's origin in the map's height datum: it picks the floor)");
+        block.Fail("z_m",
+                   "missing required key in indoor3d mode (the height of the trajectory "
+                   "frame's origin in the map's height datum: it picks the floor)");
     }
     anchor.z_m = block.OptDouble("z_m").value_or(0.0);
     return anchor;
@@ -330,11 +333,10 @@ std::optional<E> FindChoice(const std::string& name, const Choices<E>& choices) 
 
 const Choices<MapFormat>& MapFormats() {
     static const Choices<MapFormat> formats = {
-        {"osm", MapFormat::kOsm},        {"pbf", MapFormat::kOsm},
-        {"geojson", MapFormat::kGeoJson},
-        {"pcd", MapFormat::kPcd},        {"ply", MapFormat::kPly},
-        {"bt", MapFormat::kOctomap},     {"ot", MapFormat::kOctomap},
-        {"octomap", MapFormat::kOctomap}};
+        {"osm", MapFormat::kOsm},         {"pbf", MapFormat::kOsm},
+        {"geojson", MapFormat::kGeoJson}, {"pcd", MapFormat::kPcd},
+        {"ply", MapFormat::kPly},         {"bt", MapFormat::kOctomap},
+        {"ot", MapFormat::kOctomap},      {"octomap", MapFormat::kOctomap}};
     return formats;
 }
 
@@ -387,8 +389,8 @@ std::vector<MapLayerSpec> ParseMap(const Block& root, const fs::path& dir,
 
 void ParseRoot(const Block& root, Scenario& s) {
     const fs::path dir(s.dir);
-    root.WarnUnknownKeys(
-        {"name", "mode", "estimate", "ground_truth", "frame", "anchor", "map"}, s.warnings);
+    root.WarnUnknownKeys({"name", "mode", "estimate", "ground_truth", "frame", "anchor", "map"},
+                         s.warnings);
     s.name = root.OptString("name").value_or(dir.filename().string());
     s.mode = ParseChoice(root, "mode", ScenarioModes());
     s.estimate = ParseSource(root.Child("estimate"), dir, s.warnings);
@@ -443,10 +445,14 @@ std::string ToString(ScenarioMode mode) {
 
 std::string ToString(TrajectoryFormat format) {
     switch (format) {
-        case TrajectoryFormat::kKitti: return "kitti";
-        case TrajectoryFormat::kTum: return "tum";
-        case TrajectoryFormat::kCsv: return "csv";
-        case TrajectoryFormat::kEuroc: return "euroc";
+        case TrajectoryFormat::kKitti:
+            return "kitti";
+        case TrajectoryFormat::kTum:
+            return "tum";
+        case TrajectoryFormat::kCsv:
+            return "csv";
+        case TrajectoryFormat::kEuroc:
+            return "euroc";
     }
     return "unknown";
 }
@@ -477,11 +483,16 @@ std::optional<TrajectoryFormat> ParseTrajectoryFormat(const std::string& name) {
 
 std::string ToString(MapFormat format) {
     switch (format) {
-        case MapFormat::kOsm: return "osm";
-        case MapFormat::kGeoJson: return "geojson";
-        case MapFormat::kPcd: return "pcd";
-        case MapFormat::kPly: return "ply";
-        case MapFormat::kOctomap: return "octomap";
+        case MapFormat::kOsm:
+            return "osm";
+        case MapFormat::kGeoJson:
+            return "geojson";
+        case MapFormat::kPcd:
+            return "pcd";
+        case MapFormat::kPly:
+            return "ply";
+        case MapFormat::kOctomap:
+            return "octomap";
     }
     return "unknown";
 }

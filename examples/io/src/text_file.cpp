@@ -20,8 +20,8 @@ std::string Mebibytes(std::size_t bytes) {
 std::string ReadTextFile(const std::string& path, const TextLimits& limits) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) {
-        throw InputError(path, 0, "", std::string("is a folder, not a file (expected ") +
-                                          limits.what + ")");
+        throw InputError(path, 0, "",
+                         std::string("is a folder, not a file (expected ") + limits.what + ")");
     }
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(path, 0, "", "cannot open file");
@@ -44,7 +44,8 @@ std::string ReadTextFile(const std::string& path, const TextLimits& limits) {
             if (line_bytes + run > limits.max_line_bytes) {
                 throw InputError(path, line, "",
                                  "line longer than " + Mebibytes(limits.max_line_bytes) +
-                                     ", the most " + limits.what + " may have; is it the right "
+                                     ", the most " + limits.what +
+                                     " may have; is it the right "
                                      "file?");
             }
             if (!nl) {
@@ -71,10 +72,10 @@ std::optional<long> SecondYamlDocumentLine(std::string_view text) {
         pos = end + 1;
         ++number;
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        const bool marker_start = line.substr(0, 3) == "---" &&
-                                  (line.size() == 3 || line[3] == ' ' || line[3] == '\t');
-        const bool marker_end = line.substr(0, 3) == "..." &&
-                                (line.size() == 3 || line[3] == ' ' || line[3] == '\t');
+        const bool marker_start =
+            line.substr(0, 3) == "---" && (line.size() == 3 || line[3] == ' ' || line[3] == '\t');
+        const bool marker_end =
+            line.substr(0, 3) == "..." && (line.size() == 3 || line[3] == ' ' || line[3] == '\t');
         const std::size_t first = line.find_first_not_of(" \t");
         const bool blank = first == std::string_view::npos || line[first] == '#';
         if (marker_start) {

@@ -80,7 +80,8 @@ void ParseNumbers(const DataLines& lines, std::size_t n, const std::string& path
     for (std::size_t i = 0; i < n; ++i) {
         const std::optional<double> value = internal::ParseDouble(fields[i]);
         if (!value || !std::isfinite(*value)) {
-            const std::string which = "field " + std::to_string(i + 1) + " '" + std::string(fields[i]);
+            const std::string which =
+                "field " + std::to_string(i + 1) + " '" + std::string(fields[i]);
             throw InputError(path, lines.number(), "",
                              which + (value ? "' is not finite" : "' is not a number"));
         }
@@ -258,10 +259,10 @@ namespace {
 
 /// The columns of a CSV trajectory, found by name in its header line.
 struct CsvColumns {
-    std::size_t count = 0;                     ///< fields a line must have
+    std::size_t count = 0;  ///< fields a line must have
     std::size_t t = 0;
-    double t_scale = 1.0;                      ///< to seconds: 1 or 1e-9
-    std::size_t p[3] = {0, 0, 0};              ///< x y z
+    double t_scale = 1.0;                         ///< to seconds: 1 or 1e-9
+    std::size_t p[3] = {0, 0, 0};                 ///< x y z
     std::optional<std::array<std::size_t, 4>> q;  ///< qx qy qz qw, when all four are there
     bool euroc = false;
 };
@@ -274,9 +275,8 @@ std::string NormaliseColumn(std::string_view field, std::string& unit) {
     unit.clear();
     if (const std::size_t open = field.find('['); open != std::string_view::npos) {
         const std::size_t close = field.find(']', open);
-        unit = std::string(field.substr(open + 1, close == std::string_view::npos
-                                                      ? std::string_view::npos
-                                                      : close - open - 1));
+        unit = std::string(field.substr(
+            open + 1, close == std::string_view::npos ? std::string_view::npos : close - open - 1));
         field = field.substr(0, open);
     }
     std::string name(internal::Trim(field));
@@ -289,9 +289,8 @@ std::vector<std::string_view> SplitCommas(std::string_view line) {
     std::size_t pos = 0;
     for (;;) {
         const std::size_t comma = line.find(',', pos);
-        fields.push_back(internal::Trim(line.substr(pos, comma == std::string_view::npos
-                                                             ? std::string_view::npos
-                                                             : comma - pos)));
+        fields.push_back(internal::Trim(line.substr(
+            pos, comma == std::string_view::npos ? std::string_view::npos : comma - pos)));
         if (comma == std::string_view::npos) return fields;
         pos = comma + 1;
     }
@@ -320,8 +319,9 @@ CsvColumns ParseCsvHeader(std::string_view header, const std::string& path, long
     };
     cols.euroc = index.count("p_rs_r_x") > 0;
     if (require_euroc && !cols.euroc) {
-        throw InputError(path, line, "", "is not an EuRoC / ASL file: expected the header "
-                                         "'#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], ...'");
+        throw InputError(path, line, "",
+                         "is not an EuRoC / ASL file: expected the header "
+                         "'#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], ...'");
     }
     const char* const* pos_names;
     static const char* const kEurocPos[] = {"p_rs_r_x", "p_rs_r_y", "p_rs_r_z"};
@@ -330,8 +330,9 @@ CsvColumns ParseCsvHeader(std::string_view header, const std::string& path, long
     const std::optional<std::string> t =
         find({"timestamp", "t", "time", "t_s", "timestamp_s", "t_ns", "timestamp_ns"});
     if (!t) {
-        throw InputError(path, line, "", "header has no time column (t, time, timestamp, t_s, "
-                                         "timestamp_s, t_ns or timestamp_ns)");
+        throw InputError(path, line, "",
+                         "header has no time column (t, time, timestamp, t_s, "
+                         "timestamp_s, t_ns or timestamp_ns)");
     }
     cols.t = index[*t];
     // EuRoC / ASL stamps are nanoseconds whether or not the header says "[ns]".
@@ -346,8 +347,9 @@ CsvColumns ParseCsvHeader(std::string_view header, const std::string& path, long
     pos_names = cols.euroc ? kEurocPos : (index.count("x") ? kPlainPos : kTPos);
     for (int k = 0; k < 3; ++k) {
         if (!index.count(pos_names[k])) {
-            throw InputError(path, line, "", std::string("header has no position column '") +
-                                                 pos_names[k] + "' (x y z, or tx ty tz)");
+            throw InputError(path, line, "",
+                             std::string("header has no position column '") + pos_names[k] +
+                                 "' (x y z, or tx ty tz)");
         }
         cols.p[k] = index[pos_names[k]];
     }
@@ -371,7 +373,8 @@ std::optional<double> CsvTime(std::string_view field, double scale) {
         std::int64_t ns = 0;
         const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), ns);
         if (ec == std::errc() && ptr == field.data() + field.size()) {
-            return static_cast<double>(ns / 1000000000) + static_cast<double>(ns % 1000000000) * 1e-9;
+            return static_cast<double>(ns / 1000000000) +
+                   static_cast<double>(ns % 1000000000) * 1e-9;
         }
     }
     const std::optional<double> t = internal::ParseDouble(field);
@@ -381,7 +384,8 @@ std::optional<double> CsvTime(std::string_view field, double scale) {
 double CsvNumber(const std::vector<std::string_view>& fields, std::size_t i,
                  const std::string& path, long line) {
     const std::optional<double> v = internal::ParseDouble(fields[i]);
-    const std::string which = "field " + std::to_string(i + 1) + " '" + std::string(fields[i]) + "'";
+    const std::string which =
+        "field " + std::to_string(i + 1) + " '" + std::string(fields[i]) + "'";
     if (!v) throw InputError(path, line, "", which + " is not a number");
     if (!std::isfinite(*v)) throw InputError(path, line, "", which + " is not finite");
     return *v;
@@ -416,14 +420,16 @@ Trajectory ReadCsv(const std::string& path, bool require_euroc, std::size_t min_
         const std::vector<std::string_view> fields = SplitCommas(lines.line());
         if (fields.size() != cols.count) {
             throw InputError(path, lines.number(), "",
-                             "expected " + std::to_string(cols.count) + " comma-separated fields "
-                             "(as in the header), found " + std::to_string(fields.size()));
+                             "expected " + std::to_string(cols.count) +
+                                 " comma-separated fields "
+                                 "(as in the header), found " +
+                                 std::to_string(fields.size()));
         }
         const std::optional<double> t = CsvTime(fields[cols.t], cols.t_scale);
         if (!t || !std::isfinite(*t)) {
-            throw InputError(path, lines.number(), "", "field " + std::to_string(cols.t + 1) +
-                                                           " '" + std::string(fields[cols.t]) +
-                                                           "' is not a finite time");
+            throw InputError(path, lines.number(), "",
+                             "field " + std::to_string(cols.t + 1) + " '" +
+                                 std::string(fields[cols.t]) + "' is not a finite time");
         }
         CheckIncreasing(traj.t_s, *t, path, lines.number());
         traj.t_s.push_back(*t);
@@ -446,9 +452,12 @@ Trajectory LoadTrajectory(const TrajectorySource& source, std::size_t min_poses)
     switch (source.format) {
         case TrajectoryFormat::kKitti:
             return ReadKitti(source.path, source.times_path, source.rate_hz, min_poses);
-        case TrajectoryFormat::kCsv: return ReadCsv(source.path, false, min_poses);
-        case TrajectoryFormat::kEuroc: return ReadCsv(source.path, true, min_poses);
-        case TrajectoryFormat::kTum: break;
+        case TrajectoryFormat::kCsv:
+            return ReadCsv(source.path, false, min_poses);
+        case TrajectoryFormat::kEuroc:
+            return ReadCsv(source.path, true, min_poses);
+        case TrajectoryFormat::kTum:
+            break;
     }
     return ReadTum(source.path, min_poses);
 }
@@ -466,7 +475,7 @@ std::optional<TrajectoryFormat> DetectTrajectoryFormat(const std::string& path) 
     std::transform(line.begin(), line.end(), line.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return line.find("p_rs_r_x") != std::string::npos ? TrajectoryFormat::kEuroc
-                                                       : TrajectoryFormat::kCsv;
+                                                      : TrajectoryFormat::kCsv;
 }
 
 namespace {

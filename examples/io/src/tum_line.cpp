@@ -49,7 +49,8 @@ TumLine ParseTumLine(std::string_view line) {
         if (++n > 8) continue;  // counted for the message below
         const std::optional<double> value = internal::ParseDouble(field);
         if (!value || !std::isfinite(*value)) {
-            const std::string which = "field " + std::to_string(n) + " '" + std::string(field) + "'";
+            const std::string which =
+                "field " + std::to_string(n) + " '" + std::string(field) + "'";
             return Error(which + (value ? " is not finite" : " is not a number"));
         }
         v[n - 1] = *value;

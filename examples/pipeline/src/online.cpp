@@ -16,7 +16,8 @@ StreamSetup LoadStreamSetup(io::Scenario scenario, const PipelineConfig& config)
     setup.scenario = std::move(scenario);
     const io::Scenario& sc = setup.scenario;
     if (!sc.anchor.yaw_deg || sc.anchor.position_search_m > 0.0) {
-        throw InputError(sc.yaml_path, 0, sc.anchor.yaw_deg ? "anchor.position_search_m" : "anchor.yaw_deg",
+        throw InputError(sc.yaml_path, 0,
+                         sc.anchor.yaw_deg ? "anchor.position_search_m" : "anchor.yaw_deg",
                          "a start estimated from the map (yaw_deg: auto, position_search_m) needs "
                          "the whole trajectory: use correct, or give the start for stream");
     }
@@ -71,8 +72,7 @@ std::pair<Eigen::Vector3d, Eigen::Quaterniond> FromPlanarPose(
     original.t_s = {reference.t_s};
     original.p_frame = {p_frame};
     original.q_frame_body = {q_frame_body};
-    const Trajectory out =
-        FromPlanar(planar(corrected), planar(reference), original, axes, anchor);
+    const Trajectory out = FromPlanar(planar(corrected), planar(reference), original, axes, anchor);
     return {out.p_frame[0], out.q_frame_body[0]};
 }
 

@@ -35,7 +35,8 @@ Eigen::AlignedBox2d BoundsOf(const PlanarTrajectory& t) {
 }
 
 // Road map of all osm layers. Throws InputError when no layer yields a usable road.
-RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world, const RoadClassConfig& roads) {
+RoadNetwork LoadRoads(const io::Scenario& sc, const WorldFrame& world,
+                      const RoadClassConfig& roads) {
     RoadNetwork net;
     std::string last_layer;
     for (const io::MapLayerSpec& layer : sc.map) {
@@ -70,7 +71,8 @@ RoadNetwork WalkwaysNear(const IndoorMap& map, double up_m, double half_width_m)
         if (!best || std::abs(f.floor_z_m - up_m) < std::abs(best->floor_z_m - up_m)) best = &f;
     }
     if (!best) return net;
-    for (const auto& line : best->walkways_en) net.roads.push_back({0, "walkway", half_width_m, line});
+    for (const auto& line : best->walkways_en)
+        net.roads.push_back({0, "walkway", half_width_m, line});
     return net;
 }
 
@@ -102,7 +104,8 @@ TraversableField LoadSurfaceField(const io::Scenario& sc, const SurfaceFieldConf
         field.set_lift_shafts(std::move(shafts));
         return field;
     } catch (const std::invalid_argument& e) {
-        throw InputError(sc.yaml_path, 0, "map", std::string(e.what()) + " (surface_field settings)");
+        throw InputError(sc.yaml_path, 0, "map",
+                         std::string(e.what()) + " (surface_field settings)");
     }
 }
 
@@ -118,12 +121,14 @@ TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig
         const std::string key = "map[" + std::to_string(i) + "]";
         if (layer.format != io::MapFormat::kGeoJson) {
             throw InputError(sc.yaml_path, 0, key + ".format",
-                             io::ToString(layer.format) + " layers are not supported in indoor3d "
-                             "mode yet (GeoJSON walkways and floor plans are)");
+                             io::ToString(layer.format) +
+                                 " layers are not supported in indoor3d "
+                                 "mode yet (GeoJSON walkways and floor plans are)");
         }
         if (layer.role == io::LayerRole::kNone || !layer.floor_z_m) {
-            throw InputError(sc.yaml_path, 0, key,
-                             "an indoor GeoJSON layer needs role (walkways | floorplan) and floor_z_m");
+            throw InputError(
+                sc.yaml_path, 0, key,
+                "an indoor GeoJSON layer needs role (walkways | floorplan) and floor_z_m");
         }
         specs.push_back({layer.path,
                          layer.role == io::LayerRole::kWalkways ? IndoorLayerRole::kWalkways
@@ -137,14 +142,17 @@ TraversableField LoadIndoorField(const io::Scenario& sc, const IndoorFieldConfig
     } else {
         frame.anchor_crs = NormaliseCrsName(*sc.anchor.crs);
         const Eigen::Vector2d origin(*sc.anchor.easting_m, *sc.anchor.northing_m);
-        frame.anchor_crs_to_en = [origin](const Eigen::Vector2d& en) { return Eigen::Vector2d(en - origin); };
+        frame.anchor_crs_to_en = [origin](const Eigen::Vector2d& en) {
+            return Eigen::Vector2d(en - origin);
+        };
     }
     const IndoorMap map = LoadIndoorMap(specs, frame);
     walkways = WalkwaysNear(map, up_m, config.walkway_half_width_m);
     try {
         return BuildIndoorField(map.floors, config, nullptr, heights);
     } catch (const std::invalid_argument& e) {
-        throw InputError(sc.yaml_path, 0, "map", std::string(e.what()) + " (indoor_field settings)");
+        throw InputError(sc.yaml_path, 0, "map",
+                         std::string(e.what()) + " (indoor_field settings)");
     }
 }
 
@@ -231,8 +239,8 @@ void PlaceStart(const WorldFrame& world, const PipelineConfig& config, PreparedS
     }
     const TraversableField lead_field =
         LeadField(world, config, ps, reach_m + sc.anchor.position_search_m + fit_cfg.reach_m);
-    ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, lead_field,
-                              !sc.anchor.yaw_deg, sc.anchor.position_search_m, fit_cfg);
+    ps.anchor_fit = FitAnchor(ps.estimate, ps.anchor.origin_en, lead_field, !sc.anchor.yaw_deg,
+                              sc.anchor.position_search_m, fit_cfg);
     const AnchorPlacement& best = ps.anchor_fit->best;
     ps.estimate = ApplyPlacement(ps.estimate, ps.anchor.origin_en, best);
     ps.anchor.yaw_rad += best.dyaw_rad;
@@ -414,9 +422,7 @@ GeoPoint WorldFrame::ToGeo(const Eigen::Vector2d& en) const {
     return impl_->crs->ToGeo(en + impl_->crs_origin);
 }
 
-std::string ToString(Solver solver) {
-    return solver == Solver::kPaper ? "paper" : "driftcorr";
-}
+std::string ToString(Solver solver) { return solver == Solver::kPaper ? "paper" : "driftcorr"; }
 
 namespace {
 
@@ -431,8 +437,9 @@ void CheckWalkStart(const PreparedScenario& ps) {
     if (q && q->corridor.value <= kStartOffSurfaceM) return;
     const std::string where = "(" + FormatFixed(start.x(), 2) + ", " + FormatFixed(start.y(), 2) +
                               ", " + FormatFixed(start.z(), 2) + ") m";
-    const std::string how_far = q ? FormatFixed(q->corridor.value, 2) + " m from the walkable surface"
-                                  : "outside the map's extent";
+    const std::string how_far =
+        q ? FormatFixed(q->corridor.value, 2) + " m from the walkable surface"
+          : "outside the map's extent";
     throw InputError(ps.scenario.yaml_path, 0, "estimate",
                      "the walk starts " + how_far + " at " + where +
                          " (East, North, up from the anchor): map and walk are not in one frame "
@@ -480,8 +487,8 @@ void CheckRoadsInReach(const PreparedScenario& ps, const PipelineConfig& config)
             // distance means little that far from the anchor).
             const Eigen::Vector2d anchor(*a.lon_deg, *a.lat_deg);
             const Eigen::Vector2d near = anchor.cwiseMax(geo.min()).cwiseMin(geo.max());
-            const double m = GeodesicDistanceM({anchor.y(), anchor.x(), 0.0},
-                                               {near.y(), near.x(), 0.0});
+            const double m =
+                GeodesicDistanceM({anchor.y(), anchor.x(), 0.0}, {near.y(), near.x(), 0.0});
             where = FormatFixed(m / 1000.0, 1) + where.substr(where.find(" km"));
             if (std::abs(*a.lat_deg - centre.x()) < 1.0 &&
                 std::abs(*a.lon_deg - centre.y()) < 1.0) {
@@ -577,8 +584,8 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     if (gt && gt->size() != ps.estimate_frame.size()) {
         throw InputError(sc.ground_truth ? sc.ground_truth->path : "", 0,
                          sc.ground_truth ? "" : "ground_truth",
-                         "ground truth has " + std::to_string(gt->size()) + " poses, the estimate " +
-                             std::to_string(ps.estimate_frame.size()));
+                         "ground truth has " + std::to_string(gt->size()) +
+                             " poses, the estimate " + std::to_string(ps.estimate_frame.size()));
     }
 
     const auto t0 = std::chrono::steady_clock::now();
@@ -603,8 +610,8 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
     if (gt) ps.ground_truth = ToPlanar(*gt, sc.frame, ps.anchor);
     std::vector<double> up = ps.estimate.up_m;
     std::nth_element(up.begin(), up.begin() + up.size() / 2, up.end());
-    const std::vector<FieldDisc> corridor = FieldCorridor(ps.estimate, ps.anchor.origin_en,
-                                                          AnchorFitFor(sc, config), config.field);
+    const std::vector<FieldDisc> corridor =
+        FieldCorridor(ps.estimate, ps.anchor.origin_en, AnchorFitFor(sc, config), config.field);
     ps.field = LoadMapField(sc, world, config, BoundsOf(ps.estimate), up[up.size() / 2], ps.network,
                             &corridor, WalkHeights(ps.estimate, config.indoor_field));
     if (sc.mode == io::ScenarioMode::kIndoor3d) {

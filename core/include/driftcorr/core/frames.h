@@ -24,7 +24,7 @@ std::string ToString(FrameAxes axes);
 struct PlanarAnchor {
     double yaw_rad = 0.0;
     Eigen::Vector2d origin_en = Eigen::Vector2d::Zero();  ///< [m]
-    double origin_up_m = 0.0;                              ///< [m]
+    double origin_up_m = 0.0;                             ///< [m]
 };
 
 /// Splits a frame position into horizontal (u, v) and height h (a right-handed u, v, h triple).

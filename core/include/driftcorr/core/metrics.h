@@ -9,15 +9,15 @@ namespace driftcorr {
 
 struct ErrorMetrics {
     std::size_t poses = 0;
-    double ate_m = 0.0;          ///< RMS horizontal position error
-    double final_m = 0.0;        ///< horizontal error of the last pose
-    double max_m = 0.0;          ///< largest horizontal error
-    double p90_m = 0.0;          ///< 90th percentile of the horizontal error
+    double ate_m = 0.0;    ///< RMS horizontal position error
+    double final_m = 0.0;  ///< horizontal error of the last pose
+    double max_m = 0.0;    ///< largest horizontal error
+    double p90_m = 0.0;    ///< 90th percentile of the horizontal error
     double mean_m = 0.0;
-    double drift_pct = 0.0;      ///< KITTI-style translational drift [%] over 100..800 m
-                                 ///< segments of ground-truth path (0 if the path is shorter)
-    double floor_accuracy = 1.0; ///< share of poses with |up - up_gt| <= 1.5 m
-    double path_length_m = 0.0;  ///< ground-truth horizontal path length
+    double drift_pct = 0.0;       ///< KITTI-style translational drift [%] over 100..800 m
+                                  ///< segments of ground-truth path (0 if the path is shorter)
+    double floor_accuracy = 1.0;  ///< share of poses with |up - up_gt| <= 1.5 m
+    double path_length_m = 0.0;   ///< ground-truth horizontal path length
 };
 
 /// Per-pose horizontal errors [m]. Precondition: same size.

@@ -12,12 +12,13 @@
 namespace driftcorr {
 
 struct StepObservation {
-    double dt_s = 0.0;             ///< t_i - t_{i-1} [s]
-    double length_m = 0.0;         ///< horizontal step length [m]
-    double direction_rad = 0.0;    ///< step direction minus heading of pose i-1 [rad] (0 if stationary)
-    double dheading_rad = 0.0;     ///< heading change yaw_i - yaw_{i-1}, wrapped [rad]
-    double dup_m = 0.0;            ///< height change [m]
-    bool stationary = false;       ///< length below the stationary threshold
+    double dt_s = 0.0;      ///< t_i - t_{i-1} [s]
+    double length_m = 0.0;  ///< horizontal step length [m]
+    double direction_rad =
+        0.0;  ///< step direction minus heading of pose i-1 [rad] (0 if stationary)
+    double dheading_rad = 0.0;  ///< heading change yaw_i - yaw_{i-1}, wrapped [rad]
+    double dup_m = 0.0;         ///< height change [m]
+    bool stationary = false;    ///< length below the stationary threshold
     /// The odometry's length for this step was an outlier (RepairSpeedEpisodes): length_m holds
     /// the speed the neighbouring steps imply, observed_length_m what the odometry said.
     bool repaired = false;

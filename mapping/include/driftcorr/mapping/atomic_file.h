@@ -24,8 +24,8 @@ namespace driftcorr {
 /// Where an output path leads, decided before anything is written.
 struct OutputTarget {
     enum class Kind {
-        kFile,     ///< a regular file, or none yet: written atomically (temporary + rename)
-        kInPlace,  ///< a character device or FIFO: written in place, never replaced
+        kFile,        ///< a regular file, or none yet: written atomically (temporary + rename)
+        kInPlace,     ///< a character device or FIFO: written in place, never replaced
         kDescriptor,  ///< "-", /dev/stdout, /dev/stderr, /dev/fd/N: a descriptor this process holds
     };
     Kind kind = Kind::kFile;

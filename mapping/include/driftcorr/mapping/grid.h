@@ -79,9 +79,9 @@ void AssignLarge(std::vector<T>& v, std::size_t n, T value);
 /// +infinity (the features farther than cap_m along y are left out of the second pass: a field
 /// truncated at cap_m needs no more); the distances up to cap_m are the same numbers.
 /// Precondition: feature.size() == spec.size().
-std::vector<float> EuclideanDistanceTransform(const GridSpec& spec,
-                                              const std::vector<std::uint8_t>& feature,
-                                              double cap_m = std::numeric_limits<double>::infinity());
+std::vector<float> EuclideanDistanceTransform(
+    const GridSpec& spec, const std::vector<std::uint8_t>& feature,
+    double cap_m = std::numeric_limits<double>::infinity());
 
 /// EuclideanDistanceTransform(spec, feature, cap_m) of a 2-D grid (spec.nz == 1) laid under
 /// exact distances known near the features, without a grid of its own: every sample of `exact`

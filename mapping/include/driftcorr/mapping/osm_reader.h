@@ -18,13 +18,13 @@ struct OsmWay {
 };
 
 struct OsmReadReport {
-    std::size_t nodes_total = 0;        ///< <node> elements with valid coordinates
-    std::size_t ways_total = 0;         ///< all <way> elements
-    std::size_t ways_highway = 0;       ///< highway ways returned (a split way counts per piece)
+    std::size_t nodes_total = 0;   ///< <node> elements with valid coordinates
+    std::size_t ways_total = 0;    ///< all <way> elements
+    std::size_t ways_highway = 0;  ///< highway ways returned (a split way counts per piece)
     /// <nd ref> (in highway ways) with no <node>: the way is split there (not joined across)
     std::size_t missing_node_refs = 0;
-    std::size_t ways_split = 0;       ///< extra pieces made by those splits (`ways` holds each)
-    std::size_t ways_too_short = 0;   ///< highway ways with no piece of >= 2 resolved nodes, dropped
+    std::size_t ways_split = 0;      ///< extra pieces made by those splits (`ways` holds each)
+    std::size_t ways_too_short = 0;  ///< highway ways with no piece of >= 2 resolved nodes, dropped
 };
 
 struct OsmRoads {

@@ -73,7 +73,7 @@ RoadNetwork BuildRoadNetwork(const OsmRoads& osm,
                              const RoadClassConfig& config);
 
 struct RoadFieldConfig {
-    double resolution_m = 0.5;      ///< grid spacing [m]
+    double resolution_m = 0.5;  ///< grid spacing [m]
     /// The grid extends this far around the region of interest; the pipeline's corridor field
     /// also keeps the tiles within this distance of every estimated pose: the drift (estimate
     /// to corrected track) the field allows for [m]
@@ -132,8 +132,9 @@ struct FieldDisc {
 /// come within a disc of `corridor` (e.g. a disc about every pose of a dead-reckoned track):
 /// equal to RasteriseRoads' field wherever a tile is held (to float rounding), std::nullopt
 /// (outside the map) elsewhere. When the tiles would hold more than half of the box's samples
-/// and the box fits max_memory_mb, the box is built as one grid instead. Throws std::invalid_argument when the tiles would exceed max_memory_mb or the
-/// network is empty. Precondition: config.tile_m > 0.
+/// and the box fits max_memory_mb, the box is built as one grid instead. Throws
+/// std::invalid_argument when the tiles would exceed max_memory_mb or the network is empty.
+/// Precondition: config.tile_m > 0.
 TraversableField RasteriseRoadCorridor(const RoadNetwork& network,
                                        const Eigen::AlignedBox2d& region_en,
                                        const std::vector<FieldDisc>& corridor,

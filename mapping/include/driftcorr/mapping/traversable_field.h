@@ -88,9 +88,9 @@ private:
     GridSpec grid_;
     InterpolatedField centre_;
     InterpolatedField corridor_;
-    int tile_cells_ = 0;            ///< 0: one grid (centre_, corridor_)
+    int tile_cells_ = 0;  ///< 0: one grid (centre_, corridor_)
     int tiles_x_ = 0, tiles_y_ = 0;
-    std::vector<int> tile_index_;   ///< tiles_x_ * tiles_y_, index into tiles_ or -1
+    std::vector<int> tile_index_;  ///< tiles_x_ * tiles_y_, index into tiles_ or -1
     std::vector<Tile> tiles_;
     double truncation_m_ = 0.0;
     std::vector<ShaftOutline> lift_shafts_;

@@ -35,14 +35,22 @@ struct PlyType {
 // The PLY 1.0 type names and the sized names PCL also accepts.
 std::optional<PlyType> TypeNamed(const std::string& name) {
     static const std::array<std::pair<const char*, PlyType>, 16> kTypes = {{
-        {"char", {1, false, true}},    {"int8", {1, false, true}},
-        {"uchar", {1, false, false}},  {"uint8", {1, false, false}},
-        {"short", {2, false, true}},   {"int16", {2, false, true}},
-        {"ushort", {2, false, false}}, {"uint16", {2, false, false}},
-        {"int", {4, false, true}},     {"int32", {4, false, true}},
-        {"uint", {4, false, false}},   {"uint32", {4, false, false}},
-        {"float", {4, true, true}},    {"float32", {4, true, true}},
-        {"double", {8, true, true}},   {"float64", {8, true, true}},
+        {"char", {1, false, true}},
+        {"int8", {1, false, true}},
+        {"uchar", {1, false, false}},
+        {"uint8", {1, false, false}},
+        {"short", {2, false, true}},
+        {"int16", {2, false, true}},
+        {"ushort", {2, false, false}},
+        {"uint16", {2, false, false}},
+        {"int", {4, false, true}},
+        {"int32", {4, false, true}},
+        {"uint", {4, false, false}},
+        {"uint32", {4, false, false}},
+        {"float", {4, true, true}},
+        {"float32", {4, true, true}},
+        {"double", {8, true, true}},
+        {"float64", {8, true, true}},
     }};
     for (const auto& [type_name, type] : kTypes) {
         if (name == type_name) return type;
@@ -72,15 +80,16 @@ struct Element {
 struct Header {
     PlyFormat format = PlyFormat::kAscii;
     std::vector<Element> elements;
-    long lines = 0;                 // header lines, end_header included
-    std::streamoff body_start = 0;  // byte offset of the first body byte
+    long lines = 0;                                        // header lines, end_header included
+    std::streamoff body_start = 0;                         // byte offset of the first body byte
     std::optional<unsigned long long> num_cols, num_rows;  // obj_info
     long obj_info_line = 0;
 };
 
 bool IsName(const std::string& s) {
-    return !s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                             "0123456789_-.") == std::string::npos;
+    return !s.empty() && s.find_first_not_of(
+                             "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                             "0123456789_-.") == std::string::npos;
 }
 
 class HeaderParser {
@@ -101,7 +110,8 @@ public:
                 continue;
             }
             if (line == "end_header") {
-                if (!line_ended_) Bad("the file ends right after 'end_header' (no line end, no data)");
+                if (!line_ended_)
+                    Bad("the file ends right after 'end_header' (no line end, no data)");
                 header_.body_start = in.tellg();
                 return header_;
             }
@@ -151,7 +161,8 @@ private:
     void ParseFormat(const std::string& line) {
         const std::vector<std::string> w = SplitWords(line);
         if (w.size() != 3 || w[0] != "format" || w[2] != "1.0") {
-            Bad("the second line must be 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+            Bad("the second line must be 'format <ascii|binary_little_endian|binary_big_endian> "
+                "1.0'");
         }
         if (w[1] == "ascii") {
             header_.format = PlyFormat::kAscii;
@@ -178,9 +189,11 @@ private:
     // vertices (checked once the vertex count is known).
     void ParseObjInfo(const std::vector<std::string>& w) {
         if (w.size() < 2 || (w[1] != "num_cols" && w[1] != "num_rows")) return;
-        std::optional<unsigned long long>& slot = w[1] == "num_cols" ? header_.num_cols : header_.num_rows;
+        std::optional<unsigned long long>& slot =
+            w[1] == "num_cols" ? header_.num_cols : header_.num_rows;
         unsigned long long value = 0;
-        if (w.size() != 3 || !ParseWholeNumber(w[2], std::numeric_limits<std::int32_t>::max(), value)) {
+        if (w.size() != 3 ||
+            !ParseWholeNumber(w[2], std::numeric_limits<std::int32_t>::max(), value)) {
             Bad("obj_info " + w[1] + " must be followed by one whole number");
         }
         if (slot) Bad("obj_info " + w[1] + " given twice");
@@ -225,9 +238,11 @@ private:
             }
             p.count_type = *count_type;
         }
-        if (!IsName(p.name)) Bad("property name '" + p.name + "' is not made of letters, digits, '_', '-', '.'");
+        if (!IsName(p.name))
+            Bad("property name '" + p.name + "' is not made of letters, digits, '_', '-', '.'");
         for (const Property& q : element.properties) {
-            if (q.name == p.name) Bad("property '" + p.name + "' declared twice in '" + element.name + "'");
+            if (q.name == p.name)
+                Bad("property '" + p.name + "' declared twice in '" + element.name + "'");
         }
         if (element.properties.size() >= 1024) Bad("more than 1024 properties in one element");
         element.properties.push_back(p);
@@ -241,9 +256,8 @@ private:
 // PCL's colour handling on uchar vertex properties: `red` adds an rgb field, `blue` writes it,
 // `alpha` turns it into rgba. Any other arrangement makes it write past the point or assert.
 void CheckVertexColours(const std::string& path, const Element& vertex) {
-    static const std::set<std::string> kColour = {"red",          "green",         "blue",
-                                                  "diffuse_red",  "diffuse_green", "diffuse_blue",
-                                                  "alpha"};
+    static const std::set<std::string> kColour = {
+        "red", "green", "blue", "diffuse_red", "diffuse_green", "diffuse_blue", "alpha"};
     std::vector<std::string> seen;
     std::vector<std::size_t> at;
     for (std::size_t k = 0; k < vertex.properties.size(); ++k) {
@@ -295,13 +309,15 @@ void CheckVertexElement(const std::string& path, const Header& header) {
             *header.num_cols * *header.num_rows != vertex->count) {
             throw InputError(path, header.obj_info_line, "",
                              "PLY header: obj_info num_cols and num_rows must both be given and "
-                             "multiply to the vertex count (" + std::to_string(vertex->count) + ")");
+                             "multiply to the vertex count (" +
+                                 std::to_string(vertex->count) + ")");
         }
     }
     for (const Element& e : header.elements) {
         if (e.properties.empty() && e.count > 0) {
-            throw InputError(path, e.line, "",
-                             "PLY header: element '" + e.name + "' has instances but no properties");
+            throw InputError(
+                path, e.line, "",
+                "PLY header: element '" + e.name + "' has instances but no properties");
         }
     }
 }
@@ -335,7 +351,8 @@ void CheckAsciiBody(const std::string& path, std::istream& in, const Header& hea
             if (!std::getline(in, line)) {
                 throw InputError(path, n, "",
                                  "PLY data: the file ends in element '" + e.name + "' after " +
-                                     std::to_string(i) + " of " + std::to_string(e.count) + " lines");
+                                     std::to_string(i) + " of " + std::to_string(e.count) +
+                                     " lines");
             }
             auto bad = [&](const std::string& what) {
                 throw InputError(path, n, "", "PLY data: " + what + " (element '" + e.name + "')");
@@ -348,7 +365,8 @@ void CheckAsciiBody(const std::string& path, std::istream& in, const Header& hea
             for (const Property& p : e.properties) {
                 long long count = 1;
                 if (p.is_list) {
-                    if (t >= tokens.size() || !AsciiValue(tokens[t], p.count_type, &count) || count < 0) {
+                    if (t >= tokens.size() || !AsciiValue(tokens[t], p.count_type, &count) ||
+                        count < 0) {
                         bad("list '" + p.name + "' needs a count first");
                     }
                     ++t;
@@ -446,10 +464,12 @@ void CheckBinaryBody(const std::string& path, std::istream& in, const Header& he
                 long long count = 1;
                 if (p.is_list && !cursor.ReadCount(p.count_type, big, count)) short_body(i);
                 if (count < 0) {
-                    throw InputError(path, 0, "", "PLY data: negative count " + std::to_string(count) +
-                                                      " in list '" + p.name + "'");
+                    throw InputError(path, 0, "",
+                                     "PLY data: negative count " + std::to_string(count) +
+                                         " in list '" + p.name + "'");
                 }
-                if (!cursor.Skip(static_cast<unsigned long long>(count) * p.type.bytes)) short_body(i);
+                if (!cursor.Skip(static_cast<unsigned long long>(count) * p.type.bytes))
+                    short_body(i);
             }
         }
     }

@@ -34,7 +34,8 @@ struct AnchorFitConfig {
     /// ...or their positions by more than this [m].
     double distinct_position_m = 10.0;
     /// The anchor check of a given start also searches positions within this radius at the given
-    /// heading (a position a few tens of metres off, e.g. a fix of the wrong end of a car park) [m].
+    /// heading (a position a few tens of metres off, e.g. a fix of the wrong end of a car park)
+    /// [m].
     double check_position_radius_m = 25.0;
 
     /// The first value kAnchorFitParams does not allow.

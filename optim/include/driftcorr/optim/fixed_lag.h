@@ -56,8 +56,8 @@ struct FixedLagSolution {
     /// Heading-rate bias of bias segments [0, bias segment of end] [rad/s]; empty: the model
     /// has none.
     std::vector<double> biases;
-    bool usable = false;           ///< the solver returned a usable solution (else the state is kept)
-    bool boundary_prior = false;   ///< the boundary pose carried a marginalised prior
+    bool usable = false;  ///< the solver returned a usable solution (else the state is kept)
+    bool boundary_prior = false;  ///< the boundary pose carried a marginalised prior
     /// Covariance of pose `end`: the batch's covariance model (ComputeCovariance) over the
     /// window relative to its boundary, plus the boundary's marginalised uncertainty carried
     /// rigidly (end_covariance_ok false when a matrix could not be factored).
@@ -125,9 +125,9 @@ private:
     CorrectorConfig cfg_;
     bool marginalise_;
     bool boundary_scale_;
-    double scored_prior_mean_;                   ///< the scale prior's mean in Nll()
-    std::vector<double> dist_;                   ///< path length from pose 0 [m]
-    double elapsed_s_ = 0.0;                     ///< time of the appended steps [s]
+    double scored_prior_mean_;  ///< the scale prior's mean in Nll()
+    std::vector<double> dist_;  ///< path length from pose 0 [m]
+    double elapsed_s_ = 0.0;    ///< time of the appended steps [s]
     /// The median of the odometry's lengths of the GaitSteps so far
     /// (ModelConfig::step_length_exponent).
     RunningMedian gait_median_;

@@ -16,8 +16,8 @@ constexpr double kScaleMin = 0.25, kScaleMax = 4.0;
 
 struct ModelConfig {
     // Step length: sigma = step_sigma_m + step_sigma_rel * L.
-    double step_sigma_m = 0.02;       ///< [m]
-    double step_sigma_rel = 0.01;     ///< [-] share of the step length
+    double step_sigma_m = 0.02;    ///< [m]
+    double step_sigma_rel = 0.01;  ///< [-] share of the step length
     /// A pedestrian step model's lengths are read about their median: a moving step of length L
     /// is observed as median^(1 - step_length_exponent) * L^step_length_exponent (core
     /// ReadAtGait; the batch takes the median over the whole estimate, online the steps so
@@ -51,8 +51,8 @@ struct ModelConfig {
     double heading_sigma_min_rad = 1e-4;       ///< floor [rad]
     /// Heading-rate bias: the odometry's heading drifts at a slowly varying rate (a gyro bias, a
     /// visual / lidar odometry's systematic yaw error), one unknown bias [rad/s] per
-    /// heading_bias_segment_s of time, a random walk of heading_bias_rw_rad_s between segments and a
-    /// prior of heading_bias_prior_rad_s around 0 on the first. A steady drift then costs the
+    /// heading_bias_segment_s of time, a random walk of heading_bias_rw_rad_s between segments and
+    /// a prior of heading_bias_prior_rad_s around 0 on the first. A steady drift then costs the
     /// prior once, not every step's heading sigma, so following the roads stays cheaper than
     /// bending the scale. heading_bias_segment_s = 0: no bias.
     double heading_bias_segment_s = 30.0;      ///< [s]
@@ -61,8 +61,8 @@ struct ModelConfig {
     // Heading preservation prior (turns are small), per step.
     double preservation_sigma_rad = 1.0;  ///< [rad]; large = weak
     // Height change (indoor3d): sigma = height_sigma_m + height_sigma_rel * |dup|.
-    double height_sigma_m = 0.05;     ///< [m]
-    double height_sigma_rel = 0.05;   ///< [-]
+    double height_sigma_m = 0.05;    ///< [m]
+    double height_sigma_rel = 0.05;  ///< [-]
     /// Floors (indoor3d): a pose where the estimate's height stays level (within
     /// floor_level_height_m over the floor_level_window_s around it: LevelSpans) stands on a
     /// floor, so its height is drawn to the one of floor_heights_m nearest to it when the window
@@ -77,8 +77,8 @@ struct ModelConfig {
     double floor_level_window_s = 20.0;   ///< [s]
     double floor_level_height_m = 1.0;    ///< [m]
     // Map distance to the nearest traversable centre: Gaussian with sigma, gives up beyond ~giveup.
-    double map_sigma_m = 2.0;         ///< [m]
-    double map_giveup_m = 8.0;        ///< [m]
+    double map_sigma_m = 2.0;   ///< [m]
+    double map_giveup_m = 8.0;  ///< [m]
     /// Lift rides (a map with lift shafts, TraversableField::lift_shafts): a pose where the walker
     /// stands while the height changes (RideSpans: ride_min_s, ride_min_height_m; no step for
     /// ride_gap_s counts as standing; ride_lag_s of barometer lag) is in a lift: its horizontal
@@ -102,14 +102,14 @@ struct ModelConfig {
     double tread_rate_mps = 0.15;  ///< [m/s]
     // Step-length scale: one variable per scale_segment_m of estimated path, random walk between
     // segments, prior around scale_prior_mean on the first.
-    double scale_segment_m = 150.0;   ///< [m]
-    double scale_prior_sigma = 0.1;   ///< [-]
+    double scale_segment_m = 150.0;  ///< [m]
+    double scale_prior_sigma = 0.1;  ///< [-]
     /// The scale every scored NLL's prior is about (by default 1, the odometry's own scale; online,
     /// the start nearest it gives the first outputs); the windows of a start scale hypothesis
     /// hold it at the start (CorrectorConfig::start_scales; online, the FixedLagSmoother's
     /// start_scale).
-    double scale_prior_mean = 1.0;    ///< [-]
-    double scale_rw_sigma = 0.01;     ///< [-] per segment
+    double scale_prior_mean = 1.0;  ///< [-]
+    double scale_rw_sigma = 0.01;   ///< [-] per segment
     /// The plausible scale range as a prior: no cost within [scale_range_min, scale_range_max],
     /// Gaussian with scale_range_sigma beyond (metric odometry is a few percent off; pedestrian
     /// step models tens of percent). scale_range_sigma = 0: no range prior (the bounds kScaleMin,
@@ -126,8 +126,8 @@ struct ModelConfig {
     // Hard corridor: every pose whose start point is within corridor_gate_m of the traversable
     // corridor must end inside it (signed corridor distance <= corridor_slack_m).
     bool hard_corridor = true;
-    double corridor_gate_m = 3.0;     ///< [m]
-    double corridor_slack_m = 0.0;    ///< [m]
+    double corridor_gate_m = 3.0;   ///< [m]
+    double corridor_slack_m = 0.0;  ///< [m]
 
     /// The first value kModelParams or scale_range_min <= scale_range_max does not allow.
     std::optional<ParamProblem> FindProblem() const;

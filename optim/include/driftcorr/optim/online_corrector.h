@@ -32,9 +32,9 @@
 namespace driftcorr {
 
 struct OnlineConfig {
-    CorrectorConfig corrector;   ///< chunk_m, window_m, model, ... exactly as in batch mode
-    bool synchronous = false;    ///< solve inside Push (no worker thread)
-    double gap_warn_s = 1.0;     ///< Push flags a step longer than this in time [s]
+    CorrectorConfig corrector;  ///< chunk_m, window_m, model, ... exactly as in batch mode
+    bool synchronous = false;   ///< solve inside Push (no worker thread)
+    double gap_warn_s = 1.0;    ///< Push flags a step longer than this in time [s]
     /// The returned causal pose is moved into the traversable corridor when it lies outside it but
     /// within corridor.model.corridor_gate_m (what the refinement's hard constraint does to the
     /// smoothed poses), horizontally along the corridor distance gradient, in at most 3 Newton
@@ -107,11 +107,11 @@ enum class PushStatus {
 
 struct PushResult {
     PushStatus status = PushStatus::kAccepted;
-    std::string message;      ///< why rejected, or a warning (gap, outside map); empty otherwise
-    std::size_t index = 0;    ///< index of the accepted pose in the stream
-    PlanarPose corrected;     ///< causal estimate (valid when accepted); yaw_rad always set
-    bool gap = false;         ///< the step took longer than gap_warn_s
-    bool outside_map = false; ///< the corrected pose lies outside the map field (odometry only)
+    std::string message;       ///< why rejected, or a warning (gap, outside map); empty otherwise
+    std::size_t index = 0;     ///< index of the accepted pose in the stream
+    PlanarPose corrected;      ///< causal estimate (valid when accepted); yaw_rad always set
+    bool gap = false;          ///< the step took longer than gap_warn_s
+    bool outside_map = false;  ///< the corrected pose lies outside the map field (odometry only)
     /// The solve the output chains from ended this many epochs (poses) before this one...
     std::size_t correction_age_epochs = 0;
     double correction_age_s = 0.0;  ///< ...and this much earlier in stream time [s]
@@ -137,19 +137,19 @@ struct PushResult {
 
 /// How the online corrector kept up (OnlineCorrector::Statistics).
 struct OnlineStatistics {
-    std::size_t poses = 0;             ///< accepted
-    std::size_t stale_poses = 0;       ///< returned without the newest requested solve (!fresh)
-    std::size_t max_age_epochs = 0;    ///< worst correction_age_epochs
-    double max_age_s = 0.0;            ///< worst correction_age_s [s]
-    std::size_t requests = 0;          ///< solves the schedule asked for
-    std::size_t solves = 0;            ///< solves run (requests - solves were skipped)
-    std::size_t failed_solves = 0;     ///< Ipopt gave no usable solution (state kept)
-    std::size_t prior_solves = 0;      ///< solves whose boundary carried a marginalised prior
-    std::vector<double> solve_s;       ///< wall time of every solve [s]
-    std::size_t waits = 0;             ///< Pushes that waited (back-pressure)
-    double wait_s = 0.0;               ///< total wait [s]
-    std::size_t ahead_poses = 0;       ///< poses that arrived faster than real time
-    std::string worker_error;          ///< a solve that threw (the worker then stopped)
+    std::size_t poses = 0;           ///< accepted
+    std::size_t stale_poses = 0;     ///< returned without the newest requested solve (!fresh)
+    std::size_t max_age_epochs = 0;  ///< worst correction_age_epochs
+    double max_age_s = 0.0;          ///< worst correction_age_s [s]
+    std::size_t requests = 0;        ///< solves the schedule asked for
+    std::size_t solves = 0;          ///< solves run (requests - solves were skipped)
+    std::size_t failed_solves = 0;   ///< Ipopt gave no usable solution (state kept)
+    std::size_t prior_solves = 0;    ///< solves whose boundary carried a marginalised prior
+    std::vector<double> solve_s;     ///< wall time of every solve [s]
+    std::size_t waits = 0;           ///< Pushes that waited (back-pressure)
+    double wait_s = 0.0;             ///< total wait [s]
+    std::size_t ahead_poses = 0;     ///< poses that arrived faster than real time
+    std::string worker_error;        ///< a solve that threw (the worker then stopped)
 };
 
 class OnlineCorrector {
@@ -188,7 +188,7 @@ private:
     OnlineCorrector(const TraversableField* field, const OnlineConfig& config, double start_scale,
                     bool first_at_chunk);
     void StartSolving();  ///< the solver's first scale and, threaded, the worker
-    struct Entry {  ///< one accepted pose, as handed to the solver
+    struct Entry {        ///< one accepted pose, as handed to the solver
         PoseState initial;
         StepObservation step;
     };
@@ -228,8 +228,8 @@ private:
 
     // With more than one start scale: the hypotheses (this object then only forwards to them).
     std::vector<std::unique_ptr<OnlineCorrector>> hypotheses_;
-    std::size_t chosen_ = 0;     ///< the hypothesis whose outputs Push returns
-    std::size_t chosen_at_ = 0;  ///< the solve end it was chosen at (0: not yet)
+    std::size_t chosen_ = 0;       ///< the hypothesis whose outputs Push returns
+    std::size_t chosen_at_ = 0;    ///< the solve end it was chosen at (0: not yet)
     std::vector<double> weights_;  ///< each hypothesis's weight there (empty: not yet)
 
     // Push-thread-only state (never touched by the worker).
@@ -240,7 +240,7 @@ private:
     Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
     std::size_t chunk_start_ = 0;
     std::vector<double> t_s_;
-    std::vector<Entry> entries_;  ///< every accepted pose, for Finish()
+    std::vector<Entry> entries_;        ///< every accepted pose, for Finish()
     std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
     /// The input's pace: stream time and wall time outside Push (waits excluded) of the last
     /// kPaceWindow poses, oldest first.
@@ -250,25 +250,25 @@ private:
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;
-    std::condition_variable wake_;    ///< a request, or stop
-    std::condition_variable solved_;  ///< a solve merged (back-pressure)
-    std::deque<Entry> pending_;           ///< accepted poses not yet handed to the solver
-    std::size_t pending_first_ = 0;       ///< stream index of pending_.front()
-    bool requested_ = false;              ///< a solve is wanted (the newest pose's window)
-    bool request_restarts_ = false;       ///< ... with restarts (a chunk ended since the last)
-    std::size_t request_end_ = 0;         ///< the requested end (synchronous mode's window end)
-    bool busy_ = false;                   ///< the worker is solving
-    std::vector<PoseState> current_;      ///< latest estimate of every accepted pose
-    std::vector<StepObservation> steps_;  ///< observation of every accepted pose
-    std::vector<int> segment_;            ///< scale segment of every accepted pose
-    std::vector<int> bias_segment_;       ///< heading-rate bias segment of every accepted pose
+    std::condition_variable wake_;           ///< a request, or stop
+    std::condition_variable solved_;         ///< a solve merged (back-pressure)
+    std::deque<Entry> pending_;              ///< accepted poses not yet handed to the solver
+    std::size_t pending_first_ = 0;          ///< stream index of pending_.front()
+    bool requested_ = false;                 ///< a solve is wanted (the newest pose's window)
+    bool request_restarts_ = false;          ///< ... with restarts (a chunk ended since the last)
+    std::size_t request_end_ = 0;            ///< the requested end (synchronous mode's window end)
+    bool busy_ = false;                      ///< the worker is solving
+    std::vector<PoseState> current_;         ///< latest estimate of every accepted pose
+    std::vector<StepObservation> steps_;     ///< observation of every accepted pose
+    std::vector<int> segment_;               ///< scale segment of every accepted pose
+    std::vector<int> bias_segment_;          ///< heading-rate bias segment of every accepted pose
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
-    std::vector<double> front_biases_;    ///< solved biases, up to the last solved segment
-    std::size_t solved_end_ = 0;          ///< last pose of the newest merged solve
+    std::vector<double> front_biases_;       ///< solved biases, up to the last solved segment
+    std::size_t solved_end_ = 0;             ///< last pose of the newest merged solve
     PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
     bool chain_sigma_ok_ = true;
     bool stop_ = false;
-    OnlineStatistics stats_;              ///< worker's part (solves); Push's part below
+    OnlineStatistics stats_;  ///< worker's part (solves); Push's part below
     /// record_nll_: (end, NLL of poses [1, end]) after each usable solve, ends increasing.
     std::vector<std::pair<std::size_t, double>> nll_at_;
 

@@ -31,21 +31,21 @@
 namespace driftcorr {
 
 struct PaperSolverConfig {
-    double learning_rate = 0.01;        ///< fixed gradient step [m^2 per unit cost], as published
+    double learning_rate = 0.01;  ///< fixed gradient step [m^2 per unit cost], as published
     /// Gradient steps per epoch. 100: with the defaults below the stiffest direction (the step
     /// length) converges in one step (learning_rate * w_s / sigma_s^2 = 1) and the lateral
     /// direction in about 20, so 100 leaves the descent converged to < 1 mm on KITTI and PDR.
     int iterations_per_epoch = 100;
-    double turn_weight = 1.0;           ///< w_t in [0, 1]
-    double step_weight = 1.0;           ///< w_s in [0, 1]
-    double map_weight = 1.0;            ///< w_m in [0, 1]
-    double preservation_weight = 1.0;   ///< w_p in [0, 1]
+    double turn_weight = 1.0;          ///< w_t in [0, 1]
+    double step_weight = 1.0;          ///< w_s in [0, 1]
+    double map_weight = 1.0;           ///< w_m in [0, 1]
+    double preservation_weight = 1.0;  ///< w_p in [0, 1]
     /// sigma_t [rad]. Not ModelConfig's heading random walk (that one is per sqrt(s) and ~1e-3 rad
     /// per step, far too stiff for a fixed learning rate of 0.01): the turn term's curvature in
     /// position is w_t / (sigma_t * L)^2, so sigma_t * min_step_m must stay >= ~0.07 m.
     double turn_sigma_rad = 0.2;
-    double step_sigma_m = 0.1;          ///< sigma_s [m] (see iterations_per_epoch)
-    double map_sigma_m = ModelConfig{}.map_sigma_m;                        ///< sigma_m [m]
+    double step_sigma_m = 0.1;                       ///< sigma_s [m] (see iterations_per_epoch)
+    double map_sigma_m = ModelConfig{}.map_sigma_m;  ///< sigma_m [m]
     double preservation_sigma_rad = ModelConfig{}.preservation_sigma_rad;  ///< sigma_p [rad]
     /// Truncation h of the map distance [m]; 0: the road's own half-width at p, read from the
     /// field (centre distance minus signed corridor distance).
@@ -54,7 +54,7 @@ struct PaperSolverConfig {
     /// the course of a short step is ill-defined and its turn-term curvature would make the fixed
     /// learning rate diverge.
     double min_step_m = 0.5;
-    double stationary_m = 1e-3;         ///< steps shorter than this are stops [m]
+    double stationary_m = 1e-3;  ///< steps shorter than this are stops [m]
 
     /// The first value kPaperSolverParams or a rule between its values does not allow, including
     /// settings for which the fixed-step descent is unstable (learning_rate * curvature >= 2 on the

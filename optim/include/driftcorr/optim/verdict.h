@@ -92,15 +92,15 @@ struct VerdictConfig {
     /// shifted by up to the map term's reach, has at most off_map_degraded_share of its poses
     /// beyond that floor's reach.
     std::vector<double> floor_heights_m;
-    double off_floor_m = 1.0;       ///< [m]
-    double level_window_s = 20.0;   ///< [s]
-    double level_height_m = 1.0;    ///< [m] (a barometer reads a level walk 0.6-0.7 m peak to peak)
+    double off_floor_m = 1.0;      ///< [m]
+    double level_window_s = 20.0;  ///< [s]
+    double level_height_m = 1.0;   ///< [m] (a barometer reads a level walk 0.6-0.7 m peak to peak)
     /// Off the map: share of corrected poses beyond the map's reach for degraded / failed.
     double off_map_degraded_share = 0.1;  ///< [-]
     double off_map_failed_share = 0.3;    ///< [-]
     /// The start does not fit: another placement of the leading path at least this far from the
     /// given one (heading or position)...
-    double anchor_other_yaw_deg = 5.0;     ///< [deg]
+    double anchor_other_yaw_deg = 5.0;      ///< [deg]
     double anchor_other_position_m = 10.0;  ///< [m] (a GNSS start fix is good to a few metres)
     /// ...brings its RMS distance to the map below this share of the given placement's.
     double anchor_rms_ratio = 0.5;  ///< [-]

@@ -34,14 +34,14 @@ struct PoseState {
 
 /// The whole trajectory's state and its fixed inputs; windows read and write it.
 struct TrajectoryState {
-    std::vector<StepObservation> obs;   ///< obs[i]: step into pose i
-    std::vector<int> scale_segment;     ///< scale segment of step i (obs index)
+    std::vector<StepObservation> obs;  ///< obs[i]: step into pose i
+    std::vector<int> scale_segment;    ///< scale segment of step i (obs index)
     std::vector<PoseState> poses;
-    std::vector<double> scales;         ///< one per scale segment
+    std::vector<double> scales;  ///< one per scale segment
     /// Heading-rate bias segment of step i (obs index), ascending; empty: no bias variables.
     std::vector<int> bias_segment;
-    std::vector<double> biases;         ///< one per bias segment [rad/s]
-    bool fix_height = true;             ///< planar mode: heights stay as initialised
+    std::vector<double> biases;  ///< one per bias segment [rad/s]
+    bool fix_height = true;      ///< planar mode: heights stay as initialised
     /// Steps whose height change is read as settled (obs index; empty: none): a window's floor
     /// restarts (CorrectorConfig::restart_height_gains) neither count nor re-read them.
     std::vector<std::uint8_t> height_settled;

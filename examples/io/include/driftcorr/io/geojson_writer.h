@@ -9,7 +9,7 @@
 namespace driftcorr::io {
 
 struct GeoTrack {
-    std::string name;                 ///< becomes properties.name, e.g. "estimate", "corrected"
+    std::string name;  ///< becomes properties.name, e.g. "estimate", "corrected"
     std::vector<GeoPoint> points;
     /// Further properties of the feature: key and its value as JSON text (written verbatim),
     /// e.g. {"verdict", "\"ok\""} or a per-vertex array.

@@ -12,17 +12,17 @@ namespace driftcorr::io {
 
 enum class ScenarioMode { kRoad2d, kIndoor3d };
 /// kTum: "t x y z qx qy qz qw" or positions only "t x y z"; kCsv: comma-separated with a header
-/// naming the columns (trajectory_io.h), which also reads EuRoC / ASL files; kEuroc: the same reader,
-/// requiring the EuRoC / ASL header.
+/// naming the columns (trajectory_io.h), which also reads EuRoC / ASL files; kEuroc: the same
+/// reader, requiring the EuRoC / ASL header.
 enum class TrajectoryFormat { kKitti, kTum, kCsv, kEuroc };
 enum class MapFormat { kOsm, kGeoJson, kPcd, kPly, kOctomap };
 enum class LayerRole { kNone, kWalkways, kFloorplan };
 
 /// Where a trajectory comes from (the `estimate:` / `ground_truth:` blocks).
 struct TrajectorySource {
-    std::string path;                 ///< absolute or relative to the working dir (resolved)
+    std::string path;  ///< absolute or relative to the working dir (resolved)
     TrajectoryFormat format = TrajectoryFormat::kTum;
-    std::optional<double> rate_hz;    ///< kitti only
+    std::optional<double> rate_hz;          ///< kitti only
     std::optional<std::string> times_path;  ///< kitti only, resolved
     /// `heading: motion`: the heading is taken from the direction of motion even when the file
     /// has orientations (e.g. a body frame whose forward axis is not the frame's, such as the
@@ -34,10 +34,10 @@ struct TrajectorySource {
 /// `anchor:`. Exactly one of (lat_deg, lon_deg[, alt_m]) or (crs, easting_m, northing_m).
 struct AnchorSpec {
     std::optional<double> lat_deg, lon_deg, alt_m;
-    std::optional<std::string> crs;         ///< e.g. "EPSG:32632", as written
+    std::optional<std::string> crs;  ///< e.g. "EPSG:32632", as written
     std::optional<double> easting_m, northing_m;
-    /// Heading of the trajectory frame in East-North (docs/FORMAT.md); std::nullopt when the file says
-    /// `yaw_deg: auto`: the start is then estimated from the map (the key itself is required).
+    /// Heading of the trajectory frame in East-North (docs/FORMAT.md); std::nullopt when the file
+    /// says `yaw_deg: auto`: the start is then estimated from the map (the key itself is required).
     std::optional<double> yaw_deg;
     /// `position_search_m` (optional): radius around the given position within which the start
     /// is estimated from the map together with the yaw [m]; 0: the position is taken as given.
@@ -59,7 +59,7 @@ struct AnchorSpec {
 std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor);
 
 struct MapLayerSpec {
-    std::string path;                  ///< resolved
+    std::string path;  ///< resolved
     MapFormat format = MapFormat::kOsm;
     LayerRole role = LayerRole::kNone;
     std::optional<double> floor_z_m;
@@ -69,8 +69,8 @@ struct MapLayerSpec {
 };
 
 struct Scenario {
-    std::string yaml_path;             ///< the scenario.yaml that was read
-    std::string dir;                   ///< its folder; relative paths are resolved against it
+    std::string yaml_path;  ///< the scenario.yaml that was read
+    std::string dir;        ///< its folder; relative paths are resolved against it
     std::string name;
     ScenarioMode mode = ScenarioMode::kRoad2d;
     TrajectorySource estimate;

@@ -13,10 +13,9 @@ namespace driftcorr::io {
 /// Every reader throws InputError(file, line, "", message) for: missing/unreadable file, a line
 /// with the wrong number of fields or a field that is not a number, NaN/inf, timestamps that do
 /// not strictly increase, a zero-norm quaternion (TUM), a times file whose line count differs from
-/// the pose count, fewer than `min_poses` poses. Blank lines and lines starting with '#' are skipped.
-/// Quaternions are normalised.
-/// TUM: 8 numbers a line, or 4 ("t x y z", positions only: the trajectory has no orientation);
-/// the first data line decides and every line must have as many.
+/// the pose count, fewer than `min_poses` poses. Blank lines and lines starting with '#' are
+/// skipped. Quaternions are normalised. TUM: 8 numbers a line, or 4 ("t x y z", positions only: the
+/// trajectory has no orientation); the first data line decides and every line must have as many.
 Trajectory ReadTum(const std::string& path, std::size_t min_poses = 3);
 /// CSV: the first non-blank line is the header, comma-separated column names; each name is
 /// matched without a leading '#', surrounding spaces, case and a trailing unit in brackets.

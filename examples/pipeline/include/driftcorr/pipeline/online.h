@@ -12,7 +12,7 @@ namespace driftcorr::pipeline {
 
 struct StreamSetup {
     io::Scenario scenario;
-    PlanarAnchor anchor;     ///< trajectory frame -> world plane
+    PlanarAnchor anchor;  ///< trajectory frame -> world plane
     RoadNetwork network;
     TraversableField field;  ///< over the whole road network (the route is not known in advance)
     double scale = 1.0;      ///< the anchor's `scale`: a pose's position times it is metres

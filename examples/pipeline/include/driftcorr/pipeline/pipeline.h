@@ -10,8 +10,8 @@
 #include "driftcorr/core/metrics.h"
 #include "driftcorr/io/scenario.h"
 #include "driftcorr/mapping/indoor_field.h"
-#include "driftcorr/mapping/surface_field.h"
 #include "driftcorr/mapping/road_network.h"
+#include "driftcorr/mapping/surface_field.h"
 #include "driftcorr/optim/anchor_fit.h"
 #include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/online_corrector.h"
@@ -28,13 +28,13 @@ std::string ToString(Solver solver);
 /// Every parameter of a run; defaults written once, in the member structs.
 struct PipelineConfig {
     Solver solver = Solver::kDriftcorr;
-    CorrectorConfig corrector;   ///< road2d, Solver::kDriftcorr (sections `model`, `corrector`)
+    CorrectorConfig corrector;  ///< road2d, Solver::kDriftcorr (sections `model`, `corrector`)
     /// indoor3d, Solver::kDriftcorr (sections `indoor_model`, `indoor_corrector`)
     CorrectorConfig indoor_corrector = CorrectorConfig::Pedestrian();
     IndoorFieldConfig indoor_field;  ///< indoor3d GeoJSON map field (section `indoor_field`)
     /// indoor3d point-cloud / OctoMap map field (section `surface_field`)
     SurfaceFieldConfig surface_field;
-    PaperSolverConfig paper;     ///< used by Solver::kPaper (params.yaml section `paper`)
+    PaperSolverConfig paper;  ///< used by Solver::kPaper (params.yaml section `paper`)
     RoadClassConfig roads;
     RoadFieldConfig field;
     /// driftcorr stream and the online method of eval (section `online`); its `corrector` is
@@ -112,18 +112,18 @@ private:
 };
 
 struct Timings {
-    double load_s = 0.0;    ///< scenario and trajectories
-    double map_s = 0.0;     ///< map parsing and field
-    double solve_s = 0.0;   ///< correction
+    double load_s = 0.0;   ///< scenario and trajectories
+    double map_s = 0.0;    ///< map parsing and field
+    double solve_s = 0.0;  ///< correction
 };
 
 struct CorrectionRun {
     io::Scenario scenario;
-    Trajectory estimate_frame;          ///< as read
-    PlanarTrajectory estimate;          ///< in the world plane
+    Trajectory estimate_frame;  ///< as read
+    PlanarTrajectory estimate;  ///< in the world plane
     std::optional<PlanarTrajectory> ground_truth;
     RoadNetwork network;
-    PlanarAnchor anchor;                ///< as given, or as estimated from the map
+    PlanarAnchor anchor;                        ///< as given, or as estimated from the map
     std::optional<AnchorFitResult> anchor_fit;  ///< see PreparedScenario
     std::size_t map_grid_cells = 0;
     /// See PreparedScenario.
@@ -133,7 +133,7 @@ struct CorrectionRun {
     /// Can the result be vouched for (no ground truth used): ok, degraded or failed, reasons and
     /// per-pose flags.
     Verdict verdict;
-    Trajectory corrected_frame;         ///< valid only when Usable(result.status)
+    Trajectory corrected_frame;  ///< valid only when Usable(result.status)
     std::optional<ErrorMetrics> before, after;
     Timings timings;
     /// The heading came from the direction of motion: the estimate has no orientation, or the
@@ -145,10 +145,10 @@ struct CorrectionRun {
 /// Lets several solvers run on one loaded scenario (driftcorr eval).
 struct PreparedScenario {
     io::Scenario scenario;
-    Trajectory estimate_frame;          ///< as read
-    PlanarTrajectory estimate;          ///< in the world plane
+    Trajectory estimate_frame;  ///< as read
+    PlanarTrajectory estimate;  ///< in the world plane
     std::optional<PlanarTrajectory> ground_truth;
-    PlanarAnchor anchor;                ///< as given, or as estimated from the map
+    PlanarAnchor anchor;  ///< as given, or as estimated from the map
     /// How the start fits the map: the estimated start (`yaw_deg: auto`, `position_search_m`), or
     /// the given anchor scored against every other heading (the anchor check).
     std::optional<AnchorFitResult> anchor_fit;
@@ -159,8 +159,8 @@ struct PreparedScenario {
     std::optional<ScaleFitResult> scale_fit;
     RoadNetwork network;
     TraversableField field;
-    Timings timings;                    ///< load_s and map_s
-    bool heading_from_motion = false;   ///< see CorrectionRun
+    Timings timings;                   ///< load_s and map_s
+    bool heading_from_motion = false;  ///< see CorrectionRun
 };
 
 /// Loads the scenario, its trajectories and its map field. Throws InputError for bad input

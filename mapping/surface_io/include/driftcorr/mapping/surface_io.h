@@ -48,9 +48,9 @@ std::vector<Eigen::Vector3d> ReadOccupiedVoxelsOctomap(const std::string& path,
 std::vector<Eigen::Vector3d> ReadRawPoints(const std::string& path, double* voxel_m = nullptr);
 
 /// Writers (used by the synthetic building generator and the tests). Each writes through a
-/// temporary file renamed when complete (atomic_file.h); throws std::runtime_error naming the file when
-/// it cannot be written. Points are stored as 32-bit floats (keep coordinates local: a float has
-/// about 0.5 m resolution at UTM northings).
+/// temporary file renamed when complete (atomic_file.h); throws std::runtime_error naming the file
+/// when it cannot be written. Points are stored as 32-bit floats (keep coordinates local: a float
+/// has about 0.5 m resolution at UTM northings).
 void WriteSurfacePointsPcd(const std::string& path, const std::vector<Eigen::Vector3d>& points);
 void WriteSurfacePointsPly(const std::string& path, const std::vector<Eigen::Vector3d>& points);
 
