@@ -465,6 +465,38 @@ TEST(Scenario, AnchorScale) {
     EXPECT_EQ(s.anchor.scale, 1.0);
 }
 
+// The anchor's ranges, one check for scenario.yaml, --anchor and the Python dict: the first value
+// outside its range by its key, a NaN too; nothing for an anchor within every range.
+TEST(Scenario, AnchorRangesAreCheckedInOnePlace) {
+    AnchorSpec a;
+    a.lat_deg = 48.98;
+    a.lon_deg = 8.39;
+    EXPECT_FALSE(FindAnchorProblem(a).has_value());
+    const auto key = [](const AnchorSpec& spec) {
+        const std::optional<AnchorProblem> p = FindAnchorProblem(spec);
+        return p ? p->key : std::string("none");
+    };
+    AnchorSpec b = a;
+    b.lat_deg = -90.5;
+    EXPECT_EQ(key(b), "lat_deg");
+    b.lat_deg = std::nan("");
+    EXPECT_EQ(key(b), "lat_deg");
+    b = a;
+    b.lon_deg = 180.01;
+    EXPECT_EQ(key(b), "lon_deg");
+    b = a;
+    b.position_search_m = 1000.5;
+    EXPECT_EQ(key(b), "position_search_m");
+    AnchorSpec grid;
+    grid.crs = "EPSG:32632";
+    grid.easting_m = 1.0;
+    grid.northing_m = 2.0;
+    EXPECT_EQ(key(grid), "none");
+    grid.crs = "EPSG:banana";
+    EXPECT_EQ(key(grid), "crs");
+    EXPECT_NE(FindAnchorProblem(grid)->rule.find("EPSG:banana"), std::string::npos);
+}
+
 // A folder where the scenario file should be is bad input naming the path, not a read error.
 TEST(Scenario, FolderNamedLikeTheScenarioFileIsAnInputError) {
     const fs::path dir = TestDir() / "folder_yaml";

@@ -516,19 +516,19 @@ io::AnchorSpec ParseAnchorOption(const Args& a) {
     }
     io::AnchorSpec anchor;
     if (grid) {
-        if (NormaliseCrsName(a.crs).empty()) {
-            throw InputError("", 0, "--crs",
-                             "unknown CRS spelling '" + a.crs + "' (e.g. EPSG:32632)");
-        }
         anchor.crs = a.crs;
         anchor.easting_m = AnchorNumber(parts[0], "easting");
         anchor.northing_m = AnchorNumber(parts[1], "northing");
     } else {
         anchor.lat_deg = AnchorNumber(parts[0], "latitude");
         anchor.lon_deg = AnchorNumber(parts[1], "longitude");
-        if (std::abs(*anchor.lat_deg) > 90.0 || std::abs(*anchor.lon_deg) > 180.0) {
-            throw InputError("", 0, "--anchor", "latitude or longitude out of range");
-        }
+    }
+    if (const std::optional<io::AnchorProblem> problem = io::FindAnchorProblem(anchor)) {
+        const bool crs = problem->key == "crs";
+        const std::string what = problem->key == "lat_deg"   ? "the latitude "
+                                 : problem->key == "lon_deg" ? "the longitude "
+                                                             : "";
+        throw InputError("", 0, crs ? "--crs" : "--anchor", what + problem->rule);
     }
     if (parts[2] != "auto") anchor.yaw_deg = AnchorNumber(parts[2], "yaw");
     if (!a.scale.empty()) {

@@ -132,13 +132,13 @@ using Clock = std::chrono::steady_clock;
 // The stream's state: the corrector and the accepted inputs (for the smoothed output).
 class StreamSession {
 public:
-    StreamSession(const pipeline::StreamSetup& setup, const OnlineConfig& cfg,
+    StreamSession(pipeline::StreamSetup setup, const OnlineConfig& cfg,
                   const VerdictConfig& verdict_config, bool status_column)
-        : setup_(setup),
-          cfg_(cfg),
-          verdict_config_(verdict_config),
-          corrector_(&setup.field, cfg),
+        : cfg_(cfg),
+          session_(std::move(setup), cfg, verdict_config),
           status_column_(status_column) {}
+
+    const pipeline::StreamSetup& setup() const { return session_.setup(); }
 
     // One input line (without newline), read at `arrived` after waiting `pause_s` for it (the
     // producer's pause, not this program's own work); `complete` is false for a last line without
@@ -153,14 +153,11 @@ public:
             // Not one bad line but the whole input's unit: every later line would be wrong too.
             throw InputError("standard input", number, "", unit);
         }
-        const FrameAxes axes = setup_.scenario.frame;
-        const PlanarPose in =
-            pipeline::ToPlanarPose(line.t_s, line.p_frame, line.q_frame_body, setup_);
-        const PushResult r = corrector_.Push(in);
+        const pipeline::StreamSession::Output pushed =
+            session_.Push(line.t_s, line.p_frame, line.q_frame_body);
+        const PushResult& r = pushed.result;
         if (!r.Accepted()) return Skip(number, r.message);
-        const auto [p, q] = pipeline::FromPlanarPose(r.corrected, in, line.p_frame,
-                                                     line.q_frame_body, axes, setup_.anchor);
-        std::string out = io::FormatTumLine(line.t_s, p, q);
+        std::string out = io::FormatTumLine(line.t_s, pushed.p_frame, pushed.q_frame_body);
         if (status_column_) {
             char status[160];
             const Eigen::Matrix2d& c = r.covariance.xy_m2;
@@ -182,22 +179,15 @@ public:
         // had been read later), so it is not part of the pose's latency; it is reported apart.
         latency_s_.push_back(std::chrono::duration<double>(Clock::now() - arrived).count() -
                              r.waited_s);
-        Record(in, line);
-        causal_.t_s.push_back(r.corrected.t_s);
-        causal_.p_en.push_back(r.corrected.p_en);
-        causal_.up_m.push_back(r.corrected.up_m);
         ReportWarnings(number, r, pause_s);
     }
 
     int Finish(const std::string& smoothed_out, bool quiet) {
-        const OnlineStatistics st = corrector_.Statistics();
+        const OnlineStatistics st = session_.Statistics();
         if (!quiet) Summarise(st);
-        const CorrectionResult result = corrector_.Finish();
-        std::optional<OnlineVerdict> judged;
-        if (Usable(result.status)) {
-            judged = JudgeOnline(reference_, causal_, &setup_.field, cfg_.corrector.model, result,
-                                 verdict_config_);
-        }
+        const pipeline::StreamSession::Ending end = *session_.Finish();  // the one Finish
+        const CorrectionResult& result = end.result;
+        const std::optional<OnlineVerdict>& judged = end.judged;
         if (!quiet) {
             std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
@@ -218,15 +208,14 @@ public:
                          result.message.c_str());
             return kExitSolver;
         }
-        io::WriteTum(smoothed_out, FromPlanar(result.corrected, reference_, accepted_,
-                                              setup_.scenario.frame, setup_.anchor));
+        io::WriteTum(smoothed_out, *end.smoothed);
         return vouched ? 0 : kExitSolver;
     }
 
 private:
     void Summarise(const OnlineStatistics& st) const {
         std::fprintf(stderr, "driftcorr stream: %zu poses corrected, %zu lines skipped\n",
-                     accepted_.size(), skipped_);
+                     session_.accepted(), skipped_);
         const double stale = st.poses ? 100.0 * double(st.stale_poses) / double(st.poses) : 0.0;
         std::fprintf(stderr,
                      "driftcorr stream: freshness: %.1f %% of poses emitted without a fresh solve; "
@@ -277,15 +266,6 @@ private:
         ++skipped_;
         Warn(number, "skipped: " + why);
     }
-    void Record(const PlanarPose& in, const io::TumLine& line) {
-        accepted_.t_s.push_back(line.t_s);
-        accepted_.p_frame.push_back(line.p_frame);
-        accepted_.q_frame_body.push_back(line.q_frame_body);
-        reference_.t_s.push_back(in.t_s);
-        reference_.p_en.push_back(in.p_en);
-        reference_.up_m.push_back(in.up_m);
-        reference_.yaw_rad.push_back(*in.yaw_rad);
-    }
     // A pause of the input (wall time) or a gap in the stream's time: one message per pause;
     // leaving and re-entering the map once per transition.
     void ReportWarnings(long number, const PushResult& r, double pause_s) {
@@ -310,14 +290,9 @@ private:
         }
     }
 
-    const pipeline::StreamSetup& setup_;
     OnlineConfig cfg_;
-    VerdictConfig verdict_config_;
-    OnlineCorrector corrector_;
+    pipeline::StreamSession session_;
     bool status_column_;
-    Trajectory accepted_;
-    PlanarTrajectory reference_;
-    PlanarTrajectory causal_;  ///< every output, in the world plane
     std::size_t skipped_ = 0;
     bool outside_ = false;
     std::optional<double> start_scale_;  ///< of the last output (OnlineConfig start scales)
@@ -395,14 +370,14 @@ int RunStream(const StreamArgs& a) {
     }
     pipeline::PipelineConfig cfg;
     if (!a.config.empty()) cfg = pipeline::LoadPipelineConfig(a.config);
-    const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(std::move(scenario), cfg);
+    pipeline::StreamSetup setup = pipeline::LoadStreamSetup(std::move(scenario), cfg);
     OnlineConfig online = cfg.online;
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = a.sync;
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
-    StreamSession session(setup, online, pipeline::VerdictFor(setup.scenario, cfg),
-                          a.status_column);
+    const VerdictConfig verdict = pipeline::VerdictFor(setup.scenario, cfg);
+    StreamSession session(std::move(setup), online, verdict, a.status_column);
     if (!a.quiet) {
         // Poses a producer writes before this line wait in the pipe and arrive as one burst.
         std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",
@@ -410,7 +385,7 @@ int RunStream(const StreamArgs& a) {
     }
     CatchStopSignals();
     if (a.replay)
-        Replay(setup.scenario, a.rate_hz, session);
+        Replay(session.setup().scenario, a.rate_hz, session);
     else
         ReadStdin(session);
     const int stop = g_stop_signal;

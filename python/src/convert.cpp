@@ -144,14 +144,8 @@ io::AnchorSpec AnchorFromDict(const py::handle& obj, io::ScenarioMode mode) {
         a.lat_deg = num("lat_deg");
         a.lon_deg = num("lon_deg");
         a.alt_m = has("alt_m") ? num("alt_m") : 0.0;
-        if (std::abs(*a.lat_deg) > 90.0) Fail("anchor['lat_deg']", "must be within [-90, 90]");
-        if (std::abs(*a.lon_deg) > 180.0) Fail("anchor['lon_deg']", "must be within [-180, 180]");
     } else {
         a.crs = StringOf(d["crs"], "anchor['crs']");
-        if (NormaliseCrsName(*a.crs).empty()) {
-            Fail("anchor['crs']",
-                 "unknown CRS spelling '" + *a.crs + "' (expected e.g. EPSG:32632)");
-        }
         a.easting_m = num("easting_m");
         a.northing_m = num("northing_m");
     }
@@ -175,8 +169,8 @@ io::AnchorSpec AnchorFromDict(const py::handle& obj, io::ScenarioMode mode) {
         if (!problem.empty()) Fail("anchor['scale']", problem);
     }
     a.position_search_m = has("position_search_m") ? num("position_search_m") : 0.0;
-    if (!(a.position_search_m >= 0.0 && a.position_search_m <= 1000.0)) {
-        Fail("anchor['position_search_m']", "must be within [0, 1000] m");
+    if (const std::optional<io::AnchorProblem> problem = io::FindAnchorProblem(a)) {
+        Fail("anchor['" + problem->key + "']", problem->rule);
     }
     if (mode == io::ScenarioMode::kIndoor3d && !has("z_m")) {
         Fail("anchor['z_m']",

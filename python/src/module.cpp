@@ -168,51 +168,36 @@ py::dict Metrics(const py::object& trajectory_en, const py::object& ground_truth
     return MetricsToDict(ComputeMetrics(traj, gt));
 }
 
-/// The online corrector on a scenario's map (what `driftcorr stream` runs): push() returns each
-/// pose's causal estimate at once, finish() the smoothed whole trajectory. Like the CLI's
-/// StreamSession, it keeps the accepted inputs to turn the smoothed result back into the frame.
+/// The online corrector on a scenario's map (pipeline::StreamSession, what `driftcorr stream`
+/// runs): push() returns each pose's causal estimate at once, finish() the smoothed whole
+/// trajectory and the stream's verdict.
 class Stream {
 public:
     Stream(pipeline::StreamSetup setup, const OnlineConfig& cfg, const VerdictConfig& verdict)
-        : setup_(std::make_unique<pipeline::StreamSetup>(std::move(setup))),
-          corrector_(std::make_unique<OnlineCorrector>(&setup_->field, cfg)),
-          model_(cfg.corrector.model),
-          verdict_config_(verdict),
-          synchronous_(cfg.synchronous) {}
+        : session_(std::make_unique<pipeline::StreamSession>(std::move(setup), cfg, verdict)) {}
 
     ~Stream() {
         py::gil_scoped_release release;  // the worker may be finishing a solve
-        corrector_.reset();
+        session_.reset();
     }
 
     py::dict Push(const py::object& pose) {
         const FramePose in = FramePoseFromArray(pose, "pose");
-        const FrameAxes axes = setup_->scenario.frame;
-        const PlanarPose planar =
-            pipeline::ToPlanarPose(in.t_s, in.p_frame, in.q_frame_body, *setup_);
-        PushResult r;
-        std::pair<Eigen::Vector3d, Eigen::Quaterniond> out;
+        pipeline::StreamSession::Output out;
         {
+            // Pushes from several threads take turns inside the session (the GIL is released
+            // during the solve); synchronous mode solves inside Push, the threaded mode's is O(1).
             py::gil_scoped_release release;
-            // Pushes from several threads take turns: checking a pose against the last one,
-            // taking it and recording it are one step (the GIL is released during the solve).
-            const std::lock_guard<std::mutex> lock(mutex_);
-            // Synchronous mode solves inside Push; the threaded mode's Push is O(1).
-            r = corrector_->Push(planar);
-            if (r.Accepted()) {
-                out = pipeline::FromPlanarPose(r.corrected, planar, in.p_frame, in.q_frame_body,
-                                               axes, setup_->anchor);
-                Record(in, planar, r.corrected);
-            }
+            out = session_->Push(in.t_s, in.p_frame, in.q_frame_body);
         }
+        const PushResult& r = out.result;
         if (r.status == PushStatus::kRejectedFinished) {
             throw std::runtime_error("pose: the stream is finished (finish() was called)");
         }
         if (!r.Accepted()) throw py::value_error("pose: " + r.message);
-        const auto& [p, q] = out;
         py::dict d;
         d["index"] = r.index;
-        d["pose"] = FramePoseToArray(in.t_s, p, q);
+        d["pose"] = FramePoseToArray(in.t_s, out.p_frame, out.q_frame_body);
         d["pose_en"] = PlanarPoseToArray(r.corrected);
         d["gap"] = r.gap;
         d["outside_map"] = r.outside_map;
@@ -221,27 +206,23 @@ public:
     }
 
     py::dict Finish() {
-        CorrectionResult result;
-        bool again = false;
+        std::optional<pipeline::StreamSession::Ending> end;
+        std::size_t accepted = 0;
         {
             py::gil_scoped_release release;
-            const std::lock_guard<std::mutex> lock(mutex_);
-            again = finished_;
-            finished_ = true;
-            if (!again) result = corrector_->Finish();
+            end = session_->Finish();
+            accepted = session_->accepted();
         }
-        if (again) throw std::runtime_error("finish() was already called");
+        if (!end) throw std::runtime_error("finish() was already called");
+        const CorrectionResult& result = end->result;
         const bool usable = Usable(result.status);
         py::dict d;
         d["status"] = driftcorr::ToString(result.status);
         d["message"] = result.message;
         d["usable"] = usable;
-        d["poses"] = accepted_.size();
+        d["poses"] = accepted;
         d["corrected"] =
-            usable
-                ? py::object(TrajectoryToArray(FromPlanar(result.corrected, reference_, accepted_,
-                                                          setup_->scenario.frame, setup_->anchor)))
-                : py::object(py::none());
+            end->smoothed ? py::object(TrajectoryToArray(*end->smoothed)) : py::object(py::none());
         d["corrected_en"] =
             usable ? py::object(PlanarToArray(result.corrected)) : py::object(py::none());
         AddCovariance(result, d);
@@ -251,45 +232,20 @@ public:
         // The stream's verdict (optim/verdict.h JudgeOnline, as `driftcorr stream` prints it).
         d["verdict"] = py::none();
         d["reasons"] = py::list();
-        if (usable) {
-            const OnlineVerdict v =
-                JudgeOnline(reference_, causal_, &setup_->field, model_, result, verdict_config_);
-            d["verdict"] = ToString(v.verdict.level);
-            d["reasons"] = Strings(v.verdict.reasons);
+        if (end->judged) {
+            d["verdict"] = ToString(end->judged->verdict.level);
+            d["reasons"] = Strings(end->judged->verdict.reasons);
         }
         return d;
     }
 
     std::size_t size() {
         py::gil_scoped_release release;
-        const std::lock_guard<std::mutex> lock(mutex_);
-        return corrector_->size();
+        return session_->size();
     }
 
 private:
-    void Record(const FramePose& in, const PlanarPose& planar, const PlanarPose& corrected) {
-        causal_.t_s.push_back(corrected.t_s);
-        causal_.p_en.push_back(corrected.p_en);
-        causal_.up_m.push_back(corrected.up_m);
-        accepted_.t_s.push_back(in.t_s);
-        accepted_.p_frame.push_back(in.p_frame);
-        accepted_.q_frame_body.push_back(in.q_frame_body);
-        reference_.t_s.push_back(planar.t_s);
-        reference_.p_en.push_back(planar.p_en);
-        reference_.up_m.push_back(planar.up_m);
-        reference_.yaw_rad.push_back(*planar.yaw_rad);
-    }
-
-    std::unique_ptr<pipeline::StreamSetup> setup_;  ///< owns the field the corrector points to
-    std::unique_ptr<OnlineCorrector> corrector_;
-    ModelConfig model_;
-    VerdictConfig verdict_config_;
-    bool synchronous_;
-    std::mutex mutex_;  ///< one Push, Finish or size at a time (Python threads may call them)
-    bool finished_ = false;
-    Trajectory accepted_;
-    PlanarTrajectory reference_;
-    PlanarTrajectory causal_;  ///< every causal output, in the world plane
+    std::unique_ptr<pipeline::StreamSession> session_;
 };
 
 std::unique_ptr<Stream> MakeStream(pipeline::StreamSetup setup, const pipeline::PipelineConfig& cfg,

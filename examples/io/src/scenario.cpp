@@ -236,20 +236,32 @@ void ParseGeographicAnchor(const Block& block, AnchorSpec& anchor) {
     anchor.lat_deg = block.Double("lat_deg");
     anchor.lon_deg = block.Double("lon_deg");
     anchor.alt_m = block.OptDouble("alt_m").value_or(0.0);
-    if (std::abs(*anchor.lat_deg) > 90.0) block.Fail("lat_deg", "must be within [-90, 90]");
-    if (std::abs(*anchor.lon_deg) > 180.0) block.Fail("lon_deg", "must be within [-180, 180]");
 }
 
 void ParseGridAnchor(const Block& block, AnchorSpec& anchor) {
     anchor.crs = block.String("crs");
-    if (NormaliseCrsName(*anchor.crs).empty()) {
-        block.Fail("crs", "unknown CRS spelling '" + *anchor.crs + "' (expected e.g. EPSG:32632)");
-    }
     anchor.easting_m = block.Double("easting_m");
     anchor.northing_m = block.Double("northing_m");
 }
 
 }  // namespace
+
+std::optional<AnchorProblem> FindAnchorProblem(const AnchorSpec& anchor) {
+    if (anchor.lat_deg && !(std::abs(*anchor.lat_deg) <= 90.0)) {
+        return AnchorProblem{"lat_deg", "must be within [-90, 90]"};
+    }
+    if (anchor.lon_deg && !(std::abs(*anchor.lon_deg) <= 180.0)) {
+        return AnchorProblem{"lon_deg", "must be within [-180, 180]"};
+    }
+    if (anchor.crs && NormaliseCrsName(*anchor.crs).empty()) {
+        return AnchorProblem{
+            "crs", "unknown CRS spelling '" + *anchor.crs + "' (expected e.g. EPSG:32632)"};
+    }
+    if (!(anchor.position_search_m >= 0.0 && anchor.position_search_m <= 1000.0)) {
+        return AnchorProblem{"position_search_m", "must be within [0, 1000] m"};
+    }
+    return std::nullopt;
+}
 
 std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor) {
     if (Lower(text) == "auto") {
@@ -299,8 +311,8 @@ AnchorSpec ParseAnchor(const Block& block, ScenarioMode mode, std::vector<std::s
         if (!problem.empty()) block.Fail("scale", problem);
     }
     anchor.position_search_m = block.OptDouble("position_search_m").value_or(0.0);
-    if (!(anchor.position_search_m >= 0.0 && anchor.position_search_m <= 1000.0)) {
-        block.Fail("position_search_m", "must be within [0, 1000] m");
+    if (const std::optional<AnchorProblem> problem = FindAnchorProblem(anchor)) {
+        block.Fail(problem->key, problem->rule);
     }
     if (mode == ScenarioMode::kIndoor3d && !block.Has("z_m")) {
         block.Fail("z_m",

@@ -76,4 +76,65 @@ std::pair<Eigen::Vector3d, Eigen::Quaterniond> FromPlanarPose(
     return {out.p_frame[0], out.q_frame_body[0]};
 }
 
+StreamSession::StreamSession(StreamSetup setup, const OnlineConfig& config,
+                             const VerdictConfig& verdict)
+    : setup_(std::make_unique<StreamSetup>(std::move(setup))),
+      config_(config),
+      verdict_(verdict),
+      corrector_(std::make_unique<OnlineCorrector>(&setup_->field, config)) {}
+
+StreamSession::~StreamSession() = default;
+
+StreamSession::Output StreamSession::Push(double t_s, const Eigen::Vector3d& p_frame,
+                                          const Eigen::Quaterniond& q_frame_body) {
+    Output out;
+    out.input = ToPlanarPose(t_s, p_frame, q_frame_body, *setup_);
+    const std::lock_guard<std::mutex> lock(mutex_);
+    out.result = corrector_->Push(out.input);
+    if (!out.result.Accepted()) return out;
+    std::tie(out.p_frame, out.q_frame_body) =
+        FromPlanarPose(out.result.corrected, out.input, p_frame, q_frame_body,
+                       setup_->scenario.frame, setup_->anchor);
+    accepted_.t_s.push_back(t_s);
+    accepted_.p_frame.push_back(p_frame);
+    accepted_.q_frame_body.push_back(q_frame_body);
+    reference_.t_s.push_back(out.input.t_s);
+    reference_.p_en.push_back(out.input.p_en);
+    reference_.up_m.push_back(out.input.up_m);
+    reference_.yaw_rad.push_back(*out.input.yaw_rad);
+    causal_.t_s.push_back(out.result.corrected.t_s);
+    causal_.p_en.push_back(out.result.corrected.p_en);
+    causal_.up_m.push_back(out.result.corrected.up_m);
+    return out;
+}
+
+std::optional<StreamSession::Ending> StreamSession::Finish() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (finished_) return std::nullopt;
+    finished_ = true;
+    Ending end;
+    end.result = corrector_->Finish();
+    if (!Usable(end.result.status)) return end;
+    end.judged = JudgeOnline(reference_, causal_, &setup_->field, config_.corrector.model,
+                             end.result, verdict_);
+    end.smoothed = FromPlanar(end.result.corrected, reference_, accepted_, setup_->scenario.frame,
+                              setup_->anchor);
+    return end;
+}
+
+OnlineStatistics StreamSession::Statistics() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return corrector_->Statistics();
+}
+
+std::size_t StreamSession::size() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return corrector_->size();
+}
+
+std::size_t StreamSession::accepted() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return accepted_.size();
+}
+
 }  // namespace driftcorr::pipeline

@@ -58,6 +58,16 @@ struct AnchorSpec {
 /// Sets `anchor`'s scale fields when it can.
 std::string ParseAnchorScale(const std::string& text, AnchorSpec& anchor);
 
+/// An anchor value outside its range: its key (as in scenario.yaml) and the rule it breaks.
+struct AnchorProblem {
+    std::string key, rule;
+};
+/// The first of `anchor`'s values that is given and outside its range (lat_deg within [-90, 90],
+/// lon_deg within [-180, 180], crs a known spelling, position_search_m within [0, 1000] m);
+/// nothing when every one is within. The readers of scenario.yaml, the CLI's --anchor and the
+/// Python anchor dict all check with it and name the key in their own terms.
+std::optional<AnchorProblem> FindAnchorProblem(const AnchorSpec& anchor);
+
 struct MapLayerSpec {
     std::string path;  ///< resolved
     MapFormat format = MapFormat::kOsm;

@@ -2,10 +2,14 @@
 // What the online (streaming) mode needs from a scenario: the frame conventions, the anchor and
 // the map field, without a trajectory (the poses arrive one by one), plus single-pose conversions
 // between a trajectory frame and the world plane.
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include "driftcorr/optim/online_corrector.h"
+#include "driftcorr/optim/verdict.h"
 #include "driftcorr/pipeline/pipeline.h"
 
 namespace driftcorr::pipeline {
@@ -35,5 +39,52 @@ PlanarPose ToPlanarPose(double t_s, const Eigen::Vector3d& p_frame,
 std::pair<Eigen::Vector3d, Eigen::Quaterniond> FromPlanarPose(
     const PlanarPose& corrected, const PlanarPose& reference, const Eigen::Vector3d& p_frame,
     const Eigen::Quaterniond& q_frame_body, FrameAxes axes, const PlanarAnchor& anchor);
+
+/// One stream on a setup's map, as `driftcorr stream` and the Python `Stream` run it: each pose
+/// of the trajectory frame turned into the world plane, pushed to the online corrector, and its
+/// causal output turned back into the frame; the accepted poses are kept to turn the smoothed
+/// trajectory back into the frame and to judge the stream at its end (JudgeOnline). Push,
+/// Finish, Statistics and the sizes may be called from several threads, one at a time: checking
+/// a pose against the last one and taking it are one step.
+class StreamSession {
+public:
+    StreamSession(StreamSetup setup, const OnlineConfig& config, const VerdictConfig& verdict);
+    ~StreamSession();
+    StreamSession(const StreamSession&) = delete;
+    StreamSession& operator=(const StreamSession&) = delete;
+
+    struct Output {
+        PushResult result;  ///< the corrector's answer; the fields below only when Accepted()
+        PlanarPose input;   ///< the pose in the world plane, as pushed
+        Eigen::Vector3d p_frame = Eigen::Vector3d::Zero();  ///< the causal output in the frame
+        Eigen::Quaterniond q_frame_body = Eigen::Quaterniond::Identity();
+    };
+    Output Push(double t_s, const Eigen::Vector3d& p_frame, const Eigen::Quaterniond& q_frame_body);
+
+    struct Ending {
+        CorrectionResult result;              ///< the smoothed whole trajectory
+        std::optional<OnlineVerdict> judged;  ///< when the result is usable
+        /// The smoothed trajectory in the frame, at the accepted poses, when the result is usable.
+        std::optional<Trajectory> smoothed;
+    };
+    /// Ends the stream; nothing when it has ended already.
+    std::optional<Ending> Finish();
+
+    OnlineStatistics Statistics() const;
+    std::size_t size() const;      ///< poses the corrector holds
+    std::size_t accepted() const;  ///< poses accepted so far
+    const StreamSetup& setup() const { return *setup_; }
+
+private:
+    std::unique_ptr<StreamSetup> setup_;  ///< owns the field the corrector points to
+    OnlineConfig config_;
+    VerdictConfig verdict_;
+    std::unique_ptr<OnlineCorrector> corrector_;
+    mutable std::mutex mutex_;
+    bool finished_ = false;
+    Trajectory accepted_;         ///< the accepted inputs, in the frame
+    PlanarTrajectory reference_;  ///< the same in the world plane
+    PlanarTrajectory causal_;     ///< every causal output, in the world plane
+};
 
 }  // namespace driftcorr::pipeline
