@@ -220,7 +220,6 @@ TEST(CorrectorConfig, PedestrianPresetIsThePipelinesIndoorCorrector) {
     ExpectRowsEqual(kModelParams, preset.model, ModelConfig::Pedestrian());
     ExpectRowsEqual(kCorrectorParams, preset, indoor);
     ExpectRowsEqual(kCovarianceParams, preset.covariance, indoor.covariance);
-    EXPECT_EQ(preset.model.floor_heights_m, indoor.model.floor_heights_m);
     EXPECT_EQ(preset.start_scales, indoor.start_scales);
     EXPECT_EQ(preset.restart_scale_factors, indoor.restart_scale_factors);
     EXPECT_EQ(preset.restart_height_gains, indoor.restart_height_gains);

@@ -110,7 +110,7 @@ TEST(VerdictIndoor, ACorrectedFloorChangeShortOfTheReadingIsNotOk) {
 }
 
 TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
-    const TraversableField field = TwoFloors();
+    TraversableField field = TwoFloors();
     // The estimate: level, with a barometer's 0.3 m of wobble.
     const PlanarTrajectory level = Walk([](int k) { return 0.3 * std::sin(0.7 * k); });
     // The correction holds the last 100 s at 2 m: between the floors (0 and 4 m), level.
@@ -121,7 +121,7 @@ TEST(VerdictIndoor, LevelWalkingBetweenFloorsIsNotOk) {
     const Verdict unknown =
         JudgeCorrection(level, &field, model, Result(between), nullptr, false, false, config);
     EXPECT_FALSE(HasReason(unknown, "walk level")) << "no floor heights: no check";
-    config.floor_heights_m = {0.0, 4.0};
+    field.set_floor_heights_m({0.0, 4.0});
     const Verdict v =
         JudgeCorrection(level, &field, model, Result(between), nullptr, false, false, config);
     EXPECT_TRUE(HasReason(v, "walk level up to 2.0 m from every floor")) << v.reasons.front();
@@ -151,9 +151,10 @@ TEST(VerdictIndoor, AFloorThatAnotherFloorExplainsAsWellIsNotOk) {
     const PlanarTrajectory corrected = ride(1.0);
     ModelConfig model;
     model.map_giveup_m = 3.0;  // the pedestrian model's reach
-    VerdictConfig config;
-    config.floor_heights_m = {0.0, 4.0, 8.0};
-    auto judge = [&](const TraversableField& field, const PlanarTrajectory& estimate) {
+    const VerdictConfig config;
+    std::vector<double> floors = {0.0, 4.0, 8.0};
+    auto judge = [&](TraversableField field, const PlanarTrajectory& estimate) {
+        field.set_floor_heights_m(floors);
         return JudgeCorrection(estimate, &field, model, Result(corrected), nullptr, false, false,
                                config);
     };
@@ -175,7 +176,7 @@ TEST(VerdictIndoor, AFloorThatAnotherFloorExplainsAsWellIsNotOk) {
     const Verdict apart = judge(Floors({40.0, 10.0, 40.0}), ride(0.8));
     EXPECT_EQ(apart.level, VerdictLevel::kOk) << apart.reasons.front();
     // Without the floors' heights there is no check.
-    config.floor_heights_m.clear();
+    floors.clear();
     EXPECT_EQ(judge(same_floors, ride(0.8)).level, VerdictLevel::kOk);
 }
 
@@ -249,7 +250,8 @@ TEST(VerdictIndoor, StairTreadsAreNotASqueezedWalk) {
 // stays there `stay_s` seconds before it follows. An online output lags a floor change by a few
 // seconds; a level window (20 s) or more a floor apart is a wrong floor on one side.
 TEST(VerdictOnline, CausalOutputsAFloorApartAreNotOk) {
-    const TraversableField field = Floors({40.0, 40.0, 40.0});
+    TraversableField field = Floors({40.0, 40.0, 40.0});
+    field.set_floor_heights_m({0.0, 4.0, 8.0});
     const PlanarTrajectory smoothed =
         Walk([](int k) { return std::clamp(0.4 * (k - 60), 0.0, 8.0); });
     auto causal_staying = [&](int stay_s) {
@@ -259,7 +261,6 @@ TEST(VerdictOnline, CausalOutputsAFloorApartAreNotOk) {
     };
     const ModelConfig model;
     VerdictConfig config;
-    config.floor_heights_m = {0.0, 4.0, 8.0};
     auto judge = [&](const PlanarTrajectory& causal) {
         return JudgeOnline(smoothed, causal, &field, model, Result(smoothed), config);
     };

@@ -376,8 +376,7 @@ int RunStream(const StreamArgs& a) {
     online.synchronous = a.sync;
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
-    const VerdictConfig verdict = pipeline::VerdictFor(setup.scenario, cfg);
-    StreamSession session(std::move(setup), online, verdict, a.status_column);
+    StreamSession session(std::move(setup), online, cfg.verdict, a.status_column);
     if (!a.quiet) {
         // Poses a producer writes before this line wait in the pipe and arrive as one burst.
         std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",

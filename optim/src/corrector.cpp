@@ -163,7 +163,7 @@ namespace {
 // Whether the batch correction re-runs itself on other floors after the estimate's floor changes
 // (CorrectorConfig::restart_height_gains): heights free, and the floors known.
 bool FloorHypotheses(const TraversableField* field, bool fix_height, const CorrectorConfig& cfg) {
-    return field && !fix_height && !cfg.model.floor_heights_m.empty() &&
+    return field && !fix_height && !field->floor_heights_m().empty() &&
            !cfg.restart_height_gains.empty();
 }
 
@@ -371,7 +371,7 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     const std::size_t start_chosen = result.start_chosen;
     std::vector<CorrectionResult::FloorHypothesis> tried;
     if (floor_hypotheses && Usable(result.status)) {
-        const std::vector<double>& floors = cfg.model.floor_heights_m;
+        const std::vector<double>& floors = field->floor_heights_m();
         const auto [gain_min, gain_max] =
             std::minmax_element(cfg.restart_height_gains.begin(), cfg.restart_height_gains.end());
         TrajectoryState read = *observed;  // the observations with the kept readings

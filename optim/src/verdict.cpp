@@ -243,12 +243,13 @@ std::vector<LongRun> LongRuns(const std::vector<double>& t_s, Off off, Amount am
     return runs;
 }
 
-// Level walking between floors (VerdictConfig::floor_heights_m, not empty): runs of poses off every
-// floor while the estimate is level; only runs of level_window_s / 2 or more count and are flagged.
+// Level walking between the map's floors (`floors`, not empty): runs of poses off every floor
+// while the estimate is level; only runs of level_window_s / 2 or more count and are flagged.
 void JudgeLevelOffFloor(const PlanarTrajectory& est, const PlanarTrajectory& cor,
-                        const VerdictConfig& c, Verdict& v, Findings& f) {
+                        const std::vector<double>& floors, const VerdictConfig& c, Verdict& v,
+                        Findings& f) {
     auto floor_distance = [&](std::size_t i) {
-        return std::abs(cor.up_m[i] - NearestFloor(c.floor_heights_m, cor.up_m[i]));
+        return std::abs(cor.up_m[i] - NearestFloor(floors, cor.up_m[i]));
     };
     const std::vector<std::uint8_t> level =
         LevelSpans(est.t_s, est.up_m, c.level_window_s, c.level_height_m);
@@ -285,11 +286,11 @@ struct FloorStay {
     std::size_t first = 0, last = 0;
 };
 
-std::vector<FloorStay> FloorStays(const PlanarTrajectory& cor, const VerdictConfig& c,
-                                  double min_s) {
+std::vector<FloorStay> FloorStays(const PlanarTrajectory& cor, const std::vector<double>& floors,
+                                  const VerdictConfig& c, double min_s) {
     std::vector<FloorStay> visits;
     for (std::size_t i = 0; i < cor.size(); ++i) {
-        const double floor_m = NearestFloor(c.floor_heights_m, cor.up_m[i]);
+        const double floor_m = NearestFloor(floors, cor.up_m[i]);
         if (std::abs(cor.up_m[i] - floor_m) > c.off_floor_m) continue;
         if (!visits.empty() && visits.back().floor_m == floor_m) {
             visits.back().last = i;
@@ -369,7 +370,8 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
                             const TraversableField& field, const ModelConfig& model,
                             const VerdictConfig& c, Verdict& verdict, Findings& f) {
     const double span_s = 0.5 * c.level_window_s;
-    const std::vector<FloorStay> stays = FloorStays(cor, c, span_s);
+    const std::vector<double>& floors = field.floor_heights_m();
+    const std::vector<FloorStay> stays = FloorStays(cor, floors, c, span_s);
     // The estimate's height change from stay k - 1 into stay k (k >= 1).
     std::vector<double> change_m(stays.size(), 0.0);
     for (std::size_t k = 1; k < stays.size(); ++k) {
@@ -391,7 +393,7 @@ void JudgeFloorAlternatives(const PlanarTrajectory& est, const PlanarTrajectory&
         const FloorStay& v = stays[k];
         // A chosen floor the height changes deny is JudgeHeightChanges' finding.
         if (!barometer_allows(k, v.floor_m)) continue;
-        for (const double other_m : c.floor_heights_m) {
+        for (const double other_m : floors) {
             if (other_m == v.floor_m || !barometer_allows(k, other_m)) continue;
             const CentreFit other = BestShiftedFit(cor, field, v.first, v.last, other_m - v.floor_m,
                                                    model.map_giveup_m);
@@ -533,8 +535,8 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
             }
         }
         JudgeHeightChanges(observed, result.corrected, config, v, f);
-        if (!config.floor_heights_m.empty()) {
-            JudgeLevelOffFloor(observed, result.corrected, config, v, f);
+        if (!field->floor_heights_m().empty()) {
+            JudgeLevelOffFloor(observed, result.corrected, field->floor_heights_m(), config, v, f);
             JudgeFloorAlternatives(observed, result.corrected, *field, model, config, v, f);
         }
     }

@@ -309,7 +309,7 @@ void WindowProblem::AddFloorBlocks() {
         LevelSpans(t_s, up_m, cfg_.floor_level_window_s, cfg_.floor_level_height_m);
     for (std::size_t i = first_; i <= last_; ++i) {
         if (!level[i - lo]) continue;
-        const double floor = NearestFloor(cfg_.floor_heights_m, state_.poses[i].p.z());
+        const double floor = NearestFloor(field_->floor_heights_m(), state_.poses[i].p.z());
         blocks_.push_back(
             Core<RandomWalkTerm, 2>(TermFamily::kFloorHeight,
                                     RandomWalkTerm{cfg_.floor_sigma_m, 1.0, cfg_.floor_robust_k}));
@@ -354,7 +354,8 @@ void WindowProblem::BuildStructure(WindowUse use) {
     }
     AddScaleBlocks();
     if (HasBias()) AddBiasBlocks();
-    if (field_ && !state_.fix_height && cfg_.floor_sigma_m > 0.0 && !cfg_.floor_heights_m.empty()) {
+    if (field_ && !state_.fix_height && cfg_.floor_sigma_m > 0.0 &&
+        !field_->floor_heights_m().empty()) {
         AddFloorBlocks();
     }
     if (field_ && !state_.fix_height && cfg_.lift_sigma_m > 0.0 && !field_->lift_shafts().empty()) {

@@ -254,8 +254,7 @@ std::unique_ptr<Stream> MakeStream(pipeline::StreamSetup setup, const pipeline::
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = synchronous;
     if (std::string m = online.Validate(); !m.empty()) throw py::value_error("config: " + m);
-    const VerdictConfig verdict = pipeline::VerdictFor(setup.scenario, cfg);
-    return std::make_unique<Stream>(std::move(setup), online, verdict);
+    return std::make_unique<Stream>(std::move(setup), online, cfg.verdict);
 }
 
 std::unique_ptr<Stream> StreamFromScenario(const py::object& scenario, const py::object& config,

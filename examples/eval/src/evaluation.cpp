@@ -66,9 +66,8 @@ MethodResult RunOnline(const pipeline::PreparedScenario& ps, const pipeline::Pip
     }
     const CorrectionResult smoothed = online.Finish();
     if (Usable(smoothed.status)) {
-        r.verdict = JudgeOnline(est, causal, &ps.field, oc.corrector.model, smoothed,
-                                pipeline::VerdictFor(ps.scenario, base))
-                        .verdict;
+        r.verdict =
+            JudgeOnline(est, causal, &ps.field, oc.corrector.model, smoothed, base.verdict).verdict;
     }
     r.wall_s = Since(t0);
     r.poses_per_s = est.size() / std::max(1e-9, r.wall_s);

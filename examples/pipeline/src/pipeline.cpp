@@ -642,7 +642,9 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const std::optional<HeightRange>& heights) {
     if (sc.mode == io::ScenarioMode::kIndoor3d) {
         if (IsSurfaceLayer(sc.map.front())) return LoadSurfaceField(sc, config.surface_field);
-        return LoadIndoorField(sc, config.indoor_field, up_m, network, heights);
+        TraversableField field = LoadIndoorField(sc, config.indoor_field, up_m, network, heights);
+        field.set_floor_heights_m(FloorHeights(sc, config));
+        return field;
     }
     network = LoadRoads(sc, world, config.roads);
     return RoadField(sc, network, config, region_en, corridor);
@@ -659,22 +661,8 @@ std::vector<double> FloorHeights(const io::Scenario& sc, const PipelineConfig& c
     return heights;
 }
 
-VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config) {
-    VerdictConfig v = config.verdict;
-    for (double z : FloorHeights(sc, config)) {
-        if (std::find(v.floor_heights_m.begin(), v.floor_heights_m.end(), z) ==
-            v.floor_heights_m.end()) {
-            v.floor_heights_m.push_back(z);
-        }
-    }
-    return v;
-}
-
 CorrectorConfig CorrectorFor(const io::Scenario& sc, const PipelineConfig& config) {
-    if (sc.mode != io::ScenarioMode::kIndoor3d) return config.corrector;
-    CorrectorConfig c = config.indoor_corrector;
-    c.model.floor_heights_m = FloorHeights(sc, config);
-    return c;
+    return sc.mode == io::ScenarioMode::kIndoor3d ? config.indoor_corrector : config.corrector;
 }
 
 CorrectionResult Correct(const PreparedScenario& ps, const PipelineConfig& config,
@@ -691,7 +679,7 @@ Verdict JudgeResult(const PreparedScenario& ps, const PipelineConfig& config,
     const bool start_estimated = !a.yaw_deg || a.position_search_m > 0.0;
     return JudgeCorrection(ps.estimate, &ps.field, CorrectorFor(ps.scenario, config).model, result,
                            ps.anchor_fit ? &*ps.anchor_fit : nullptr, start_estimated,
-                           config.solver == Solver::kDriftcorr, VerdictFor(ps.scenario, config));
+                           config.solver == Solver::kDriftcorr, config.verdict);
 }
 
 CorrectionRun RunCorrection(const std::string& scenario_path, const PipelineConfig& config,

@@ -66,6 +66,10 @@ public:
     const std::vector<ShaftOutline>& lift_shafts() const { return lift_shafts_; }
     /// Precondition: each shaft has 3 or more corners.
     void set_lift_shafts(std::vector<ShaftOutline> shafts);
+    /// The heights a walker's device has on the map's floors (each floor's height plus the
+    /// device's above it; an indoor map of floor plans; none for roads and surface maps) [m].
+    const std::vector<double>& floor_heights_m() const { return floor_heights_m_; }
+    void set_floor_heights_m(std::vector<double> heights) { floor_heights_m_ = std::move(heights); }
 
     /// The grid the field's samples lie on (for a tiled field: the grid its tiles are cut from).
     const GridSpec& spec() const { return grid_; }
@@ -94,6 +98,7 @@ private:
     std::vector<Tile> tiles_;
     double truncation_m_ = 0.0;
     std::vector<ShaftOutline> lift_shafts_;
+    std::vector<double> floor_heights_m_;
 };
 
 /// How well a set of points lies on the traversable centres: the share of them farther than

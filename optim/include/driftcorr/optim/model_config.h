@@ -65,13 +65,12 @@ struct ModelConfig {
     double height_sigma_rel = 0.05;  ///< [-]
     /// Floors (indoor3d): a pose where the estimate's height stays level (within
     /// floor_level_height_m over the floor_level_window_s around it: LevelSpans) stands on a
-    /// floor, so its height is drawn to the one of floor_heights_m nearest to it when the window
-    /// is built: sigma floor_sigma_m, Cauchy beyond floor_robust_k sigmas (0: Gaussian). Stair
-    /// halls and lift shafts are traversable at every height between their floors: without it a
-    /// walk whose barometer misreads a climb walks on, level, between floors there.
-    /// floor_sigma_m = 0 or no floor heights: no such term. floor_heights_m comes from the
-    /// scenario's floor plans (pose heights: floor plus device height), not from a parameter.
-    std::vector<double> floor_heights_m;  ///< [m]
+    /// floor, so its height is drawn to the one of the map's floors (TraversableField::
+    /// floor_heights_m) nearest to it when the window is built: sigma floor_sigma_m, Cauchy
+    /// beyond floor_robust_k sigmas (0: Gaussian). Stair halls and lift shafts are traversable
+    /// at every height between their floors: without it a walk whose barometer misreads a climb
+    /// walks on, level, between floors there. floor_sigma_m = 0 or a map without floors: no
+    /// such term.
     double floor_sigma_m = 0.0;           ///< [m]
     double floor_robust_k = 3.0;          ///< [-]
     double floor_level_window_s = 20.0;   ///< [s]
@@ -139,9 +138,8 @@ struct ModelConfig {
     /// can be tens of percent off, their lengths erring with the gait and read about the walk's
     /// median step; a heading that errs by offsets and jumps (a heading walk, no rate bias); a
     /// barometer's height changes; walkways a few metres wide; poses drawn to a lift shaft during
-    /// a ride and to the nearest floor where the walk is level (floor_heights_m stays empty: it
-    /// comes from the floor plans). How each value was chosen: docs/results.md, "Indoor
-    /// parameters".
+    /// a ride and to the nearest of the map's floors where the walk is level. How each value
+    /// was chosen: docs/results.md, "Indoor parameters".
     static ModelConfig Pedestrian();
 };
 

@@ -81,8 +81,8 @@ struct VerdictConfig {
     double height_disagree_rel = 0.35;  ///< [-]
     double height_short_rel = 0.2;      ///< [-]
     /// Walkers walk level only on floors (stairs change height). With the floors' heights known
-    /// (a map of discrete floors, in the trajectory's height datum; set by the pipeline; empty:
-    /// not known, no check), corrected poses farther than off_floor_m from every floor while
+    /// (the field's floor_heights_m: a map of discrete floors, in the trajectory's height datum;
+    /// empty: not known, no check), corrected poses farther than off_floor_m from every floor while
     /// the estimate's height stays within level_height_m over level_window_s around them walk
     /// level between floors (a stair hall or shaft at a height no floor has): degraded when such
     /// poses span level_window_s / 2 in a row, failed beyond off_map_failed_share of the poses.
@@ -91,7 +91,6 @@ struct VerdictConfig {
     /// and out of it agree with another floor as well (the tolerances above) and the stay's path,
     /// shifted by up to the map term's reach, has at most off_map_degraded_share of its poses
     /// beyond that floor's reach.
-    std::vector<double> floor_heights_m;
     double off_floor_m = 1.0;      ///< [m]
     double level_window_s = 20.0;  ///< [s]
     double level_height_m = 1.0;   ///< [m] (a barometer reads a level walk 0.6-0.7 m peak to peak)

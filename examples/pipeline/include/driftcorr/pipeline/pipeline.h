@@ -183,7 +183,8 @@ PreparedScenario PrepareScenario(io::Scenario scenario, Trajectory estimate_fram
 /// `corridor` and field.tile_m > 0, only the tiles within its discs, see RasteriseRoadCorridor),
 /// or the indoor GeoJSON / point-cloud / OctoMap layers (indoor3d; `up_m` picks the floor whose
 /// walkways go into `network` for pictures; with `heights`, GeoJSON floors only at the layers
-/// that serve them, see BuildIndoorField). Throws InputError naming the file or setting.
+/// that serve them, see BuildIndoorField; the field holds the scenario's FloorHeights). Throws
+/// InputError naming the file or setting.
 TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,
                               double up_m, RoadNetwork& network,
@@ -193,11 +194,8 @@ TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
 /// The floors' pose heights of an indoor3d scenario whose map is GeoJSON floors: each layer's
 /// floor_z_m + indoor_field.device_height_m, once each; empty otherwise.
 std::vector<double> FloorHeights(const io::Scenario& sc, const PipelineConfig& config);
-/// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector),
-/// with the scenario's FloorHeights (`ModelConfig::floor_heights_m`).
+/// The corrector settings for the scenario's mode (config.corrector or config.indoor_corrector).
 CorrectorConfig CorrectorFor(const io::Scenario& sc, const PipelineConfig& config);
-/// config.verdict, with the scenario's FloorHeights (`VerdictConfig::floor_heights_m`).
-VerdictConfig VerdictFor(const io::Scenario& sc, const PipelineConfig& config);
 
 /// Runs config.solver on a prepared scenario. Solver outcomes are in the result, never thrown.
 CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig& config,
