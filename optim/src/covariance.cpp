@@ -463,8 +463,8 @@ CovarianceResult WholeCovariance(const TrajectoryState& state, const Traversable
     return r;
 }
 
-// Poses [from - 1, to] of `s` as a state of their own (pose from - 1 its pose 0, held fixed), its
-// scale and bias segments renumbered from the first that step `from` uses.
+// Poses [from - 1, to] of `s` as a state of their own (pose from - 1 its pose 0), its scale and
+// bias segments renumbered from the first that step `from` uses.
 TrajectoryState SubState(const TrajectoryState& s, std::size_t from, std::size_t to) {
     TrajectoryState sub;
     sub.fix_height = s.fix_height;
@@ -486,9 +486,9 @@ TrajectoryState SubState(const TrajectoryState& s, std::size_t from, std::size_t
     return sub;
 }
 
-// The prior on pose `pose` of `s` that a covariance `c` of it makes: its mean the pose, its
-// information the inverse of c on the free components (the height left out when fixed);
-// nothing when c is singular there.
+// The prior that a pose's covariance `c` makes: its mean the pose, its information the inverse
+// of c on the free components (the height left out when fixed); nothing when c is singular
+// there.
 std::optional<PosePriorTerm> PriorFrom(const PoseCovariance& c, const PoseState& pose,
                                        bool fix_height) {
     const PoseMatrix sigma = ToPoseMatrix(c);

@@ -147,7 +147,8 @@ double HeightTravel(const TrajectoryState& s, std::size_t first, std::size_t las
 // cfg.refine_block_poses poses, consecutive windows of that many poses, each starting a tenth of a
 // block before the end of the one before (its poses re-solved with the next block's terms), the
 // poses before each held at their solved values. A block's memory is the whole drive's bound.
-// Reports the first unusable block's outcome, else the last block's; the iterations of all, the
+// Reports the first unusable block's outcome, else the last block's, and the first block that was
+// re-solved without its corridor constraints (the verdict's signal); the iterations of all, the
 // largest violation, the constrained poses of the poses each block settles.
 SolveReport RefineInBlocks(TrajectoryState& s, const TraversableField* field,
                            const CorrectorConfig& cfg, const IpoptOptions& opt,
@@ -156,6 +157,7 @@ SolveReport RefineInBlocks(TrajectoryState& s, const TraversableField* field,
     if (n - 1 <= block) return SolveWindow(s, field, cfg, opt, 1, n - 1, result, true);
     const std::size_t step = block - block / 10;
     SolveReport report;
+    std::string soft;  // the first block re-solved without its corridor constraints
     std::size_t blocks = 0, constrained = 0;
     int iterations = 0;
     double violation = 0.0;
@@ -165,6 +167,10 @@ SolveReport RefineInBlocks(TrajectoryState& s, const TraversableField* field,
         ++blocks;
         iterations += rep.iterations;
         violation = std::max(violation, rep.max_violation_m);
+        if (soft.empty() && rep.message.find("without hard constraints") != std::string::npos) {
+            soft =
+                "poses " + std::to_string(first) + "-" + std::to_string(last) + ": " + rep.message;
+        }
         const std::size_t settled_last = last == n - 1 ? last : first + step - 1;
         const std::vector<std::uint8_t> flags =
             GateConstraints(s, field, cfg.model, first, settled_last);
@@ -177,7 +183,7 @@ SolveReport RefineInBlocks(TrajectoryState& s, const TraversableField* field,
     report.max_violation_m = violation;
     report.message = std::to_string(blocks) + " blocks of at most " + std::to_string(block) +
                      " poses, " + (Usable(report.status) ? "the last: " : "stopped at: ") +
-                     report.message;
+                     report.message + (soft.empty() ? "" : "; " + soft);
     return report;
 }
 

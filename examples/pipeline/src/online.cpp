@@ -1,6 +1,7 @@
 #include "driftcorr/pipeline/online.h"
 
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 #include "driftcorr/core/errors.h"

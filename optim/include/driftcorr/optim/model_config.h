@@ -71,10 +71,10 @@ struct ModelConfig {
     /// at every height between their floors: without it a walk whose barometer misreads a climb
     /// walks on, level, between floors there. floor_sigma_m = 0 or a map without floors: no
     /// such term.
-    double floor_sigma_m = 0.0;           ///< [m]
-    double floor_robust_k = 3.0;          ///< [-]
-    double floor_level_window_s = 20.0;   ///< [s]
-    double floor_level_height_m = 1.0;    ///< [m]
+    double floor_sigma_m = 0.0;          ///< [m]
+    double floor_robust_k = 3.0;         ///< [-]
+    double floor_level_window_s = 20.0;  ///< [s]
+    double floor_level_height_m = 1.0;   ///< [m]
     // Map distance to the nearest traversable centre: Gaussian with sigma, gives up beyond ~giveup.
     double map_sigma_m = 2.0;   ///< [m]
     double map_giveup_m = 8.0;  ///< [m]
