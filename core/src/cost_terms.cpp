@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/core/cost_terms.h declares.
 #include "driftcorr/core/cost_terms.h"
 
 #include <Eigen/Eigenvalues>

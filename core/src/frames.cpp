@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/core/frames.h declares.
 #include "driftcorr/core/frames.h"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/core/metrics.h declares.
 #include "driftcorr/core/metrics.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/core/observables.h declares.
 #include "driftcorr/core/observables.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what synth_common.h declares.
 #include "synth_common.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what road_removal.h declares.
 #include "road_removal.h"
 
 #include <Eigen/Geometry>

@@ -1,3 +1,4 @@
+// The definitions of what scenario_output.h declares.
 #include "scenario_output.h"
 
 #include <charconv>

@@ -1,3 +1,4 @@
+// The definitions of what stress_transforms.h declares.
 #include "stress_transforms.h"
 
 #include <algorithm>

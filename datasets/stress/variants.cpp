@@ -1,3 +1,4 @@
+// The definitions of what variants.h declares.
 #include "variants.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what building.h declares.
 #include "building.h"
 
 #include <cmath>

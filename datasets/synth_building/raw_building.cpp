@@ -1,3 +1,4 @@
+// The definitions of what raw_building.h declares.
 #include "raw_building.h"
 
 #include <algorithm>

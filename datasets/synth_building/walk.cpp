@@ -1,3 +1,4 @@
+// The definitions of what walk.h declares.
 #include "walk.h"
 
 #include <cmath>

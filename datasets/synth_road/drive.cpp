@@ -1,3 +1,4 @@
+// The definitions of what drive.h declares.
 #include "drive.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what odometry_drift.h declares.
 #include "odometry_drift.h"
 
 #include <cmath>

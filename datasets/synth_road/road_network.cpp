@@ -1,3 +1,4 @@
+// The definitions of what road_network.h declares.
 #include "road_network.h"
 
 #include <algorithm>

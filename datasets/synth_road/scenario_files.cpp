@@ -1,3 +1,4 @@
+// The definitions of what scenario_files.h declares.
 #include "scenario_files.h"
 
 #include <algorithm>

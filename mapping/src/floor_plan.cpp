@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/floor_plan.h declares.
 #include "driftcorr/mapping/floor_plan.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/geodesy.h declares.
 #include "driftcorr/mapping/geodesy.h"
 
 #include <dlfcn.h>

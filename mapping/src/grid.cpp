@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/grid.h declares.
 #include "driftcorr/mapping/grid.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/indoor_field.h declares.
 #include "driftcorr/mapping/indoor_field.h"
 
 #include <Eigen/Geometry>

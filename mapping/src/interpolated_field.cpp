@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/interpolated_field.h declares.
 #include "driftcorr/mapping/interpolated_field.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what osm_ways.h declares.
 #include "osm_ways.h"
 
 #include <cmath>

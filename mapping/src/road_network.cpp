@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/road_network.h declares.
 #include "driftcorr/mapping/road_network.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/surface_field.h declares.
 #include "driftcorr/mapping/surface_field.h"
 
 #include <Eigen/Geometry>

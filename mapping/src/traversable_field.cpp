@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/traversable_field.h declares.
 #include "driftcorr/mapping/traversable_field.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what voxel_corridor.h declares.
 #include "voxel_corridor.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/walkable_surface.h declares.
 #include "driftcorr/mapping/walkable_surface.h"
 
 #include <algorithm>

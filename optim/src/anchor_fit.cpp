@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/anchor_fit.h declares.
 #include "driftcorr/optim/anchor_fit.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/corrector.h declares.
 #include "driftcorr/optim/corrector.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/covariance.h declares.
 #include "driftcorr/optim/covariance.h"
 
 #include <Eigen/Cholesky>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/fixed_lag.h declares.
 #include "driftcorr/optim/fixed_lag.h"
 
 #include <Eigen/LU>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/incremental_corrector.h declares.
 #include "driftcorr/optim/incremental_corrector.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/ipopt_solver.h declares.
 #include "driftcorr/optim/ipopt_solver.h"
 
 #include <IpIpoptApplication.hpp>

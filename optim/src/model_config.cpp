@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/model_config.h declares.
 #include "driftcorr/optim/model_config.h"
 
 namespace driftcorr {

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/newton_solver.h declares.
 #include "driftcorr/optim/newton_solver.h"
 
 #include <algorithm>

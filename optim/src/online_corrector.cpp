@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/online_corrector.h declares.
 #include "driftcorr/optim/online_corrector.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/paper_solver.h declares.
 #include "driftcorr/optim/paper_solver.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/skyline_ldlt.h declares.
 #include "driftcorr/optim/skyline_ldlt.h"
 
 #include <algorithm>

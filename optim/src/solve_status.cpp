@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/solve_status.h declares.
 #include "driftcorr/optim/solve_status.h"
 
 namespace driftcorr {

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/term_block.h declares.
 #include "driftcorr/optim/term_block.h"
 
 #include <Eigen/Eigenvalues>

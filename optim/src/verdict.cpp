@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/verdict.h declares.
 #include "driftcorr/optim/verdict.h"
 
 #include <algorithm>

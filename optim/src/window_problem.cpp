@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/optim/window_problem.h declares.
 #include "driftcorr/optim/window_problem.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what convert.h declares.
 #include "convert.h"
 
 #include <cmath>

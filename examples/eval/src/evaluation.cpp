@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/eval/evaluation.h declares.
 #include "driftcorr/eval/evaluation.h"
 
 #include <chrono>

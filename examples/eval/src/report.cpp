@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/eval/report.h declares.
 #include "driftcorr/eval/report.h"
 
 #include <algorithm>

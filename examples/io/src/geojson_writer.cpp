@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/io/geojson_writer.h declares.
 #include "driftcorr/io/geojson_writer.h"
 
 #include <cmath>

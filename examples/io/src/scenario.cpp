@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/io/scenario.h declares.
 #include "driftcorr/io/scenario.h"
 
 #include <yaml-cpp/yaml.h>

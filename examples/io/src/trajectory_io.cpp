@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/io/trajectory_io.h declares.
 #include "driftcorr/io/trajectory_io.h"
 
 #include <algorithm>

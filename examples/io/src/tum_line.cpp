@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/io/tum_line.h declares.
 #include "driftcorr/io/tum_line.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/pipeline/online.h declares.
 #include "driftcorr/pipeline/online.h"
 
 #include <stdexcept>

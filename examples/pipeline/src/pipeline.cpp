@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/pipeline/pipeline.h declares.
 #include "driftcorr/pipeline/pipeline.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/pipeline/surface_io_loader.h declares.
 #include "driftcorr/pipeline/surface_io_loader.h"
 
 #include <stdexcept>

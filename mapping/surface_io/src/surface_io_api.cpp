@@ -1,3 +1,4 @@
+// The definitions of what driftcorr/mapping/surface_io.h declares.
 #include "driftcorr/mapping/surface_io.h"
 
 extern "C" const driftcorr::SurfaceIoApi* driftcorr_surface_io_api() {
