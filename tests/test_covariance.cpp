@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/metrics.h"
 #include "driftcorr/core/observables.h"
 #include "driftcorr/mapping/road_network.h"
 #include "driftcorr/optim/corrector.h"
@@ -686,6 +687,44 @@ TEST(Covariance, ALongDrivesFinalSolveInBlocksIsTheWholeSolve) {
     EXPECT_GT(largest, 0.0) << "the blocks were not solved apart";
     ASSERT_EQ(blocks.covariance.status, CovarianceStatus::kOk) << blocks.covariance.message;
     EXPECT_NE(blocks.covariance.message.find("runs over blocks"), std::string::npos);
+}
+
+// Where the solve holds the heights (planar), the corrected trajectory's heights are the
+// estimate's at grades of at most max_grade: an estimate climbing 30 % along a level road comes
+// back climbing 10 %, one climbing 2.5 % as it was, and the horizontal correction is the same.
+TEST(Heights, ARoadCorrectionBoundsTheGradeOfItsHeights) {
+    const PlanarTrajectory truth = Curve(200, 0.01, false, 2.0);
+    const TraversableField field = RoadAlong(truth);
+    PlanarTrajectory gentle = truth;  // a heading drift of 0.5 mrad a step, steps 2 % long
+    for (std::size_t i = 1; i < gentle.size(); ++i) {
+        const Eigen::Vector2d step = truth.p_en[i] - truth.p_en[i - 1];
+        gentle.p_en[i] = gentle.p_en[i - 1] + 1.02 * (Eigen::Rotation2D<double>(0.0005 * i) * step);
+        gentle.yaw_rad[i] = truth.yaw_rad[i] + 0.0005 * double(i);
+    }
+    PlanarTrajectory steep = gentle;
+    for (std::size_t i = 0; i < steep.size(); ++i) steep.up_m[i] = 0.6 * double(i);  // 30 %
+    CorrectorConfig cfg, unbounded;
+    unbounded.model.max_grade = 0.0;
+    const CorrectionResult bounded = CorrectTrajectory(steep, &field, cfg);
+    const CorrectionResult as_estimated = CorrectTrajectory(steep, &field, unbounded);
+    ASSERT_TRUE(Usable(bounded.status)) << bounded.message;
+    ASSERT_TRUE(Usable(as_estimated.status)) << as_estimated.message;
+    ASSERT_FALSE(bounded.input_kept);
+    EXPECT_GT(bounded.grades.stretches, 10u);
+    EXPECT_EQ(bounded.grades.limited, bounded.grades.stretches);
+    EXPECT_EQ(as_estimated.grades.limited, 0u);
+    EXPECT_EQ(as_estimated.corrected.up_m, steep.up_m);
+    const double run_m = PathLength(bounded.corrected);
+    EXPECT_NEAR(bounded.corrected.up_m.back(), 0.10 * run_m, 1e-6 * run_m);
+    for (std::size_t i = 0; i < steep.size(); ++i) {
+        EXPECT_EQ(bounded.corrected.p_en[i], as_estimated.corrected.p_en[i]) << "pose " << i;
+    }
+    const CorrectionResult climb = CorrectTrajectory(gentle, &field, cfg);  // climbs 2.5 %
+    ASSERT_TRUE(Usable(climb.status)) << climb.message;
+    ASSERT_FALSE(climb.input_kept);
+    EXPECT_GT(climb.grades.stretches, 10u);
+    EXPECT_EQ(climb.grades.limited, 0u);
+    EXPECT_EQ(climb.corrected.up_m, gentle.up_m);
 }
 
 TEST(Covariance, BadStatesAreAStatusNotGarbage) {

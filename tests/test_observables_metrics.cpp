@@ -517,6 +517,43 @@ TEST(Metrics, DistanceTravelledAccumulatesHorizontalSteps) {
     EXPECT_NEAR(s[3], 11.0, kTol);
 }
 
+TEST(Metrics, VerticalRmsIsTheHeightsError) {
+    const PlanarTrajectory gt = MakePlanar({{0, 0}, {1, 0}, {2, 0}, {3, 0}}, {}, {0, 0, 0, 0});
+    const PlanarTrajectory t = MakePlanar({{0, 0}, {1, 0}, {2, 0}, {3, 0}}, {}, {0, 3, -3, 0});
+    EXPECT_NEAR(ComputeMetrics(t, gt).vertical_rms_m, std::sqrt(18.0 / 4.0), kTol);
+    EXPECT_NEAR(ComputeMetrics(t, gt).ate_m, 0.0, kTol);
+}
+
+// A stretch steeper than the bound has its height change scaled down to it, the heights inside
+// alike, and the later stretches follow on; gentler stretches keep theirs.
+TEST(BoundGrades, OnlyStretchesSteeperThanTheBoundChange) {
+    std::vector<Eigen::Vector2d> en;
+    std::vector<double> up;
+    for (int i = 0; i <= 100; ++i) {  // 1 m steps: 0-50 m climbs 30 %, 50-100 m climbs 5 %
+        en.emplace_back(double(i), 0.0);
+        up.push_back(i <= 50 ? 0.3 * i : 15.0 + 0.05 * (i - 50));
+    }
+    std::vector<double> bounded = up;
+    const GradeBound b = BoundGrades(en, 25.0, 0.10, bounded);
+    EXPECT_EQ(b.stretches, 4u);
+    EXPECT_EQ(b.limited, 2u);
+    EXPECT_NEAR(bounded[25], 2.5, 1e-12);
+    EXPECT_NEAR(bounded[10], 1.0, 1e-12);  // inside the stretch: scaled alike
+    EXPECT_NEAR(bounded[50], 5.0, 1e-12);
+    EXPECT_NEAR(bounded[100], 5.0 + 2.5, 1e-12);  // the gentle half climbs as estimated
+    EXPECT_NEAR(bounded[75] - bounded[50], up[75] - up[50], 1e-12);
+    // Falling is bounded alike; no bound, or no stretch beyond it, changes nothing.
+    std::vector<double> down = up;
+    for (double& h : down) h = -h;
+    EXPECT_EQ(BoundGrades(en, 25.0, 0.10, down).limited, 2u);
+    EXPECT_NEAR(down[50], -5.0, 1e-12);
+    std::vector<double> same = up;
+    EXPECT_EQ(BoundGrades(en, 25.0, 0.0, same).limited, 0u);
+    EXPECT_EQ(same, up);
+    EXPECT_EQ(BoundGrades(en, 25.0, 0.35, same).limited, 0u);
+    EXPECT_EQ(same, up);
+}
+
 // ---- Frames ----------------------------------------------------------------------------------
 
 /// Random poses; bodies turned about the frame's Up axis by a random heading, tilted a little.

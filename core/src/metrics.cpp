@@ -61,14 +61,17 @@ ErrorMetrics ComputeMetrics(const PlanarTrajectory& traj, const PlanarTrajectory
     const std::vector<double> e = HorizontalErrors(traj, gt);
     m.poses = e.size();
     if (e.empty()) return m;
-    double sq = 0.0, sum = 0.0;
+    double sq = 0.0, sum = 0.0, up_sq = 0.0;
     std::size_t on_floor = 0;
     for (std::size_t i = 0; i < e.size(); ++i) {
         sq += e[i] * e[i];
         sum += e[i];
         m.max_m = std::max(m.max_m, e[i]);
-        if (std::abs(traj.up_m[i] - gt.up_m[i]) <= 1.5) ++on_floor;
+        const double up_error = traj.up_m[i] - gt.up_m[i];
+        if (std::abs(up_error) <= 1.5) ++on_floor;
+        up_sq += up_error * up_error;
     }
+    m.vertical_rms_m = std::sqrt(up_sq / e.size());
     m.ate_m = std::sqrt(sq / e.size());
     m.mean_m = sum / e.size();
     m.final_m = e.back();

@@ -308,4 +308,31 @@ double NearestFloor(const std::vector<double>& floor_heights_m, double up_m) {
         [up_m](double a, double b) { return std::abs(a - up_m) < std::abs(b - up_m); });
 }
 
+GradeBound BoundGrades(const std::vector<Eigen::Vector2d>& en, double stretch_m, double max_grade,
+                       std::vector<double>& up_m) {
+    DRIFTCORR_CHECK(en.size() == up_m.size(), "one height per position");
+    GradeBound bound;
+    if (!(max_grade > 0.0) || en.size() < 2) return bound;
+    const std::vector<double> in = up_m;
+    std::size_t a = 0;
+    while (a + 1 < en.size()) {
+        std::size_t b = a;
+        double run_m = 0.0;
+        while (b + 1 < en.size() && run_m < stretch_m) {
+            run_m += (en[b + 1] - en[b]).norm();
+            ++b;
+        }
+        const double rise_m = in[b] - in[a];
+        double f = 1.0;
+        if (std::abs(rise_m) > max_grade * run_m) {
+            f = max_grade * run_m / std::abs(rise_m);
+            ++bound.limited;
+        }
+        for (std::size_t k = a + 1; k <= b; ++k) up_m[k] = up_m[a] + f * (in[k] - in[a]);
+        ++bound.stretches;
+        a = b;
+    }
+    return bound;
+}
+
 }  // namespace driftcorr

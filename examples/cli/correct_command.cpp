@@ -210,7 +210,23 @@ void PrintMetricsRow(std::FILE* out, const char* label, const ErrorMetrics& m, b
                  "  %-10s ATE %8.2f m   final %8.2f m   max %8.2f m   p90 %8.2f m   drift %6.2f %%",
                  label, m.ate_m, m.final_m, m.max_m, m.p90_m, m.drift_pct);
     if (floors) std::fprintf(out, "   right floor %5.1f %%", 100.0 * m.floor_accuracy);
-    std::fprintf(out, "\n");
+    std::fprintf(out, "   vertical %8.2f m\n", m.vertical_rms_m);
+}
+
+// Where the solve held the heights (road2d): the estimate's, at bounded grades.
+void PrintHeights(std::FILE* out, const CorrectionResult& r) {
+    if (r.input_kept) {
+        std::fprintf(out, "heights    the input's, unchanged\n");
+    } else if (r.grades.limited == 0) {
+        std::fprintf(out,
+                     "heights    as estimated: no stretch of the path steeper than the grade "
+                     "bound (model.max_grade)\n");
+    } else {
+        std::fprintf(out,
+                     "heights    as estimated, but %zu of %zu stretches of the path steeper than "
+                     "the grade bound (model.max_grade): their height change limited to it\n",
+                     r.grades.limited, r.grades.stretches);
+    }
 }
 
 // How the start fits the map: the estimated start, or the given one and the best other heading.
@@ -416,12 +432,13 @@ void PrintSummary(std::FILE* out, const pipeline::CorrectionRun& run, const std:
                  run.estimate.size() / std::max(1e-9, run.timings.solve_s), r.incremental_s,
                  r.refine_s, PeakMemoryMb());
     PrintGlobalScale(out, run);
+    if (!indoor && Usable(r.status)) PrintHeights(out, r);
     if (run.anchor_fit) PrintAnchorFit(out, run);
     PrintAgreement(out, r);
     if (run.before) {
         std::fprintf(out,
-                     "errors     against the ground truth, horizontal (East, North; the height "
-                     "is not counted), no re-alignment:\n");
+                     "errors     against the ground truth, no re-alignment: ATE to drift "
+                     "horizontal (East, North), vertical the height's RMS error:\n");
         PrintMetricsRow(out, "estimate", *run.before, indoor);
     }
     if (run.after) PrintMetricsRow(out, "corrected", *run.after, indoor);

@@ -470,6 +470,7 @@ void KeepInput(const PlanarTrajectory& estimate, CorrectionResult& result) {
     result.input_kept = true;
     result.corrected = estimate;
     result.scale_min = result.scale_max = 1.0;
+    result.grades = GradeBound{};  // the input's heights, unchanged
 }
 
 // Do no harm: scores the input by the correction's objective and keeps it when it scores better;

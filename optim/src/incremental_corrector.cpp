@@ -484,7 +484,13 @@ CorrectionResult IncrementalCorrector::Finish(const std::vector<double>& t_s,
         result.repaired_steps += state_.obs[i].repaired ? 1 : 0;
     }
     result.nll = Nll();
-    if (Usable(result.status)) result.corrected = ToTrajectory(t_s, state_);
+    if (Usable(result.status)) {
+        result.corrected = ToTrajectory(t_s, state_);
+        if (state_.fix_height) {  // the heights as estimated, at bounded grades
+            result.grades = BoundGrades(result.corrected.p_en, cfg_.model.grade_stretch_m,
+                                        cfg_.model.max_grade, result.corrected.up_m);
+        }
+    }
     if (Usable(result.status) && cfg_.compute_covariance) AddCovariance(result);
     return result;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Accuracy of a trajectory against ground truth, pose by pose (same index = same timestamp), in
-// the world's horizontal East-North plane, with no re-alignment (docs/FORMAT.md, "Judging").
+// the world's horizontal East-North plane (and the height's RMS error apart), with no
+// re-alignment (docs/FORMAT.md, "Judging").
 #include <vector>
 
 #include "driftcorr/core/types.h"
@@ -17,6 +18,7 @@ struct ErrorMetrics {
     double drift_pct = 0.0;       ///< KITTI-style translational drift [%] over 100..800 m
                                   ///< segments of ground-truth path (0 if the path is shorter)
     double floor_accuracy = 1.0;  ///< share of poses with |up - up_gt| <= 1.5 m
+    double vertical_rms_m = 0.0;  ///< RMS of up - up_gt (the height's error)
     double path_length_m = 0.0;   ///< ground-truth horizontal path length
 };
 

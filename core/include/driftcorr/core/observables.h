@@ -139,4 +139,17 @@ void ReadAtGait(StepObservation& o, double median_m, double exponent, double max
 /// The one of floor_heights_m nearest to up_m. Precondition: floor_heights_m not empty.
 double NearestFloor(const std::vector<double>& floor_heights_m, double up_m);
 
+/// Roads climb and fall at bounded grades. Along the horizontal path `en`, cut into stretches of
+/// at least `stretch_m` (each ends at the first pose that far along from its start; the last
+/// may be shorter), a stretch whose height change in `up_m` is steeper than `max_grade` (rise
+/// over run) has it scaled down to the bound, the heights inside it alike; the stretches are
+/// chained from the first height. `up_m` is changed in place. Returns the number of stretches
+/// and of those limited. Nothing changes when max_grade <= 0. Precondition: en and up_m of one
+/// size.
+struct GradeBound {
+    std::size_t stretches = 0, limited = 0;
+};
+GradeBound BoundGrades(const std::vector<Eigen::Vector2d>& en, double stretch_m, double max_grade,
+                       std::vector<double>& up_m);
+
 }  // namespace driftcorr

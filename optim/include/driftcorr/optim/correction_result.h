@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "driftcorr/core/observables.h"
 #include "driftcorr/core/types.h"
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/solve_status.h"
@@ -55,6 +56,9 @@ struct CorrectionResult {
     int iterations = 0;                       ///< solver iterations, all solves
     std::size_t constrained_poses = 0;        ///< poses with the hard corridor constraint (refine)
     double scale_min = 1.0, scale_max = 1.0;  ///< estimated step-length scale range
+    /// Where the solve held the heights: the stretches of the corrected path the grade bound
+    /// looked at, and those whose height change it limited (ModelConfig::max_grade).
+    GradeBound grades;
     /// The corrected trajectory's NLL (the objective of the soft terms at the output).
     double nll = 0.0;
     /// The starts of the batch correction (CorrectorConfig::start_scales), the NLL each one's

@@ -75,6 +75,12 @@ struct ModelConfig {
     double floor_robust_k = 3.0;         ///< [-]
     double floor_level_window_s = 20.0;  ///< [s]
     double floor_level_height_m = 1.0;   ///< [m]
+    /// Roads climb and fall at bounded grades. Where the solve holds the heights (road2d), each
+    /// stretch of grade_stretch_m of the corrected path whose estimated height change is steeper
+    /// than max_grade (rise over run) has it limited to that grade (core BoundGrades); the
+    /// heights are otherwise the estimate's. 0: the estimate's heights as they are.
+    double max_grade = 0.10;        ///< [-]
+    double grade_stretch_m = 25.0;  ///< [m]
     // Map distance to the nearest traversable centre: Gaussian with sigma, gives up beyond ~giveup.
     double map_sigma_m = 2.0;   ///< [m]
     double map_giveup_m = 8.0;  ///< [m]
@@ -194,6 +200,11 @@ inline constexpr Param<ModelConfig> kModelParamRows[] = {
      "a pose is level when the estimate's height stays within floor_level_height_m over this span"},
     {"floor_level_height_m", Field<&ModelConfig::floor_level_height_m>(), kPositive,
      "see floor_level_window_s"},
+    {"max_grade", Field<&ModelConfig::max_grade>(), kShare,
+     "road2d: a stretch of corrected path climbs or falls at most this grade; 0: heights as "
+     "estimated"},
+    {"grade_stretch_m", Field<&ModelConfig::grade_stretch_m>(), kPositive,
+     "the length of those stretches"},
     {"map_sigma_m", Field<&ModelConfig::map_sigma_m>(), kPositive,
      "pull towards the nearest traversable centre"},
     {"map_giveup_m", Field<&ModelConfig::map_giveup_m>(), kPositive,
