@@ -33,6 +33,7 @@ cmake --build "$BUILD_DIR" -j"$JOBS"
 built=$(date +%s)
 
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
+export LSAN_OPTIONS="suppressions=$REPO/tests/lsan_suppressions.txt:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 status=0
 ctest --test-dir "$BUILD_DIR" --output-on-failure -j"$JOBS" --timeout 1800 || status=$?
