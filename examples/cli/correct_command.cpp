@@ -217,6 +217,10 @@ void PrintMetricsRow(std::FILE* out, const char* label, const ErrorMetrics& m, b
 void PrintHeights(std::FILE* out, const CorrectionResult& r) {
     if (r.input_kept) {
         std::fprintf(out, "heights    the input's, unchanged\n");
+    } else if (r.grades.stretches == 0) {
+        std::fprintf(out,
+                     "heights    as estimated, not bounded (model.max_grade 0, or a solver "
+                     "without the bound)\n");
     } else if (r.grades.limited == 0) {
         std::fprintf(out,
                      "heights    as estimated: no stretch of the path steeper than the grade "
