@@ -169,6 +169,34 @@ TEST_F(CliOutputs, TwoOutputsOnOneFileAreRefused) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(CliOutputs, NoScenarioOfABatchWritesAnotherOnesInput) {
+    // Scenario "second" reads its estimate from out/scenario.tum, the file the batch's first
+    // scenario ("scenario") would write: the whole batch is refused before any work, in either
+    // order, and that estimate is left as it was.
+    const fs::path second = dir_ / "second";
+    fs::copy(scenario_, second, fs::copy_options::recursive);
+    fs::copy_file(second / "estimate.tum", dir_ / "out" / "scenario.tum");
+    fs::remove(second / "estimate.tum");
+    std::string yaml = ReadFile(second / "scenario.yaml");
+    yaml = std::regex_replace(yaml, std::regex(R"(path:\s*estimate\.tum)"),
+                              "path: ../out/scenario.tum");
+    WriteFile(second / "scenario.yaml", yaml);
+    for (const bool second_first : {false, true}) {
+        const std::string a = second_first ? second.string() : scenario_.string();
+        const std::string b = second_first ? scenario_.string() : second.string();
+        const Shell r = RunShell(
+            Join({kCli, "correct", a, b, "-q", "-o", (dir_ / "out").string() + "/"}), dir_);
+        EXPECT_EQ(r.exit_code, kExitBadInput) << r.err;
+        EXPECT_NE(r.err.find("-o: is the estimate of argument " +
+                             std::string(second_first ? "1" : "2") + " (second)"),
+                  std::string::npos)
+            << r.err;
+        EXPECT_EQ(ReadFile(dir_ / "out" / "scenario.tum"), estimate_before_);
+        EXPECT_FALSE(fs::exists(dir_ / "out" / "second.tum"));
+    }
+    ExpectInputsIntact();
+}
+
 TEST_F(CliOutputs, TrajectoryFileWithOsmRefusesToOverwriteItself) {
     const std::string yaml = ReadFile(scenario_ / "scenario.yaml");
     std::smatch lat, lon, yaw;

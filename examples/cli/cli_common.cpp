@@ -1,4 +1,5 @@
 // What the subcommands share: option parsing, output paths checked before any work is done.
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -99,7 +101,45 @@ bool SameFile(const std::string& a, const std::string& b) {
     return !ec && ca == cb;
 }
 
+/// A key that two existing paths share exactly when they are the same file (device and inode,
+/// as SameFile), and two paths that do not exist when they name the same place; nothing when
+/// the path cannot be resolved.
+std::optional<std::string> FileIdentity(const std::string& path) {
+    namespace fs = std::filesystem;
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0) {
+        return "inode " + std::to_string(st.st_dev) + " " + std::to_string(st.st_ino);
+    }
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(fs::absolute(path, ec), ec);
+    if (ec) return std::nullopt;
+    return "path " + canonical.string();
+}
+
 }  // namespace
+
+void CheckOutputsAgainstOtherRunsInputs(const std::vector<std::vector<NamedOutput>>& outputs,
+                                        const std::vector<std::vector<io::InputFile>>& inputs) {
+    std::map<std::string, std::pair<std::size_t, const io::InputFile*>> owner;  // identity -> run
+    for (std::size_t j = 0; j < inputs.size(); ++j) {
+        for (const io::InputFile& in : inputs[j]) {
+            if (in.path.empty()) continue;
+            if (const auto id = FileIdentity(in.path)) owner.emplace(*id, std::make_pair(j, &in));
+        }
+    }
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        for (const NamedOutput& out : outputs[i]) {
+            if (out.path.empty()) continue;
+            const auto id = FileIdentity(out.path);
+            const auto it = id ? owner.find(*id) : owner.end();
+            if (it == owner.end() || it->second.first == i) continue;
+            const io::InputFile& in = *it->second.second;
+            throw OutputError(out.path, out.option,
+                              "is " + in.what + " (" + in.path +
+                                  "): writing it would destroy an input; choose another path");
+        }
+    }
+}
 
 void CheckOutputsAgainstInputs(const std::vector<NamedOutput>& outputs,
                                const std::vector<io::InputFile>& inputs) {

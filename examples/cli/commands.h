@@ -57,6 +57,13 @@ struct NamedOutput {
 void CheckOutputsAgainstInputs(const std::vector<NamedOutput>& outputs,
                                const std::vector<io::InputFile>& inputs);
 
+/// For runs of one batch: throws OutputError (exit 2) naming the option when an output of run i
+/// is an input of another run j (the same file however it is spelled), so that no run replaces
+/// what a later one reads. Each run's outputs against its own inputs are for
+/// CheckOutputsAgainstInputs. Time linear in the files (one stat each).
+void CheckOutputsAgainstOtherRunsInputs(const std::vector<std::vector<NamedOutput>>& outputs,
+                                        const std::vector<std::vector<io::InputFile>>& inputs);
+
 /// One scenario path of a manifest, with where it was named (for messages).
 struct ManifestEntry {
     std::string path;   ///< resolved against the manifest's folder when relative

@@ -818,17 +818,41 @@ void PrepareFolder(const std::string& dir, const char* option) {
         throw InputError(dir, 0, option, "folder is not writable");
 }
 
+/// The files one scenario of a batch writes: <name>.tum, .geojson, .cov.txt in their folders.
+OutputPaths BatchOutputs(const Args& a, const BatchItem& item) {
+    const auto join = [](const std::string& dir, const std::string& file) {
+        return dir.empty() ? std::string() : (std::filesystem::path(dir) / file).string();
+    };
+    return {join(a.output, item.name + ".tum"), join(a.geojson, item.name + ".geojson"),
+            join(a.covariance, item.name + ".cov.txt")};
+}
+
+/// Before any work: no scenario's output may be another scenario's input, or one scenario's
+/// correction would replace what a later one reads. (A scenario's outputs against its own inputs
+/// are checked when it runs, CheckOutputs.) A scenario.yaml that cannot be read is left to its
+/// own run to report.
+void CheckBatchOutputsAgainstInputs(const Args& a, const std::vector<BatchItem>& items) {
+    std::vector<std::vector<NamedOutput>> outputs;
+    std::vector<std::vector<io::InputFile>> inputs(items.size());
+    for (std::size_t i = 0; i < items.size(); ++i) {
+        const OutputPaths out = BatchOutputs(a, items[i]);
+        outputs.push_back(
+            {{"-o", out.tum}, {"--geojson", out.geojson}, {"--covariance", out.covariance}});
+        try {
+            inputs[i] = io::InputFiles(io::LoadScenario(items[i].path));
+        } catch (const InputError&) {
+        }
+        for (io::InputFile& in : inputs[i])
+            in.what += " of " + items[i].where + " (" + items[i].name + ")";
+    }
+    CheckOutputsAgainstOtherRunsInputs(outputs, inputs);
+}
+
 /// One scenario of a batch: its exit code and the lines to print for it.
 ProcessOutcome CorrectOneOfMany(const Args& a, const pipeline::PipelineConfig& cfg,
                                 const BatchItem& item) {
-    namespace fs = std::filesystem;
     const auto t0 = std::chrono::steady_clock::now();
-    const auto join = [](const std::string& dir, const std::string& file) {
-        return dir.empty() ? std::string() : (fs::path(dir) / file).string();
-    };
-    const OutputPaths out{join(a.output, item.name + ".tum"),
-                          join(a.geojson, item.name + ".geojson"),
-                          join(a.covariance, item.name + ".cov.txt")};
+    const OutputPaths out = BatchOutputs(a, item);
     ProcessOutcome o;
     try {
         io::Scenario scenario = io::LoadScenario(item.path);
@@ -874,6 +898,7 @@ int RunBatch(const Args& a) {
     PrepareFolder(a.output, "-o");
     if (!a.geojson.empty()) PrepareFolder(a.geojson, "--geojson");
     if (!a.covariance.empty()) PrepareFolder(a.covariance, "--covariance");
+    CheckBatchOutputsAgainstInputs(a, items);
     const pipeline::PipelineConfig cfg = LoadConfig(a);
     const int jobs = std::stoi(a.jobs);
     std::vector<int> codes(items.size(), kExitOk);
