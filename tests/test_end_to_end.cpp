@@ -154,6 +154,19 @@ TEST(DoNoHarm, AnInputTheMapCannotTellWrongIsKept) {
     EXPECT_GT(moved.after->ate_m, 1.0) << "the correction must move the input for the test to mean "
                                           "anything";
     EXPECT_EQ(moved.result.agreement_inside, run.result.agreement_inside);
+
+    // The kept input's covariance is its error's second moment: the correction's covariance plus
+    // the outer product of the input's offset from the correction.
+    const std::vector<PoseCovariance>& kept = run.result.covariance.poses;
+    const std::vector<PoseCovariance>& corrected = moved.result.covariance.poses;
+    ASSERT_EQ(kept.size(), corrected.size());
+    ASSERT_EQ(kept.size(), moved.result.corrected.size());
+    for (std::size_t i = 1; i < kept.size(); ++i) {
+        const Eigen::Vector2d d = run.result.corrected.p_en[i] - moved.result.corrected.p_en[i];
+        const Eigen::Matrix2d expected = corrected[i].xy_m2 + d * d.transpose();
+        ASSERT_LT((kept[i].xy_m2 - expected).norm(), 1e-9 * (1.0 + expected.norm()))
+            << "pose " << i;
+    }
 }
 
 TEST(DoNoHarm, ADriftingInputIsCorrected) {

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "driftcorr/core/angles.h"
 #include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/core/metrics.h"
@@ -473,6 +474,22 @@ void KeepInput(const PlanarTrajectory& estimate, CorrectionResult& result) {
     result.grades = GradeBound{};  // the input's heights, unchanged
 }
 
+// The second moment about `kept` of the error of a kept trajectory whose offset from the
+// correction is kept - correction: each pose's covariance (the correction's) plus the outer product
+// of its offset (East, North, the height where the covariance has one, the heading where both
+// trajectories have one).
+void AddOffsets(const PlanarTrajectory& correction, const PlanarTrajectory& kept,
+                std::vector<PoseCovariance>& poses) {
+    const bool yaw = correction.HasYaw() && kept.HasYaw();
+    for (std::size_t i = 1; i < poses.size() && i < kept.size() && i < correction.size(); ++i) {
+        const Eigen::Vector4d d(kept.p_en[i].x() - correction.p_en[i].x(),
+                                kept.p_en[i].y() - correction.p_en[i].y(),
+                                poses[i].z_m2 > 0.0 ? kept.up_m[i] - correction.up_m[i] : 0.0,
+                                yaw ? AngleDiff(kept.yaw_rad[i], correction.yaw_rad[i]) : 0.0);
+        poses[i] = ToPoseCovariance(ToPoseMatrix(poses[i]) + d * d.transpose());
+    }
+}
+
 // Do no harm: scores the input by the correction's objective and keeps it when it scores better;
 // counts the poses whose input lies inside the correction's 95 % region and keeps the input
 // unless they are significantly fewer than the region's own share. Pose 0 (the known start) and
@@ -506,12 +523,17 @@ void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField*
     const bool agrees = result.agreement_poses > 0 &&
                         double(result.agreement_inside) / double(result.agreement_poses) >=
                             result.agreement_threshold;
-    if (result.input_nll_lower || agrees) KeepInput(estimate, result);
+    if (!result.input_nll_lower && !agrees) return;
+    const PlanarTrajectory correction = std::move(result.corrected);
+    KeepInput(estimate, result);
     // An input kept for its lower NLL lies in another basin than the correction: its covariance
-    // is the model's curvature at the input, not the correction's. (An input kept for lying
-    // inside the correction's 95 % region keeps the correction's.)
+    // is the model's curvature at the input, not the correction's. An input kept for lying
+    // inside the correction's 95 % region errs by its offset from the correction plus the
+    // correction's own error: its covariance is that second moment.
     if (result.input_nll_lower && cfg.compute_covariance) {
         result.covariance = ComputeCovariance(input, field, cfg.model, cfg.covariance);
+    } else if (result.covariance.status == CovarianceStatus::kOk) {
+        AddOffsets(correction, estimate, result.covariance.poses);
     }
 }
 
