@@ -175,4 +175,20 @@ FieldSample DistanceToShafts(const std::vector<ShaftOutline>& shafts,
     return out;
 }
 
+void MoveIntoCorridor(const TraversableField& field, TraversableSample sample, double slack_m,
+                      Eigen::Vector3d& p_enu) {
+    constexpr double kMinSlope = 0.5;
+    for (int k = 0; k < 3 && sample.corridor.value > slack_m; ++k) {
+        const Eigen::Vector2d g = sample.corridor.gradient.head<2>();
+        const double slope = g.norm();
+        if (!(slope >= kMinSlope)) break;
+        Eigen::Vector3d p = p_enu;
+        p.head<2>() -= (sample.corridor.value - slack_m) / slope * (g / slope);
+        const auto next = field.Query(p);
+        if (!next || !(next->corridor.value < sample.corridor.value)) break;
+        p_enu = p;
+        sample = *next;
+    }
+}
+
 }  // namespace driftcorr

@@ -14,6 +14,8 @@
 #include "driftcorr/core/observables.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/optim/window_problem.h"
+#include "floor_hypotheses.h"
+#include "whole_corrections.h"
 
 namespace driftcorr {
 
@@ -160,17 +162,6 @@ CorrectionResult DecideHeadingBias(const std::vector<double>& t_s, const Travers
 
 }  // namespace
 
-namespace {
-
-// Whether the batch correction re-runs itself on other floors after the estimate's floor changes
-// (CorrectorConfig::restart_height_gains): heights free, and the floors known.
-bool FloorHypotheses(const TraversableField* field, bool fix_height, const CorrectorConfig& cfg) {
-    return field && !fix_height && !field->floor_heights_m().empty() &&
-           !cfg.restart_height_gains.empty();
-}
-
-}  // namespace
-
 // The incremental pass and the refinement live in IncrementalCorrector (shared with the online
 // corrector); the batch case hands it the whole estimate at once, once per start scale.
 IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
@@ -183,95 +174,6 @@ IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
 }
 
 namespace {
-
-// The spans where the estimate's height stays level (LevelSpans over the observed height
-// changes, with the floor term's window and height): the stays on a floor between its floor
-// changes.
-struct LevelRun {
-    std::size_t first = 0, last = 0;
-};
-
-std::vector<LevelRun> LevelRuns(const TrajectoryState& s, const std::vector<double>& t_s,
-                                const ModelConfig& model) {
-    std::vector<double> up_m(s.obs.size(), 0.0);
-    for (std::size_t i = 1; i < s.obs.size(); ++i) up_m[i] = up_m[i - 1] + s.obs[i].dup_m;
-    const std::vector<std::uint8_t> level =
-        LevelSpans(t_s, up_m, model.floor_level_window_s, model.floor_level_height_m);
-    std::vector<LevelRun> runs;
-    for (std::size_t i = 0; i < level.size(); ++i) {
-        if (!level[i]) continue;
-        // Two level poses in a row with a height change between them (a lift ride between two
-        // poses: each is level over the time around it) end one run and start the next.
-        if (!runs.empty() && runs.back().last + 1 == i &&
-            std::abs(up_m[i] - up_m[i - 1]) <= model.floor_level_height_m) {
-            runs.back().last = i;
-        } else {
-            runs.push_back({i, i});
-        }
-    }
-    return runs;
-}
-
-// The floor nearest to the mean corrected height over poses [first, last].
-double FloorOf(const PlanarTrajectory& cor, const std::vector<double>& floors_m, std::size_t first,
-               std::size_t last) {
-    double sum = 0.0;
-    for (std::size_t i = first; i <= last; ++i) sum += cor.up_m[i];
-    return NearestFloor(floors_m, sum / double(last - first + 1));
-}
-
-// A floor change of the estimate: the steps (from, to] between two level runs (runs[run - 1] and
-// runs[run]) whose observed height changes add up to read_m, restart_height_change_m or more;
-// ride: one of its poses is in a lift ride (RideSpans).
-struct FloorChange {
-    std::size_t run = 0, from = 0, to = 0;
-    double read_m = 0.0;
-    bool ride = false;
-};
-
-std::vector<FloorChange> FloorChanges(const std::vector<StepObservation>& obs,
-                                      const std::vector<LevelRun>& runs,
-                                      const CorrectorConfig& cfg) {
-    const ModelConfig& m = cfg.model;
-    const std::vector<std::uint8_t> ride =
-        RideSpans(obs, m.ride_min_s, m.ride_min_height_m, m.ride_gap_s, m.ride_lag_s);
-    std::vector<FloorChange> changes;
-    for (std::size_t j = 1; j < runs.size(); ++j) {
-        FloorChange c{j, runs[j - 1].last, runs[j].first};
-        for (std::size_t i = c.from + 1; i <= c.to; ++i) {
-            c.read_m += obs[i].dup_m;
-            c.ride = c.ride || ride[i];
-        }
-        if (std::abs(c.read_m) >= cfg.restart_height_change_m) changes.push_back(c);
-    }
-    return changes;
-}
-
-// CorrectorConfig::floor_gain_sigma: the NLL of the gains of `changes` as `cor` takes them,
-// floor to floor, about one gain per kind (a lift ride or walked), each kind's gain at its best
-// (the mean log). A gain is clamped to [1/4, 4] before its log: a change `cor` does not take, or
-// takes the other way, costs as much as the farthest gain.
-double GainNll(const std::vector<FloorChange>& changes, const std::vector<LevelRun>& runs,
-               const PlanarTrajectory& cor, const std::vector<double>& floors_m,
-               const CorrectorConfig& cfg) {
-    if (cfg.floor_gain_sigma <= 0.0) return 0.0;
-    constexpr double kGainMin = 0.25, kGainMax = 4.0;
-    std::vector<double> log_gain[2];  // walked, ride
-    for (const FloorChange& c : changes) {
-        const LevelRun &before = runs[c.run - 1], &after = runs[c.run];
-        const double taken_m = FloorOf(cor, floors_m, after.first, after.last) -
-                               FloorOf(cor, floors_m, before.first, before.last);
-        log_gain[c.ride].push_back(std::log(std::clamp(taken_m / c.read_m, kGainMin, kGainMax)));
-    }
-    double nll = 0.0;
-    for (const std::vector<double>& g : log_gain) {
-        if (g.size() < 2) continue;
-        double mean = 0.0;
-        for (double v : g) mean += v / double(g.size());
-        for (double v : g) nll += 0.5 * (v - mean) * (v - mean);
-    }
-    return nll / (cfg.floor_gain_sigma * cfg.floor_gain_sigma);
-}
 
 // The covariance of the mixture of the starts' corrections about the kept one: each start weighs
 // exp(-(its NLL - the kept one's)) and adds its offset from the kept path (squared) to the kept
@@ -299,21 +201,36 @@ void AddStartsToCovariance(const std::vector<std::vector<Eigen::Vector2d>>& path
     for (std::size_t i = 0; i < poses.size(); ++i) poses[i].xy_m2 += spread[i] / total;
 }
 
+// Each start scale runs the whole correction (incremental pass and refinement) from `initial`;
+// the lowest NLL is kept. Returns each start's NLL (NaN where unusable) and corrected positions.
+std::pair<std::vector<double>, std::vector<std::vector<Eigen::Vector2d>>> SearchStartScales(
+    TrajectoryState initial, const CorrectorConfig& cfg, WholeCorrections& run,
+    KeptCorrection& kept) {
+    std::vector<double> nll;
+    std::vector<std::vector<Eigen::Vector2d>> paths;
+    for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
+        // The last start takes the initial state itself, not a copy.
+        TrajectoryState state = k + 1 < cfg.start_scales.size() ? initial : std::move(initial);
+        std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
+        auto [inc, r] = run.Run(std::move(state), cfg.start_scales[k], nullptr);
+        nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
+        paths.push_back(Usable(r.status) ? r.corrected.p_en : std::vector<Eigen::Vector2d>{});
+        if (!kept.Better(r)) continue;
+        kept.Keep(std::move(inc), std::move(r));
+        kept.result.start_chosen = k;
+    }
+    return {std::move(nll), std::move(paths)};
+}
+
 }  // namespace
 
-// Each start scale runs the whole correction (incremental pass and refinement); the lowest NLL
-// is kept. Then the floor hypotheses (3D, floors known, restart_height_gains not empty): after
-// every floor change of the estimate (a change of restart_height_change_m or more between two
-// level runs), each other floor that the change reaches when read with a gain within the range
-// of restart_height_gains is tried: the whole correction again, from the kept start, with that
-// change's steps read to land on that floor (the windows do not re-read them), refined and
-// scored against the observations as they are, plus the NLL of its floor changes' gains
-// (GainNll; the correction it is tried against scored alike). One whose score is lower by more
-// than floor_hypothesis_margin is kept, and later changes are read from there. The windows' own
-// floor restarts see a window of path: a stay that fits the wrong floor's walkways for its first
-// tens of metres (the floors of a building are alike near their lifts) keeps that floor, and what
-// denies it (walkways that floor does not have, a stair climb from it to no floor) comes later.
-// Time: one correction per start and per floor tried.
+// The start scales (SearchStartScales), then the floor hypotheses (TryOtherFloors, 3D with the
+// floors known), then the heading-rate bias's decision (DecideHeadingBias); the counters add up
+// over every correction. The windows' own floor restarts see a window of path: a stay that fits
+// the wrong floor's walkways for its first tens of metres (the floors of a building are alike near
+// their lifts) keeps that floor, and what denies it (walkways that floor does not have, a stair
+// climb from it to no floor) comes later, hence the whole corrections on other floors. Time: one
+// correction per start and per floor tried.
 IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vector<double>& t_s,
                                        const TraversableField* field, const CorrectorConfig& cfg,
                                        CorrectionResult& result, const ProgressCallback& progress) {
@@ -331,96 +248,20 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
         initial.biases.clear();
     }
     const bool floor_hypotheses = FloorHypotheses(field, initial.fix_height, cfg);
-    std::optional<IncrementalCorrector> best;
-    std::vector<double> nll;
-    std::vector<std::vector<Eigen::Vector2d>> paths;  // each start's corrected positions
-    CorrectionResult work;  // the counters and times over every correction
-    // One whole correction from `state`: its windows hold the scale about `scale` (the prior's
-    // mean, so that a start is a hypothesis the first windows keep rather than one the prior
-    // about 1 pulls back where the map cannot tell), its final solve about the configured mean,
-    // against `obs` when given (else its own), so that every start's NLL compares.
-    auto correct = [&](TrajectoryState state, double scale,
-                       const std::vector<StepObservation>* obs) {
-        CorrectorConfig held = each;
-        held.model.scale_prior_mean = scale;
-        IncrementalCorrector inc(std::move(state), field, held);
-        inc.SolveRemaining(progress);
-        inc.SetScalePriorMean(cfg.model.scale_prior_mean);
-        if (obs) inc.ReplaceObservations(*obs);
-        CorrectionResult r = inc.Finish(t_s, progress);
-        work.windows += r.windows, work.window_retries += r.window_retries;
-        work.window_restarts += r.window_restarts, work.iterations += r.iterations;
-        work.incremental_s += r.incremental_s, work.refine_s += r.refine_s;
-        return std::make_pair(std::move(inc), std::move(r));
-    };
-    auto better = [&](const CorrectionResult& r) {
-        return !best || (Usable(r.status) && (!Usable(result.status) || r.nll < result.nll));
-    };
-    // The last start takes the initial state itself, not a copy, unless the floors need it.
-    std::optional<TrajectoryState> observed;
+    WholeCorrections run(t_s, field, each, cfg.model.scale_prior_mean, progress);
+    KeptCorrection kept{std::nullopt, result};
+    std::optional<TrajectoryState> observed;  // the observations as they are, for the floors
     if (floor_hypotheses) observed = initial;
-    for (std::size_t k = 0; k < cfg.start_scales.size(); ++k) {
-        TrajectoryState state = k + 1 < cfg.start_scales.size() ? initial : std::move(initial);
-        std::fill(state.scales.begin(), state.scales.end(), cfg.start_scales[k]);
-        auto [inc, r] = correct(std::move(state), cfg.start_scales[k], nullptr);
-        nll.push_back(Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN());
-        paths.push_back(Usable(r.status) ? r.corrected.p_en : std::vector<Eigen::Vector2d>{});
-        if (!better(r)) continue;
-        best.emplace(std::move(inc));
-        result = std::move(r);
-        result.start_chosen = k;
-    }
+    auto [nll, paths] = SearchStartScales(std::move(initial), cfg, run, kept);
     const std::size_t start_chosen = result.start_chosen;
     std::vector<CorrectionResult::FloorHypothesis> tried;
     if (floor_hypotheses && Usable(result.status)) {
-        const std::vector<double>& floors = field->floor_heights_m();
-        const auto [gain_min, gain_max] =
-            std::minmax_element(cfg.restart_height_gains.begin(), cfg.restart_height_gains.end());
-        TrajectoryState read = *observed;  // the observations with the kept readings
-        std::fill(read.scales.begin(), read.scales.end(), cfg.start_scales[start_chosen]);
-        const std::vector<LevelRun> runs = LevelRuns(read, t_s, cfg.model);
-        // As observed: a kept hypothesis re-reads its own change's steps, and later changes'
-        // steps lie after them.
-        const std::vector<FloorChange> changes = FloorChanges(observed->obs, runs, cfg);
-        auto gain_nll = [&](const CorrectionResult& r) {
-            return GainNll(changes, runs, r.corrected, floors, cfg);
-        };
-        double kept_gain_nll = gain_nll(result);
-        for (const FloorChange& c : changes) {
-            const std::size_t from = c.from, to = c.to;
-            const double before_m =
-                FloorOf(result.corrected, floors, runs[c.run - 1].first, runs[c.run - 1].last);
-            const double after_m =
-                FloorOf(result.corrected, floors, runs[c.run].first, runs[c.run].last);
-            for (const double floor_m : floors) {
-                const double gain = (floor_m - before_m) / c.read_m;
-                if (floor_m == after_m || gain < *gain_min || gain > *gain_max) continue;
-                TrajectoryState trial = read;
-                trial.height_settled.resize(trial.obs.size(), 0);
-                for (std::size_t i = from + 1; i <= to; ++i) {
-                    trial.obs[i].dup_m *= gain;
-                    trial.height_settled[i] = 1;
-                }
-                auto [inc, r] = correct(trial, cfg.start_scales[start_chosen], &observed->obs);
-                const double nll_m =
-                    Usable(r.status) ? r.nll : std::numeric_limits<double>::quiet_NaN();
-                const double trial_gain_nll = Usable(r.status) ? gain_nll(r) : 0.0;
-                tried.push_back({t_s[to] - t_s[0], before_m, after_m, floor_m, nll_m, result.nll,
-                                 trial_gain_nll, kept_gain_nll});
-                if (!Usable(r.status) || r.nll + trial_gain_nll >= result.nll + kept_gain_nll -
-                                                                       cfg.floor_hypothesis_margin)
-                    continue;
-                tried.back().kept = true;
-                kept_gain_nll = trial_gain_nll;
-                best.emplace(std::move(inc));
-                result = std::move(r);
-                read = std::move(trial);
-                break;
-            }
-        }
+        tried =
+            TryOtherFloors(*observed, cfg.start_scales[start_chosen], t_s, *field, cfg, run, kept);
     }
+    CorrectionResult& work = run.work();
     if (decide_bias && Usable(result.status)) {
-        CorrectionResult with = DecideHeadingBias(t_s, field, cfg, best, result);
+        CorrectionResult with = DecideHeadingBias(t_s, field, cfg, kept.corrector, result);
         work.iterations += with.iterations, work.refine_s += with.refine_s;
     }
     result.floor_hypotheses = std::move(tried);
@@ -437,14 +278,14 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
     result.window_restarts = work.window_restarts, result.iterations = work.iterations;
     result.incremental_s = work.incremental_s, result.refine_s = work.refine_s;
     if (Usable(result.status) && cfg.compute_covariance) {
-        best->AddCovariance(result);
+        kept.corrector->AddCovariance(result);
         const bool floor_kept =
             std::any_of(result.floor_hypotheses.begin(), result.floor_hypotheses.end(),
                         [](const auto& h) { return h.kept; });
         AddStartsToCovariance(paths, result.start_nll, floor_kept ? paths.size() : start_chosen,
                               result);
     }
-    return std::move(*best);
+    return std::move(*kept.corrector);
 }
 
 namespace {

@@ -101,6 +101,15 @@ private:
     std::vector<double> floor_heights_m_;
 };
 
+/// Moves `p_enu` horizontally towards the corridor when its signed corridor distance `sample`
+/// (the field's value at p_enu) exceeds slack_m: at most 3 Newton steps along the distance's
+/// horizontal gradient to slack_m, each taken only where that slope is at least 0.5 (where the
+/// distance falls mostly with height, between floors or on stairs, a step along a small slope
+/// would be long; the excess over slack_m bounds a step at twice it) and kept only where it
+/// lowers the distance.
+void MoveIntoCorridor(const TraversableField& field, TraversableSample sample, double slack_m,
+                      Eigen::Vector3d& p_enu);
+
 /// How well a set of points lies on the traversable centres: the share of them farther than
 /// reach_m from every centre (or outside the field), and their RMS distance, each capped at
 /// reach_m (a negative interpolated distance counts as 0).

@@ -14,14 +14,12 @@
 // its solves ("How a pose is estimated", "Start scales", "Threading"): docs/method.md, "The
 // online corrector"; measured: docs/results.md, "Online output".
 #include <chrono>
-#include <condition_variable>
 #include <cstddef>
 #include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -152,6 +150,8 @@ struct OnlineStatistics {
     std::string worker_error;        ///< a solve that threw (the worker then stopped)
 };
 
+class OnlineChain;
+
 class OnlineCorrector {
 public:
     /// The input counts as faster than real time when its stream time over the last
@@ -183,98 +183,29 @@ public:
     OnlineStatistics Statistics() const;
 
 private:
-    /// One hypothesis of a corrector with several start scales: starts from `start_scale`,
-    /// records the NLL after each solve and, with `first_at_chunk`, first solves at the chunk rule.
-    OnlineCorrector(const TraversableField* field, const OnlineConfig& config, double start_scale,
-                    bool first_at_chunk);
-    void StartSolving();  ///< the solver's first scale and, threaded, the worker
-    struct Entry {        ///< one accepted pose, as handed to the solver
-        PoseState initial;
-        StepObservation step;
-    };
-    PushResult Reject(PushStatus status, std::string message) const;
-    std::optional<PushResult> Validate(const PlanarPose& pose) const;
-    Entry MakeEntry(const PlanarPose& pose, double yaw_unwrapped);
-    double FrontScale(int segment) const;
-    double FrontBias(int segment) const;  ///< solved heading-rate bias (0: none solved)
-    /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
-    bool ProjectOutput(PoseState& pose) const;
-    void UpdateSchedule(std::size_t index);
-    void Request(std::size_t end, bool restarts);
     bool AheadOfRealTime(double t_s);
-    void WaitForSolver(PushResult& r);
-    void WorkerLoop();
-    void RunSolve(std::size_t end, bool restarts);
-    void StopWorker();  ///< a running solve is finished first
-    /// Takes a validated pose (Push: validation, the input's pace, then this).
-    PushResult Take(const PlanarPose& pose, bool ahead_of_real_time);
-    /// With hypotheses: Take in each, return the output of the chosen one (ChooseHypothesis).
+    /// With several chains: the output of the chosen one (ChooseChain), its covariance the
+    /// mixture's (MixtureCovariance).
     PushResult TakeHypotheses(const PlanarPose& pose, bool ahead_of_real_time);
-    void ChooseHypothesis();
+    void ChooseChain();
     PoseCovariance MixtureCovariance(const std::vector<PushResult>& results) const;
-    /// The batch correction (CorrectFromStarts under `config`) of every accepted pose.
-    CorrectionResult SolveWhole(const CorrectorConfig& config) const;
-    void Merge(const FixedLagSolution& solution, double solve_s);
-    void Recompose(std::size_t end);
-    void ChainPose(std::size_t i);
 
-    const TraversableField* field_;
     OnlineConfig cfg_;
-    bool fix_height_ = true;
     bool finished_ = false;
-    double start_scale_ = 1.0;
-    bool record_nll_ = false;
-    bool first_at_chunk_ = false;  ///< the first solve at the chunk rule, none before it
-
-    // With more than one start scale: the hypotheses (this object then only forwards to them).
-    std::vector<std::unique_ptr<OnlineCorrector>> hypotheses_;
-    std::size_t chosen_ = 0;       ///< the hypothesis whose outputs Push returns
+    /// One causal chain per start scale (optim/src/online_chain.h); each gets every pose.
+    std::vector<std::unique_ptr<OnlineChain>> chains_;
+    std::size_t chosen_ = 0;       ///< the chain whose outputs Push returns
     std::size_t chosen_at_ = 0;    ///< the solve end it was chosen at (0: not yet)
-    std::vector<double> weights_;  ///< each hypothesis's weight there (empty: not yet)
+    std::vector<double> weights_;  ///< each chain's weight there (empty: not yet)
+    /// With several chains: the outputs' ages (the solves' are the chains').
+    mutable std::mutex stats_mutex_;
+    OnlineStatistics output_stats_;
 
-    // Push-thread-only state (never touched by the worker).
-    std::optional<bool> has_yaw_;
-    bool heading_known_ = false;  ///< without yaw: a moving step has been seen
-    double last_t_s_ = 0.0, last_yaw_u_ = 0.0, path_m_ = 0.0, chunk_start_path_m_ = 0.0,
-           update_path_m_ = 0.0;
-    Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
-    std::size_t chunk_start_ = 0;
-    std::vector<double> t_s_;
-    std::vector<Entry> entries_;        ///< every accepted pose, for Finish()
-    std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
     /// The input's pace: stream time and wall time outside Push (waits excluded) of the last
     /// kPaceWindow poses, oldest first.
     std::deque<std::pair<double, double>> pace_;
     double outside_s_ = 0.0;  ///< wall time spent outside Push since the first pose [s]
     std::chrono::steady_clock::time_point push_returned_{};
-
-    // Shared with the worker, guarded by mutex_.
-    mutable std::mutex mutex_;
-    std::condition_variable wake_;           ///< a request, or stop
-    std::condition_variable solved_;         ///< a solve merged (back-pressure)
-    std::deque<Entry> pending_;              ///< accepted poses not yet handed to the solver
-    std::size_t pending_first_ = 0;          ///< stream index of pending_.front()
-    bool requested_ = false;                 ///< a solve is wanted (the newest pose's window)
-    bool request_restarts_ = false;          ///< ... with restarts (a chunk ended since the last)
-    std::size_t request_end_ = 0;            ///< the requested end (synchronous mode's window end)
-    bool busy_ = false;                      ///< the worker is solving
-    std::vector<PoseState> current_;         ///< latest estimate of every accepted pose
-    std::vector<StepObservation> steps_;     ///< observation of every accepted pose
-    std::vector<int> segment_;               ///< scale segment of every accepted pose
-    std::vector<int> bias_segment_;          ///< heading-rate bias segment of every accepted pose
-    std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
-    std::vector<double> front_biases_;       ///< solved biases, up to the last solved segment
-    std::size_t solved_end_ = 0;             ///< last pose of the newest merged solve
-    PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
-    bool chain_sigma_ok_ = true;
-    bool stop_ = false;
-    OnlineStatistics stats_;  ///< worker's part (solves); Push's part below
-    /// record_nll_: (end, NLL of poses [1, end]) after each usable solve, ends increasing.
-    std::vector<std::pair<std::size_t, double>> nll_at_;
-
-    // Worker-only.
-    std::unique_ptr<FixedLagSmoother> solver_;
-    std::thread worker_;
 };
 
 }  // namespace driftcorr

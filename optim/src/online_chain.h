@@ -1,0 +1,115 @@
+#pragma once
+// One causal chain of the online corrector (OnlineCorrector holds one per start scale): takes the
+// accepted poses, schedules the fixed-lag window solves (optim/fixed_lag.h), runs them on a worker
+// thread of lower scheduling priority (or inside Take when synchronous), holds back input that
+// runs ahead of the solver (back-pressure), and returns each pose composed onto the newest solved
+// window with its covariance carried there. How it schedules, chains and threads its solves:
+// docs/method.md, "The online corrector".
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "driftcorr/optim/online_corrector.h"
+
+namespace driftcorr {
+
+class OnlineChain {
+public:
+    /// `field` may be null and must outlive this object; `config.corrector.start_scales` is not
+    /// read: the chain starts from `start_scale`. With `record_nll` it records the NLL of its
+    /// poses after each usable solve (NllAt); with `first_at_chunk` its first solve is at the
+    /// chunk rule, none before it. Starts the worker unless config.synchronous.
+    OnlineChain(const TraversableField* field, const OnlineConfig& config, double start_scale,
+                bool record_nll, bool first_at_chunk);
+    ~OnlineChain();  ///< stops the worker (a running solve is finished first)
+    OnlineChain(const OnlineChain&) = delete;
+    OnlineChain& operator=(const OnlineChain&) = delete;
+
+    /// Why `pose` cannot follow the accepted ones (time, non-finite, heading), or nullopt.
+    std::optional<PushResult> Validate(const PlanarPose& pose) const;
+    /// Takes a validated pose and returns its causal estimate (waits first for back-pressure).
+    PushResult Take(const PlanarPose& pose, bool ahead_of_real_time);
+    void StopWorker();  ///< a running solve is finished first; no further ones
+
+    std::size_t size() const { return t_s_.size(); }  ///< accepted poses (the caller's thread)
+    OnlineStatistics Statistics() const;
+    /// The batch correction (CorrectFromStarts under `config`) of every accepted pose.
+    CorrectionResult SolveWhole(const CorrectorConfig& config) const;
+
+    /// (end, NLL of poses [1, end]) after each usable solve, ends increasing (record_nll); read
+    /// under the lock that Lock returns.
+    const std::vector<std::pair<std::size_t, double>>& NllAt() const { return nll_at_; }
+    std::unique_lock<std::mutex> Lock() const { return std::unique_lock<std::mutex>(mutex_); }
+
+private:
+    struct Entry {  ///< one accepted pose, as handed to the solver
+        PoseState initial;
+        StepObservation step;
+    };
+    Entry MakeEntry(const PlanarPose& pose, double yaw_unwrapped);
+    double FrontScale(int segment) const;
+    double FrontBias(int segment) const;  ///< solved heading-rate bias (0: none solved)
+    /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
+    bool ProjectOutput(PoseState& pose) const;
+    void UpdateSchedule(std::size_t index);
+    void Request(std::size_t end, bool restarts);
+    void WaitForSolver(PushResult& r);
+    void WorkerLoop();
+    void RunSolve(std::size_t end, bool restarts);
+    void Merge(const FixedLagSolution& solution, double solve_s);
+    void Recompose(std::size_t end);
+    void ChainPose(std::size_t i);
+
+    const TraversableField* field_;
+    OnlineConfig cfg_;
+    bool fix_height_ = true;
+    double start_scale_ = 1.0;
+    bool record_nll_ = false;
+    bool first_at_chunk_ = false;
+
+    // Caller-thread-only state (never touched by the worker).
+    std::optional<bool> has_yaw_;
+    bool heading_known_ = false;  ///< without yaw: a moving step has been seen
+    double last_t_s_ = 0.0, last_yaw_u_ = 0.0, path_m_ = 0.0, chunk_start_path_m_ = 0.0,
+           update_path_m_ = 0.0;
+    Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
+    std::size_t chunk_start_ = 0;
+    std::vector<double> t_s_;
+    std::vector<Entry> entries_;        ///< every accepted pose, for SolveWhole
+    std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
+
+    // Shared with the worker, guarded by mutex_.
+    mutable std::mutex mutex_;
+    std::condition_variable wake_;           ///< a request, or stop
+    std::condition_variable solved_;         ///< a solve merged (back-pressure)
+    std::deque<Entry> pending_;              ///< accepted poses not yet handed to the solver
+    std::size_t pending_first_ = 0;          ///< stream index of pending_.front()
+    bool requested_ = false;                 ///< a solve is wanted (the newest pose's window)
+    bool request_restarts_ = false;          ///< ... with restarts (a chunk ended since the last)
+    std::size_t request_end_ = 0;            ///< the requested end (synchronous mode's window end)
+    bool busy_ = false;                      ///< the worker is solving
+    std::vector<PoseState> current_;         ///< latest estimate of every accepted pose
+    std::vector<StepObservation> steps_;     ///< observation of every accepted pose
+    std::vector<int> segment_;               ///< scale segment of every accepted pose
+    std::vector<int> bias_segment_;          ///< heading-rate bias segment of every accepted pose
+    std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
+    std::vector<double> front_biases_;       ///< solved biases, up to the last solved segment
+    std::size_t solved_end_ = 0;             ///< last pose of the newest merged solve
+    PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
+    bool chain_sigma_ok_ = true;
+    bool stop_ = false;
+    OnlineStatistics stats_;
+    std::vector<std::pair<std::size_t, double>> nll_at_;
+
+    // Worker-only.
+    std::unique_ptr<FixedLagSmoother> solver_;
+    std::thread worker_;
+};
+
+}  // namespace driftcorr
