@@ -17,6 +17,7 @@
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/format.h"
+#include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
 namespace driftcorr {

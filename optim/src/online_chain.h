@@ -15,7 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include "driftcorr/optim/online_corrector.h"
+#include "driftcorr/optim/fixed_lag.h"
+#include "driftcorr/optim/online_types.h"
 
 namespace driftcorr {
 

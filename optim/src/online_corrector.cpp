@@ -39,15 +39,6 @@ void CountOutput(const PushResult& r, OnlineStatistics& stats) {
 
 }  // namespace
 
-std::optional<ParamProblem> OnlineConfig::FindProblem() const {
-    return CheckRows(kOnlineParams, *this);
-}
-
-std::string OnlineConfig::Validate() const {
-    if (std::string m = corrector.Validate(); !m.empty()) return m;
-    return ToMessage(kOnlineParams.section, FindProblem());
-}
-
 OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConfig& config)
     : cfg_(config) {
     DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");

@@ -6,7 +6,6 @@
 #include <utility>
 #include <vector>
 
-#include "driftcorr/optim/corrector.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
 namespace driftcorr {

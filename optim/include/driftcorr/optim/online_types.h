@@ -1,0 +1,136 @@
+#pragma once
+// What the online corrector (optim/online_corrector.h) takes and returns: its configuration (the
+// params.yaml section `online`), a pose in the world plane, the result of a Push with the
+// output's age and covariance, and how the corrector kept up.
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "driftcorr/optim/corrector_config.h"
+#include "driftcorr/optim/covariance.h"
+
+namespace driftcorr {
+
+struct OnlineConfig {
+    CorrectorConfig corrector;  ///< chunk_m, window_m, model, ... exactly as in batch mode
+    bool synchronous = false;   ///< solve inside Push (no worker thread)
+    double gap_warn_s = 1.0;    ///< Push flags a step longer than this in time [s]
+    /// The returned causal pose is moved into the traversable corridor when it lies outside it but
+    /// within corridor.model.corridor_gate_m (what the refinement's hard constraint does to the
+    /// smoothed poses), horizontally along the corridor distance gradient, in at most 3 Newton
+    /// steps, each taken only where the horizontal slope is >= 0.5 and kept only when it lowers
+    /// the distance. Only the output is moved; the solver state is not.
+    bool project_output = true;
+    /// Path between solves for the causal output, as a share of corrector.chunk_m (0.125: every
+    /// 10 m with the road chunks of 80 m); 0: only at the chunk rule.
+    double update_fraction = 0.125;
+    /// Back-pressure (threaded mode): before taking a pose, Push waits while the previous pose
+    /// is more than this many epochs past the last solved pose and a solve is requested or
+    /// running; 0: never waits (under a burst the outputs then chain from older solves, and say
+    /// so in their age).
+    std::size_t max_lag_epochs = 1;
+    /// false: back-pressure only while the input arrives faster than real time (kAheadFactor), so
+    /// a live producer is never held back; true: whenever the lag exceeds max_lag_epochs.
+    bool hold_live_input = false;
+    /// The online windows' boundary pose: true, a variable under the marginalised prior of the
+    /// poses before it (optim/fixed_lag.h; docs/method.md, Eq. 19); false, held fixed at its last
+    /// solution. Measured both ways: docs/results.md, "The online windows' boundary prior".
+    bool boundary_prior = true;
+    /// With boundary_prior: the prior is joint with the scale of the boundary pose's segment,
+    /// which the window then re-estimates (optim/fixed_lag.h); false: the prior is on the pose
+    /// alone, given the scales, and the earlier segments' scales stay fixed. Measured both ways:
+    /// docs/results.md, "Online correction that keeps up".
+    bool boundary_scale = true;
+
+    /// The first value kOnlineParams does not allow (corrector is not looked at).
+    std::optional<ParamProblem> FindProblem() const;
+    /// Empty if valid, else "<section>.<key>: <rule> (got <value>)" for the first bad field of
+    /// corrector or of this struct (section online).
+    std::string Validate() const;
+};
+
+/// Params.yaml section `online` (synchronous and corrector are set by the caller).
+inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
+    {"update_fraction", Field<&OnlineConfig::update_fraction>(), kShare,
+     "a window solve for the causal output every this share of chunk_m; 0: at the chunk rule"},
+    {"gap_warn_s", Field<&OnlineConfig::gap_warn_s>(), kPositive,
+     "a longer input pause or timestamp gap is reported"},
+    {"project_output", Field<&OnlineConfig::project_output>(), kNoRange,
+     "the causal pose is moved into the corridor when within corridor_gate_m"},
+    {"max_lag_epochs", Field<&OnlineConfig::max_lag_epochs>(), kNonNegative,
+     "back-pressure: Push waits while this many epochs past the last solve; 0: never waits"},
+    {"hold_live_input", Field<&OnlineConfig::hold_live_input>(), kNoRange,
+     "back-pressure also on input that arrives at real time; false: only on faster input"},
+    {"boundary_prior", Field<&OnlineConfig::boundary_prior>(), kNoRange,
+     "online windows: the past marginalised onto the boundary pose"},
+    {"boundary_scale", Field<&OnlineConfig::boundary_scale>(), kNoRange,
+     "online windows: the boundary prior joint with its segment's scale, which the window "
+     "re-estimates"},
+};
+inline constexpr ParamTable<OnlineConfig> kOnlineParams{"online", kOnlineParamRows};
+
+/// One pose in the world plane (ENU at the anchor).
+struct PlanarPose {
+    double t_s = 0.0;
+    Eigen::Vector2d p_en = Eigen::Vector2d::Zero();  ///< [m]
+    double up_m = 0.0;                               ///< [m]
+    std::optional<double> yaw_rad;  ///< heading, CCW from East [rad]; nullopt: from the steps
+};
+
+enum class PushStatus {
+    kAccepted,
+    kRejectedTime,       ///< timestamp not after the previous accepted one (out of order/repeated)
+    kRejectedNonFinite,  ///< NaN or inf in any field
+    kRejectedHeading,    ///< with a heading when the stream started without one, or vice versa
+    kRejectedFinished,   ///< Push after Finish()
+};
+
+struct PushResult {
+    PushStatus status = PushStatus::kAccepted;
+    std::string message;       ///< why rejected, or a warning (gap, outside map); empty otherwise
+    std::size_t index = 0;     ///< index of the accepted pose in the stream
+    PlanarPose corrected;      ///< causal estimate (valid when accepted); yaw_rad always set
+    bool gap = false;          ///< the step took longer than gap_warn_s
+    bool outside_map = false;  ///< the corrected pose lies outside the map field (odometry only)
+    /// The solve the output chains from ended this many epochs (poses) before this one...
+    std::size_t correction_age_epochs = 0;
+    double correction_age_s = 0.0;  ///< ...and this much earlier in stream time [s]
+    /// The output chains from the newest solve the schedule had requested before this pose
+    /// (false: the solver was behind; the pose was composed onto an older solve).
+    bool fresh = true;
+    /// Time Push waited for the solver before taking the pose (back-pressure) [s]; with start
+    /// scales, over every hypothesis
+    double waited_s = 0.0;
+    /// The start scale of the hypothesis this output comes from (docs/method.md, "Start scales").
+    double start_scale = 1.0;
+    /// The input arrived faster than real time when this pose was pushed (kAheadFactor).
+    bool ahead_of_real_time = false;
+    /// Covariance of the output pose: the solved pose's it chains from (FixedLagSolution::
+    /// end_covariance, the batch's covariance model) carried through the odometry of the
+    /// correction_age_epochs steps since (PropagateStep); before the first solve, the known
+    /// start's (zero) so carried. Valid when covariance_ok (false after a solve whose matrices
+    /// could not be factored, until the next).
+    PoseCovariance covariance;
+    bool covariance_ok = false;
+    bool Accepted() const { return status == PushStatus::kAccepted; }
+};
+
+/// How the online corrector kept up (OnlineCorrector::Statistics).
+struct OnlineStatistics {
+    std::size_t poses = 0;           ///< accepted
+    std::size_t stale_poses = 0;     ///< returned without the newest requested solve (!fresh)
+    std::size_t max_age_epochs = 0;  ///< worst correction_age_epochs
+    double max_age_s = 0.0;          ///< worst correction_age_s [s]
+    std::size_t requests = 0;        ///< solves the schedule asked for
+    std::size_t solves = 0;          ///< solves run (requests - solves were skipped)
+    std::size_t failed_solves = 0;   ///< Ipopt gave no usable solution (state kept)
+    std::size_t prior_solves = 0;    ///< solves whose boundary carried a marginalised prior
+    std::vector<double> solve_s;     ///< wall time of every solve [s]
+    std::size_t waits = 0;           ///< Pushes that waited (back-pressure)
+    double wait_s = 0.0;             ///< total wait [s]
+    std::size_t ahead_poses = 0;     ///< poses that arrived faster than real time
+    std::string worker_error;        ///< a solve that threw (the worker then stopped)
+};
+
+}  // namespace driftcorr
