@@ -105,6 +105,27 @@ TEST_F(OnlineSynthetic, SynchronousMatchesBatch) {
     EXPECT_EQ(o.smoothed.windows, run_->result.windows);
 }
 
+// Finish() judges the input against its correction as the batch does: the true trajectory given
+// as the estimate lies inside the correction's 95 % region, and the smoothed result is the input,
+// as the batch's is (the generator's truth drives 1.5 m off the centre line, so the correction
+// itself is not the input).
+TEST(Online, TheSmoothedResultKeepsAnInputTheMapCannotTellWrong) {
+    const std::string dir = Generate("do_no_harm", "--seed 1 --duration-s 120");
+    fs::copy_file(dir + "/ground_truth.tum", dir + "/estimate.tum",
+                  fs::copy_options::overwrite_existing);
+    const pipeline::CorrectionRun run = pipeline::RunCorrection(dir, {});
+    ASSERT_TRUE(Usable(run.result.status)) << run.result.message;
+    ASSERT_TRUE(run.result.input_kept);
+    const pipeline::StreamSetup setup = pipeline::LoadStreamSetup(dir, {});
+    const OnlineOutcome o = RunOnline(run.estimate, setup.field, true);
+    ASSERT_TRUE(Usable(o.smoothed.status)) << o.smoothed.message;
+    EXPECT_TRUE(o.smoothed.input_kept);
+    ASSERT_EQ(o.smoothed.corrected.size(), run.estimate.size());
+    for (std::size_t i = 0; i < run.estimate.size(); ++i) {
+        ASSERT_LT((o.smoothed.corrected.p_en[i] - run.estimate.p_en[i]).norm(), 1e-9) << i;
+    }
+}
+
 // The solves between chunk ends (update_fraction) only move the causal output: the smoothed
 // result is the batch solve, the same with them and without them (same process, same solves:
 // equal to rounding). They do move it (on this synthetic drive both are within the same bound of

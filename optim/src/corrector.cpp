@@ -331,53 +331,6 @@ void AddOffsets(const PlanarTrajectory& correction, const PlanarTrajectory& kept
     }
 }
 
-// Do no harm: scores the input by the correction's objective and keeps it when it scores better;
-// counts the poses whose input lies inside the correction's 95 % region and keeps the input
-// unless they are significantly fewer than the region's own share. Pose 0 (the known start) and
-// poses without a positive-definite covariance are not counted.
-void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField* field,
-                       const CorrectorConfig& cfg, CorrectionResult& result) {
-    if (!Usable(result.status)) return;
-    // The input scored as a correction would be: scale 1 and no heading-rate bias, so that its
-    // scale walk, bias and scale prior terms cost nothing whichever segments the model has.
-    TrajectoryState input = InitialState(estimate, cfg, !field || field->planar());
-    result.input_nll = SoftNll(input, field, cfg.model, input.poses.size() - 1);
-    result.input_nll_lower = result.input_nll < result.nll;
-    if (result.covariance.status == CovarianceStatus::kOk) {
-        const std::vector<PoseCovariance>& cov = result.covariance.poses;
-        const PlanarTrajectory& c = result.corrected;
-        for (std::size_t i = 1; i < cov.size() && i < estimate.size() && i < c.size(); ++i) {
-            const Eigen::Matrix2d& s = cov[i].xy_m2;
-            if (!(s(0, 0) > 0.0 && s.determinant() > 0.0)) continue;
-            const Eigen::Vector2d d = estimate.p_en[i] - c.p_en[i];
-            bool inside = d.dot(s.inverse() * d) <= kChi2TwoDof95;
-            if (cov[i].z_m2 > 0.0 && i < estimate.up_m.size() && i < c.up_m.size()) {
-                inside = inside && std::abs(estimate.up_m[i] - c.up_m[i]) <=
-                                       kNormal95 * std::sqrt(cov[i].z_m2);
-            }
-            ++result.agreement_poses;
-            result.agreement_inside += inside ? 1 : 0;
-        }
-        result.agreement_threshold = AgreementThreshold(estimate, cfg);
-    }
-    if (!cfg.keep_agreeing_input) return;
-    const bool agrees = result.agreement_poses > 0 &&
-                        double(result.agreement_inside) / double(result.agreement_poses) >=
-                            result.agreement_threshold;
-    if (!result.input_nll_lower && !agrees) return;
-    const PlanarTrajectory correction = std::move(result.corrected);
-    KeepInput(estimate, result);
-    // An input kept for its lower NLL lies in another basin than the correction: its covariance
-    // is the model's curvature at the input, not the correction's. An input kept for lying
-    // inside the correction's 95 % region errs by its offset from the correction plus the
-    // correction's own error: its covariance is that second moment.
-    if (result.input_nll_lower && cfg.compute_covariance) {
-        result.covariance = ComputeCovariance(input, field, cfg.model, cfg.covariance);
-    } else if (result.covariance.status == CovarianceStatus::kOk) {
-        AddOffsets(correction, estimate, result.covariance.poses);
-    }
-}
-
 // The BIC price of a correction's unknowns beyond one scale: (scales - 1 + heading-rate biases
 // kept) / 2 ln n.
 double FreedomPrice(const TrajectoryState& s) {
@@ -453,6 +406,53 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
 }
 
 }  // namespace
+
+// Do no harm: scores the input by the correction's objective and keeps it when it scores better;
+// counts the poses whose input lies inside the correction's 95 % region and keeps the input
+// unless they are significantly fewer than the region's own share. Pose 0 (the known start) and
+// poses without a positive-definite covariance are not counted.
+void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField* field,
+                       const CorrectorConfig& cfg, CorrectionResult& result) {
+    if (!Usable(result.status)) return;
+    // The input scored as a correction would be: scale 1 and no heading-rate bias, so that its
+    // scale walk, bias and scale prior terms cost nothing whichever segments the model has.
+    TrajectoryState input = InitialState(estimate, cfg, !field || field->planar());
+    result.input_nll = SoftNll(input, field, cfg.model, input.poses.size() - 1);
+    result.input_nll_lower = result.input_nll < result.nll;
+    if (result.covariance.status == CovarianceStatus::kOk) {
+        const std::vector<PoseCovariance>& cov = result.covariance.poses;
+        const PlanarTrajectory& c = result.corrected;
+        for (std::size_t i = 1; i < cov.size() && i < estimate.size() && i < c.size(); ++i) {
+            const Eigen::Matrix2d& s = cov[i].xy_m2;
+            if (!(s(0, 0) > 0.0 && s.determinant() > 0.0)) continue;
+            const Eigen::Vector2d d = estimate.p_en[i] - c.p_en[i];
+            bool inside = d.dot(s.inverse() * d) <= kChi2TwoDof95;
+            if (cov[i].z_m2 > 0.0 && i < estimate.up_m.size() && i < c.up_m.size()) {
+                inside = inside && std::abs(estimate.up_m[i] - c.up_m[i]) <=
+                                       kNormal95 * std::sqrt(cov[i].z_m2);
+            }
+            ++result.agreement_poses;
+            result.agreement_inside += inside ? 1 : 0;
+        }
+        result.agreement_threshold = AgreementThreshold(estimate, cfg);
+    }
+    if (!cfg.keep_agreeing_input) return;
+    const bool agrees = result.agreement_poses > 0 &&
+                        double(result.agreement_inside) / double(result.agreement_poses) >=
+                            result.agreement_threshold;
+    if (!result.input_nll_lower && !agrees) return;
+    const PlanarTrajectory correction = std::move(result.corrected);
+    KeepInput(estimate, result);
+    // An input kept for its lower NLL lies in another basin than the correction: its covariance
+    // is the model's curvature at the input, not the correction's. An input kept for lying
+    // inside the correction's 95 % region errs by its offset from the correction plus the
+    // correction's own error: its covariance is that second moment.
+    if (result.input_nll_lower && cfg.compute_covariance) {
+        result.covariance = ComputeCovariance(input, field, cfg.model, cfg.covariance);
+    } else if (result.covariance.status == CovarianceStatus::kOk) {
+        AddOffsets(correction, estimate, result.covariance.poses);
+    }
+}
 
 CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const TraversableField* field,
                                    const CorrectorConfig& cfg, const ProgressCallback& progress) {

@@ -399,6 +399,16 @@ CorrectionResult OnlineChain::SolveWhole(const CorrectorConfig& config) const {
     }
     CorrectFromStarts(BatchState(std::move(obs), std::move(poses), config, fix_height_), t_s_,
                       field_, config, result);
+    // The input as pushed, judged against the correction as the batch judges it.
+    PlanarTrajectory input;
+    input.t_s = t_s_;
+    for (const Entry& e : entries_) {
+        input.p_en.push_back(e.initial.p.head<2>());
+        input.up_m.push_back(e.initial.p.z());
+        input.yaw_rad.push_back(e.initial.yaw_rad);
+    }
+    KeepAgreeingInput(input, field_, config, result);
+    DiagnoseCorrection(input, field_, config, result);
     return result;
 }
 

@@ -19,6 +19,14 @@ struct TrajectoryState;      // optim/window_problem.h
 void DiagnoseCorrection(const PlanarTrajectory& estimate, const TraversableField* field,
                         const CorrectorConfig& config, CorrectionResult& result);
 
+/// Do no harm, after a correction of `estimate` (CorrectorConfig::keep_agreeing_input): the input
+/// is scored by the correction's objective and by the correction's 95 % region, and is the result
+/// where the map cannot tell it wrong or where it explains the data better
+/// (CorrectionResult::input_kept, agreement_*, input_nll). CorrectTrajectory calls it; so does a
+/// caller of CorrectFromStarts whose result stands for the batch's (the online corrector's Finish).
+void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField* field,
+                       const CorrectorConfig& config, CorrectionResult& result);
+
 /// Corrects `estimate` (world ENU plane, >= 3 poses) against `field` (may be null: odometry
 /// only). Pose 0 is the known initial position and heading and stays fixed. The whole correction
 /// runs from each of config.start_scales, and the usable one of lowest NLL is kept
@@ -31,8 +39,9 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
                                    const CorrectorConfig& config,
                                    const ProgressCallback& progress = {});
 
-/// CorrectTrajectory without the warnings (DiagnoseCorrection), for callers that need the kept
-/// start's state as well (its incremental corrector, returned; the outcome into `result`).
+/// CorrectTrajectory without the input's test (KeepAgreeingInput) and the warnings
+/// (DiagnoseCorrection), for callers that need the kept start's state as well (its incremental
+/// corrector, returned; the outcome into `result`).
 IncrementalCorrector CorrectFromStarts(const PlanarTrajectory& estimate,
                                        const TraversableField* field, const CorrectorConfig& config,
                                        CorrectionResult& result,
