@@ -247,9 +247,9 @@ void OnlineChain::WaitForSolver(PushResult& r) {
     stats_.wait_s += r.waited_s;
 }
 
-// Requests a solve every update_fraction * chunk_m of path, with restarts where the batch rule
-// completes a chunk (chunk_m of path or max_chunk_poses poses). Without headings, nothing is
-// solved before the first moving step (the poses' heading is not known yet).
+// Requests a solve every update_fraction * chunk_m of path and where the batch rule completes a
+// chunk (chunk_m of path or max_chunk_poses poses). Without headings, nothing is solved before
+// the first moving step (the poses' heading is not known yet).
 void OnlineChain::UpdateSchedule(std::size_t index) {
     if (index == 0 || (has_yaw_ && !*has_yaw_ && !heading_known_)) return;
     if (path_m_ - chunk_start_path_m_ >= cfg_.corrector.chunk_m ||
@@ -257,29 +257,28 @@ void OnlineChain::UpdateSchedule(std::size_t index) {
         chunk_start_ = index;
         chunk_start_path_m_ = path_m_;
         update_path_m_ = path_m_;
-        Request(index, true);
+        Request(index);
     } else if (cfg_.update_fraction > 0.0 && !(first_at_chunk_ && last_request_end_ == 0) &&
                path_m_ - update_path_m_ >= cfg_.update_fraction * cfg_.corrector.chunk_m) {
         update_path_m_ = path_m_;
-        Request(index, false);
+        Request(index);
     }
 }
 
-void OnlineChain::Request(std::size_t end, bool restarts) {
+void OnlineChain::Request(std::size_t end) {
     last_request_end_ = end;
     if (cfg_.synchronous) {
         {
             std::lock_guard<std::mutex> lock(mutex_);
             ++stats_.requests;
         }
-        RunSolve(end, restarts);
+        RunSolve(end);
         return;
     }
     {
         std::lock_guard<std::mutex> lock(mutex_);
         ++stats_.requests;
         requested_ = true;
-        request_restarts_ = request_restarts_ || restarts;
         request_end_ = end;
     }
     wake_.notify_one();
@@ -291,18 +290,16 @@ void OnlineChain::WorkerLoop() {
     LowerWorkerPriority();
     for (;;) {
         std::size_t end = 0;
-        bool restarts = false;
         {
             std::unique_lock<std::mutex> lock(mutex_);
             wake_.wait(lock, [this] { return stop_ || requested_; });
             if (stop_) return;  // Finish solves the whole trajectory itself
             end = std::max(request_end_, pending_first_ + pending_.size() - 1);
-            restarts = request_restarts_;
-            requested_ = request_restarts_ = false;
+            requested_ = false;
             busy_ = true;
         }
         try {
-            RunSolve(end, restarts);
+            RunSolve(end);
         } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(mutex_);
             stats_.worker_error = std::string("window solve failed: ") + e.what();
@@ -315,7 +312,7 @@ void OnlineChain::WorkerLoop() {
 
 // Hands the queued poses up to `end` to the solver (holding the mutex only to take them), solves
 // the window ending at `end` and merges it. On the worker (or inside Push when synchronous).
-void OnlineChain::RunSolve(std::size_t end, bool restarts) {
+void OnlineChain::RunSolve(std::size_t end) {
     std::vector<Entry> entries;
     {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -340,7 +337,11 @@ void OnlineChain::RunSolve(std::size_t end, bool restarts) {
         return;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    const FixedLagSolution solution = solver_->Solve(end, restarts);
+    // Every window is checked as the batch's windows are, and re-solved from the other scale
+    // hypotheses where it fell into a wrong basin (SolveSoftWindow): a chain that took a turn
+    // before its junction, its scale collapsing to hold the poses on the road they left, would
+    // otherwise carry that scale on through the boundary prior.
+    const FixedLagSolution solution = solver_->Solve(end, true);
     const bool record = record_nll_ && solution.usable;
     const double nll = record ? solver_->Nll(solution.end) : 0.0;
     const double solve_s = SecondsSince(t0);

@@ -59,10 +59,10 @@ private:
     /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
     bool ProjectOutput(PoseState& pose) const;
     void UpdateSchedule(std::size_t index);
-    void Request(std::size_t end, bool restarts);
+    void Request(std::size_t end);
     void WaitForSolver(PushResult& r);
     void WorkerLoop();
-    void RunSolve(std::size_t end, bool restarts);
+    void RunSolve(std::size_t end);
     void Merge(const FixedLagSolution& solution, double solve_s);
     void Recompose(std::size_t end);
     void ChainPose(std::size_t i);
@@ -92,7 +92,6 @@ private:
     std::deque<Entry> pending_;              ///< accepted poses not yet handed to the solver
     std::size_t pending_first_ = 0;          ///< stream index of pending_.front()
     bool requested_ = false;                 ///< a solve is wanted (the newest pose's window)
-    bool request_restarts_ = false;          ///< ... with restarts (a chunk ended since the last)
     std::size_t request_end_ = 0;            ///< the requested end (synchronous mode's window end)
     bool busy_ = false;                      ///< the worker is solving
     std::vector<PoseState> current_;         ///< latest estimate of every accepted pose
