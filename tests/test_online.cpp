@@ -364,6 +364,37 @@ TEST_F(OnlineSynthetic, GapAndOutsideMapAreFlagged) {
     const PushResult off = online.Push(far);
     EXPECT_TRUE(off.Accepted() && off.outside_map);
     EXPECT_TRUE(off.corrected.p_en.allFinite());
+    EXPECT_TRUE(off.doubt & kDoubtOffMap);
+    EXPECT_FALSE(gap.doubt & kDoubtOffMap);
+}
+
+// A window that stays in a wrong basin after its restarts flags the outputs chained from it: the
+// estimate turned by 90 degrees about the start leaves the map within metres, no scale hypothesis
+// brings it back, and the lines say so as it happens (the batch verdict only at the end).
+TEST_F(OnlineSynthetic, AChainInAWrongBasinFlagsItsOutputs) {
+    PlanarTrajectory turned = run_->estimate;
+    const Eigen::Rotation2Dd r(M_PI / 2.0);
+    for (std::size_t i = 0; i < turned.size(); ++i) {
+        turned.p_en[i] = turned.p_en[0] + r * (turned.p_en[i] - turned.p_en[0]);
+        turned.yaw_rad[i] += M_PI / 2.0;
+    }
+    OnlineConfig cfg;
+    cfg.synchronous = true;
+    OnlineCorrector online(&setup_->field, cfg);
+    std::size_t poor = 0, solved = 0;
+    for (std::size_t i = 0; i < 600; ++i) {
+        const PushResult p = online.Push(At(turned, i));
+        ASSERT_TRUE(p.Accepted()) << p.message;
+        if (p.correction_age_epochs < i) ++solved;
+        poor += (p.doubt & kDoubtPoorWindow) != 0;
+    }
+    EXPECT_GT(solved, 300u);
+    EXPECT_GT(poor, solved / 2) << "of " << solved << " outputs after a solve";
+    // The untouched drive: no output chains from a window in a wrong basin.
+    OnlineCorrector clean(&setup_->field, cfg);
+    for (std::size_t i = 0; i < 600; ++i) {
+        EXPECT_FALSE(clean.Push(At(run_->estimate, i)).doubt & kDoubtPoorWindow) << i;
+    }
 }
 
 // A 3D field (20 m x 20 m x 4 m, 0.5 m cells) whose corridor distance is corridor(p) everywhere.
@@ -577,8 +608,8 @@ TEST_F(OnlineSynthetic, PipeThroughTheBinary) {
 }
 
 // A producer that pauses longer than gap_warn_s and resumes: the stream goes on and says so once;
-// --status-column adds the correction's age and the pose's covariance to every line; the summary
-// says how fresh they were.
+// --status-column adds the correction's age, the pose's covariance and why it may be wrong to
+// every line; the summary says how fresh they were.
 TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
     const Trajectory est = io::LoadTrajectory(run_->scenario.estimate);
     const std::string dir = TmpDir("pause");
@@ -617,7 +648,7 @@ TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
         std::istringstream ss(line);
         std::vector<double> v;
         for (std::string field; ss >> field;) v.push_back(std::strtod(field.c_str(), nullptr));
-        ASSERT_EQ(v.size(), 14u) << "line " << lines + 1 << ": " << line;
+        ASSERT_EQ(v.size(), 15u) << "line " << lines + 1 << ": " << line;
         // The pose's horizontal covariance: from the known start (0) growing along the odometry,
         // a solved window's marginal after each solve.
         const double var_e = v[11], cov_en = v[12], var_n = v[13];
@@ -626,6 +657,8 @@ TEST_F(OnlineSynthetic, PauseIsReportedOnceAndStatusColumnsAreWritten) {
         if (lines > 0) {
             EXPECT_GT(var_e + var_n, 0.0) << "line " << lines + 1;
         }
+        // Why the pose may be wrong (OnlineDoubt bits).
+        EXPECT_TRUE(v[14] >= 0.0 && v[14] <= 15.0 && v[14] == std::floor(v[14])) << line;
         ++lines;
     }
     EXPECT_EQ(lines, 300u);

@@ -318,6 +318,15 @@ TEST(VerdictOnline, CausalOutputsFartherThanTheInputFail) {
     EXPECT_NEAR(far.check.input_rms_m, 3.0, 1e-9);
     EXPECT_EQ(far.verdict.level, VerdictLevel::kFailed);
     EXPECT_TRUE(HasReason(far.verdict, "followed a wrong branch of the map"));
+    // A smoothed result that is the input kept (the map cannot tell it wrong): the causal outputs
+    // moved it, and the reason says so rather than blaming a branch.
+    CorrectionResult kept = Result(input);
+    kept.input_kept = true;
+    const OnlineVerdict moved = JudgeOnline(input, beside(4.0), &field, model, kept, config);
+    EXPECT_TRUE(moved.check.disagree);
+    EXPECT_EQ(moved.verdict.level, VerdictLevel::kFailed);
+    EXPECT_TRUE(HasReason(moved.verdict, "which is the input itself"));
+    EXPECT_FALSE(HasReason(moved.verdict, "wrong branch"));
 }
 
 }  // namespace

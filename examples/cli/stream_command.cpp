@@ -42,8 +42,10 @@ const char* kStreamUsage =
     "when R is 0 or absent).\n"
     "--status-column appends to each line the age of the correction it used: epochs and seconds\n"
     "(stream time) since the last pose of the solve it chains from, 1 if that was the newest\n"
-    "solve requested before the pose (fresh) else 0, and the pose's horizontal covariance\n"
-    "var_east var_east_north var_north [m^2] (nan when not known).\n"
+    "solve requested before the pose (fresh) else 0, the pose's horizontal covariance\n"
+    "var_east var_east_north var_north [m^2] (nan when not known), and why the pose may be\n"
+    "wrong (bits: 1 off the map, 2 the solve it chains from in a wrong basin, 4 a step-length\n"
+    "scale outside the plausible range, 8 start-scale hypotheses that part; 0: none).\n"
     "Back-pressure: while the input arrives faster than real time (a file piped in, a replay, a\n"
     "burst: its timestamps advance more than twice as fast as the wall clock), the next line is\n"
     "read only once the last pose is at most N epochs past the last solved one (--max-lag N,\n"
@@ -162,10 +164,10 @@ public:
             char status[160];
             const Eigen::Matrix2d& c = r.covariance.xy_m2;
             const double nan = std::numeric_limits<double>::quiet_NaN();
-            std::snprintf(status, sizeof(status), " %zu %.3f %d %.6g %.6g %.6g\n",
+            std::snprintf(status, sizeof(status), " %zu %.3f %d %.6g %.6g %.6g %u\n",
                           r.correction_age_epochs, r.correction_age_s, r.fresh ? 1 : 0,
                           r.covariance_ok ? c(0, 0) : nan, r.covariance_ok ? c(0, 1) : nan,
-                          r.covariance_ok ? c(1, 1) : nan);
+                          r.covariance_ok ? c(1, 1) : nan, r.doubt);
             out.pop_back();
             out += status;
         }

@@ -290,21 +290,15 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
 
 namespace {
 
-// The 95 % quantiles of the chi-square distribution with 2 degrees of freedom (-2 ln 0.05), of
-// the standard normal (two-sided) and the one-sided 95 % quantile of the standard normal.
-constexpr double kChi2TwoDof95 = 5.991464547107979;
+// The two-sided 95 % quantile of the standard normal.
 constexpr double kNormal95 = 1.959963984540054;
-constexpr double kNormalOneSided95 = 1.6448536269514722;
-constexpr double kRegionLevel = 0.95;
 
 // The least share of poses inside the 95 % region that does not reject "the input is as likely
-// as the truth" (a one-sided binomial test at 5 %, normal approximation): the poses are not
-// independent, the map's error holding along a street, so the sample is the path's number of
-// map-offset correlation lengths (CovarianceConfig::map_offset_correlation_m), at least one.
+// as the truth" (AgreementShareThreshold): the poses are not independent, the map's error holding
+// along a street, so the sample is the path's number of map-offset correlation lengths
+// (CovarianceConfig::map_offset_correlation_m).
 double AgreementThreshold(const PlanarTrajectory& estimate, const CorrectorConfig& cfg) {
-    const double path_m = PathLength(estimate);
-    const double n = std::max(1.0, path_m / cfg.covariance.map_offset_correlation_m);
-    return kRegionLevel - kNormalOneSided95 * std::sqrt(kRegionLevel * (1.0 - kRegionLevel) / n);
+    return AgreementShareThreshold(PathLength(estimate) / cfg.covariance.map_offset_correlation_m);
 }
 
 // Keeps the input as the result (CorrectionResult::input_kept).
@@ -425,8 +419,7 @@ void KeepAgreeingInput(const PlanarTrajectory& estimate, const TraversableField*
         for (std::size_t i = 1; i < cov.size() && i < estimate.size() && i < c.size(); ++i) {
             const Eigen::Matrix2d& s = cov[i].xy_m2;
             if (!(s(0, 0) > 0.0 && s.determinant() > 0.0)) continue;
-            const Eigen::Vector2d d = estimate.p_en[i] - c.p_en[i];
-            bool inside = d.dot(s.inverse() * d) <= kChi2TwoDof95;
+            bool inside = InsideRegion95(estimate.p_en[i] - c.p_en[i], s);
             if (cov[i].z_m2 > 0.0 && i < estimate.up_m.size() && i < c.up_m.size()) {
                 inside = inside && std::abs(estimate.up_m[i] - c.up_m[i]) <=
                                        kNormal95 * std::sqrt(cov[i].z_m2);

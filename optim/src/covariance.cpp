@@ -399,6 +399,18 @@ const char* ToString(CovarianceStatus status) {
     return "?";
 }
 
+bool InsideRegion95(const Eigen::Vector2d& d, const Eigen::Matrix2d& xy_m2) {
+    constexpr double kChi2TwoDof95 = 5.991464547107979;  // -2 ln 0.05
+    if (!(xy_m2(0, 0) > 0.0 && xy_m2.determinant() > 0.0)) return false;
+    return d.dot(xy_m2.inverse() * d) <= kChi2TwoDof95;
+}
+
+double AgreementShareThreshold(double samples) {
+    constexpr double kLevel = 0.95, kNormalOneSided95 = 1.6448536269514722;
+    const double n = std::max(1.0, samples);
+    return kLevel - kNormalOneSided95 * std::sqrt(kLevel * (1.0 - kLevel) / n);
+}
+
 Eigen::MatrixXd DenseGaussNewtonHessian(const WindowProblem& problem, const double* x) {
     std::vector<LinearisedTerm> terms;
     problem.LineariseTerms(x, terms);

@@ -277,6 +277,7 @@ FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
         SolveSoftWindow(state_, field_, cfg_, first, end, prior, restarts, stats_);
     ++stats_.windows;
     out.usable = Usable(rep.status);
+    out.poor = field_ && PoorWindow(state_, *field_, cfg_, first, end, rep);
     if (!out.usable) ++stats_.window_failures;
     out.poses.assign(state_.poses.begin() + out.first, state_.poses.begin() + end + 1);
     out.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);

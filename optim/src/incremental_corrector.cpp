@@ -190,6 +190,13 @@ SolveReport RefineInBlocks(TrajectoryState& s, const TraversableField* field,
 
 }  // namespace
 
+bool PoorWindow(const TrajectoryState& s, const TraversableField& field, const CorrectorConfig& cfg,
+                std::size_t first, std::size_t last, const SolveReport& report) {
+    const double nll_per_pose = report.objective / double(last - first + 1);
+    return !Usable(report.status) || nll_per_pose > cfg.restart_nll_per_pose ||
+           OffRoadShare(s, field, first, last, cfg.restart_offroad_m) > cfg.restart_offroad_share;
+}
+
 // One incremental window (soft terms). When its solution leaves many poses off the roads, or
 // explains the window poorly (a high NLL per pose), the window fell into a wrong basin (typically:
 // a turn before the junction is reached, with the scale collapsing to keep the poses on the road
@@ -209,9 +216,7 @@ SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
     if (!restarts || !field) return best;
     // The hypotheses (scale factor, height-change gain) to start from as well.
     std::vector<std::pair<double, double>> starts;
-    const double nll_per_pose = best.objective / double(last - first + 1);
-    if (!Usable(best.status) || nll_per_pose > cfg.restart_nll_per_pose ||
-        OffRoadShare(s, *field, first, last, cfg.restart_offroad_m) > cfg.restart_offroad_share) {
+    if (PoorWindow(s, *field, cfg, first, last, best)) {
         for (double factor : cfg.restart_scale_factors) starts.emplace_back(factor, 1.0);
     }
     if (!s.fix_height && HeightTravel(s, first, last) >= cfg.restart_height_change_m) {

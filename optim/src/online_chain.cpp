@@ -205,6 +205,10 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
         r.fresh = solved_end_ >= requested_before;
         r.covariance = ToPoseCovariance(chain_sigma_);
         r.covariance_ok = chain_sigma_ok_;
+        if (chain_poor_) r.doubt |= kDoubtPoorWindow;
+        const ModelConfig& m = cfg_.corrector.model;
+        const double scale = FrontScale(segment_[r.index]);
+        if (scale < m.scale_range_min || scale > m.scale_range_max) r.doubt |= kDoubtScale;
         r.correction_age_s = pose.t_s - t_s_[r.index - r.correction_age_epochs];
         ++stats_.poses;
         if (!r.fresh) ++stats_.stale_poses;
@@ -214,6 +218,7 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
     }
     if (!ProjectOutput(out)) {
         r.outside_map = true;
+        r.doubt |= kDoubtOffMap;
         r.message = "pose is outside the map: corrected by odometry only";
     }
     r.corrected = ToPlanarPose(pose.t_s, out);
@@ -363,6 +368,7 @@ void OnlineChain::Merge(const FixedLagSolution& sol, double solve_s) {
     front_scales_ = sol.scales;
     front_biases_ = sol.biases;
     solved_end_ = sol.end;
+    chain_poor_ = sol.poor;
     chain_sigma_ok_ = sol.end_covariance_ok;
     if (chain_sigma_ok_) chain_sigma_ = ToPoseMatrix(sol.end_covariance);
     Recompose(sol.end);

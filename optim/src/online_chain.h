@@ -104,6 +104,7 @@ private:
     PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
     bool chain_sigma_ok_ = true;
     bool stop_ = false;
+    bool chain_poor_ = false;  ///< the newest merged solve failed the restart test (PoorWindow)
     OnlineStatistics stats_;
     std::vector<std::pair<std::size_t, double>> nll_at_;
 

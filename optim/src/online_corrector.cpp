@@ -87,8 +87,21 @@ PushResult OnlineCorrector::TakeHypotheses(const PlanarPose& pose, bool ahead_of
     }
     ChooseChain();
     const PoseCovariance mixture = MixtureCovariance(results);
+    // A hypothesis nearly as likely (NLL within 3 of the chosen one's; all alike before the first
+    // choice) that puts the pose outside the chosen output's own 95 % region.
+    const PushResult& chosen = results[chosen_];
+    unsigned doubt = 0;
+    for (std::size_t k = 0; k < results.size() && chosen.covariance_ok; ++k) {
+        const bool near = weights_.empty() || weights_[k] >= std::exp(-3.0) * weights_[chosen_];
+        if (k != chosen_ && near &&
+            !InsideRegion95(results[k].corrected.p_en - chosen.corrected.p_en,
+                            chosen.covariance.xy_m2)) {
+            doubt = kDoubtHypotheses;
+        }
+    }
     PushResult r = std::move(results[chosen_]);
     r.waited_s = waited_s;
+    r.doubt |= doubt;
     if (r.covariance_ok) r.covariance = mixture;
     std::lock_guard<std::mutex> lock(stats_mutex_);
     CountOutput(r, output_stats_);

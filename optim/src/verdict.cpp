@@ -586,7 +586,12 @@ OnlineVerdict JudgeOnline(const PlanarTrajectory& input, const PlanarTrajectory&
                                         field && !field->planar() ? &config : nullptr)};
     const CausalCheck& c = out.check;
     Findings f(out.verdict);
-    if (c.disagree) {
+    if (c.disagree && smoothed.input_kept) {
+        f.Failed("the causal outputs lie " + FormatFixed(c.causal_rms_m, 2) +
+                 " m (RMS) from the smoothed trajectory, which is the input itself (the map cannot "
+                 "tell it wrong): the causal outputs moved an input they should have left as it "
+                 "was");
+    } else if (c.disagree) {
         f.Failed(
             "the causal outputs and the smoothed trajectory lie " + FormatFixed(c.causal_rms_m, 2) +
             " m apart (RMS), farther than the input lies from the smoothed trajectory (" +

@@ -201,6 +201,7 @@ public:
         d["pose_en"] = PlanarPoseToArray(r.corrected);
         d["gap"] = r.gap;
         d["outside_map"] = r.outside_map;
+        d["doubt"] = r.doubt;
         d["message"] = r.message;
         return d;
     }

@@ -164,6 +164,15 @@ struct CovarianceResult {
     std::size_t factor_nonzeros = 0;  ///< entries of L below the diagonal (fill diagnostic)
 };
 
+/// Whether an offset `d` [m] from a pose lies inside that pose's horizontal 95 % region, of
+/// covariance `xy_m2` (false unless it is positive definite).
+bool InsideRegion95(const Eigen::Vector2d& d, const Eigen::Matrix2d& xy_m2);
+/// The least share of trajectory poses inside their 95 % regions that does not reject "the
+/// trajectory is as likely as the truth": 95 % less the one-sided 5 % margin of a binomial share
+/// (normal approximation) over `samples` independent stretches (at least one). The poses of a
+/// stretch of a map offset's correlation length share its error, so that length is one sample.
+double AgreementShareThreshold(double samples);
+
 /// The covariance [East, North, up, yaw] of pose b = ComposeStep(a, step, scale, ...) given pose
 /// a's, to first order: a's through the step's Jacobian plus the step's own noise (StepNoiseOf;
 /// length along the step direction, lateral across it, height unless `fix_height`, heading).

@@ -58,6 +58,9 @@ struct FixedLagSolution {
     std::vector<double> biases;
     bool usable = false;  ///< the solver returned a usable solution (else the state is kept)
     bool boundary_prior = false;  ///< the boundary pose carried a marginalised prior
+    /// The solution fails the windows' restart test even after its restarts (PoorWindow: poses
+    /// off the roads, a high NLL per pose): the chain may be in a wrong basin.
+    bool poor = false;
     /// Covariance of pose `end`: the batch's covariance model (ComputeCovariance) over the
     /// window relative to its boundary, plus the boundary's marginalised uncertainty carried
     /// rigidly (end_covariance_ok false when a matrix could not be factored).

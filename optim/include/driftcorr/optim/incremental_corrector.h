@@ -139,6 +139,13 @@ SolveReport SolveSoftWindow(TrajectoryState& s, const TraversableField* field,
                             const std::optional<PosePriorTerm>& prior, bool restarts,
                             CorrectionResult& stats);
 
+/// The restart test of SolveSoftWindow: whether the solved window [first, last] (`report` its
+/// outcome) looks like a wrong basin: no usable solution, an NLL per pose above
+/// restart_nll_per_pose, or more than restart_offroad_share of its poses farther than
+/// restart_offroad_m from every traversable centre.
+bool PoorWindow(const TrajectoryState& s, const TraversableField& field, const CorrectorConfig& cfg,
+                std::size_t first, std::size_t last, const SolveReport& report);
+
 /// The state of a whole drive for the batch correction: its observations with the dropped-step
 /// episodes repaired (core RepairSpeedEpisodes, model.outlier_accel_mps2), scale and heading-rate
 /// bias segments, the given poses (pose 0: the start), every scale at 1.

@@ -86,6 +86,18 @@ enum class PushStatus {
     kRejectedFinished,   ///< Push after Finish()
 };
 
+/// Why an output is in doubt: the bits of PushResult::doubt.
+enum OnlineDoubt : unsigned {
+    kDoubtOffMap = 1,      ///< the output lies outside the map field (odometry only)
+    kDoubtPoorWindow = 2,  ///< the solve it chains from fails the windows' restart test (a wrong
+                           ///< basin: poses off the roads, a high NLL per pose) after its restarts
+    kDoubtScale = 4,       ///< the step-length scale it moves by lies outside the plausible range
+                           ///< (model.scale_range_min..scale_range_max)
+    kDoubtHypotheses = 8,  ///< with start scales: a hypothesis whose NLL is within 3 of the chosen
+                           ///< one's (a likelihood ratio above 1/20) puts the pose outside the
+                           ///< chosen output's 95 % region (the covariance holds the mixture)
+};
+
 struct PushResult {
     PushStatus status = PushStatus::kAccepted;
     std::string message;       ///< why rejected, or a warning (gap, outside map); empty otherwise
@@ -93,6 +105,8 @@ struct PushResult {
     PlanarPose corrected;      ///< causal estimate (valid when accepted); yaw_rad always set
     bool gap = false;          ///< the step took longer than gap_warn_s
     bool outside_map = false;  ///< the corrected pose lies outside the map field (odometry only)
+    /// OnlineDoubt bits: why this output may be wrong, as it happens (0: none).
+    unsigned doubt = 0;
     /// The solve the output chains from ended this many epochs (poses) before this one...
     std::size_t correction_age_epochs = 0;
     double correction_age_s = 0.0;  ///< ...and this much earlier in stream time [s]
