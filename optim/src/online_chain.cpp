@@ -22,6 +22,11 @@
 
 namespace driftcorr {
 namespace {
+
+// kDoubtOdometry: the input's speed is compared over windows of kSpeedWindowS (three KITTI
+// frames, as the verdict's input-jump test and the dropped-step repair do), and a jump keeps the
+// outputs in doubt for kSpeedEpisodeS (the longest episode the repair takes).
+constexpr double kSpeedWindowS = 0.3, kSpeedEpisodeS = 10.0;
 // The worker runs the solves at a lower scheduling priority than the thread that calls Push, so
 // that on a busy or single core an arriving pose pre-empts a running solve instead of waiting for
 // its time slice (the output latency is the Push path's, not the solver's): nice + 10, and the
@@ -195,6 +200,8 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
     last_p_ = entry.initial.p;
     last_yaw_u_ = yaw_u;
     path_m_ += entry.step.length_m;
+    if (SpeedJump(pose.t_s)) odometry_doubt_until_s_ = pose.t_s + kSpeedEpisodeS;
+    if (pose.t_s <= odometry_doubt_until_s_) r.doubt |= kDoubtOdometry;
     const std::size_t requested_before = last_request_end_;
     UpdateSchedule(r.index);  // synchronous: solves here
     PoseState out;
@@ -250,6 +257,29 @@ void OnlineChain::WaitForSolver(PushResult& r) {
     r.waited_s = SecondsSince(t0);
     ++stats_.waits;
     stats_.wait_s += r.waited_s;
+}
+
+// Whether the input's speed over the last kSpeedWindowS changed faster than
+// model.outlier_accel_mps2 against the kSpeedWindowS before it (the verdict's input-jump test and
+// the dropped-step repair's, made causal). Caller thread.
+bool OnlineChain::SpeedJump(double t_s) {
+    recent_path_.emplace_back(t_s, path_m_);
+    while (recent_path_.size() > 2 && recent_path_[1].first <= t_s - 2.0 * kSpeedWindowS) {
+        recent_path_.pop_front();
+    }
+    const auto& [t0, p0] = recent_path_.front();
+    if (t_s - t0 < 2.0 * kSpeedWindowS - 1e-9) return false;  // not two windows of input yet
+    // The pose nearest the middle of the span.
+    auto mid = recent_path_.begin();
+    for (auto it = recent_path_.begin(); it != recent_path_.end(); ++it) {
+        if (std::abs(it->first - (t_s - kSpeedWindowS)) <
+            std::abs(mid->first - (t_s - kSpeedWindowS)))
+            mid = it;
+    }
+    if (!(mid->first > t0 && t_s > mid->first)) return false;
+    const double before = (mid->second - p0) / (mid->first - t0);
+    const double after = (path_m_ - mid->second) / (t_s - mid->first);
+    return std::abs(after - before) / (0.5 * (t_s - t0)) > cfg_.corrector.model.outlier_accel_mps2;
 }
 
 // Requests a solve every update_fraction * chunk_m of path and where the batch rule completes a

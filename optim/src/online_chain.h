@@ -59,6 +59,7 @@ private:
     /// The output pose: `pose` moved into the corridor (project_output); false outside the map.
     bool ProjectOutput(PoseState& pose) const;
     void UpdateSchedule(std::size_t index);
+    bool SpeedJump(double t_s);
     void Request(std::size_t end);
     void WaitForSolver(PushResult& r);
     void WorkerLoop();
@@ -84,6 +85,10 @@ private:
     std::vector<double> t_s_;
     std::vector<Entry> entries_;        ///< every accepted pose, for SolveWhole
     std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
+    /// The input's (time, path) over the last 0.6 s, and until when a speed jump in it puts the
+    /// outputs in doubt (kDoubtOdometry).
+    std::deque<std::pair<double, double>> recent_path_;
+    double odometry_doubt_until_s_ = -1e300;
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;

@@ -96,7 +96,8 @@ class StreamPose:
     gap: bool                 #: the step took longer than online.gap_warn_s
     outside_map: bool         #: outside the map field: odometry only
     doubt: int                #: why the pose may be wrong, bits: 1 off the map, 2 a window in
-                              #: a wrong basin, 4 an implausible scale, 8 hypotheses that part
+                              #: a wrong basin, 4 an implausible scale, 8 hypotheses that part,
+                              #: 16 a speed jump of the input within 10 s
     message: str
 
 

@@ -96,6 +96,9 @@ enum OnlineDoubt : unsigned {
     kDoubtHypotheses = 8,  ///< with start scales: a hypothesis whose NLL is within 3 of the chosen
                            ///< one's (a likelihood ratio above 1/20) puts the pose outside the
                            ///< chosen output's 95 % region (the covariance holds the mixture)
+    kDoubtOdometry = 16,   ///< the input's speed over 0.3 s changed faster than
+                           ///< model.outlier_accel_mps2 within the last 10 s (dropped or doubled
+                           ///< odometry steps, the longest episode the repair takes)
 };
 
 struct PushResult {
