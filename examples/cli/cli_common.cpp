@@ -84,26 +84,9 @@ void CheckOutputPath(const std::string& path, const std::string& option) {
 
 namespace {
 
-/// Whether a and b name the same file: the same inode when both exist, else the same path once
-/// "..", "." and symbolic links of the existing part are resolved.
-bool SameFile(const std::string& a, const std::string& b) {
-    namespace fs = std::filesystem;
-    std::error_code ec_a, ec_b;
-    const bool a_exists = fs::exists(a, ec_a), b_exists = fs::exists(b, ec_b);
-    if (a_exists && b_exists) {
-        std::error_code ec;
-        return fs::equivalent(a, b, ec);
-    }
-    if (a_exists != b_exists) return false;
-    std::error_code ec;
-    const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
-    const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
-    return !ec && ca == cb;
-}
-
-/// A key that two existing paths share exactly when they are the same file (device and inode,
-/// as SameFile), and two paths that do not exist when they name the same place; nothing when
-/// the path cannot be resolved.
+/// A key that two existing paths share exactly when they are the same file (device and inode),
+/// and two paths that do not exist when they name the same place once "..", "." and symbolic
+/// links of the existing part are resolved; nothing when the path cannot be resolved.
 std::optional<std::string> FileIdentity(const std::string& path) {
     namespace fs = std::filesystem;
     struct stat st {};
@@ -114,6 +97,13 @@ std::optional<std::string> FileIdentity(const std::string& path) {
     const fs::path canonical = fs::weakly_canonical(fs::absolute(path, ec), ec);
     if (ec) return std::nullopt;
     return "path " + canonical.string();
+}
+
+/// Whether a and b name the same file: the same inode when both exist, else the same path once
+/// "..", "." and symbolic links of the existing part are resolved.
+bool SameFile(const std::string& a, const std::string& b) {
+    const std::optional<std::string> ia = FileIdentity(a), ib = FileIdentity(b);
+    return ia && ib && *ia == *ib;
 }
 
 }  // namespace
