@@ -226,6 +226,20 @@ TEST_P(CovarianceVsDense, MarginalsEqualBlocksOfTheDenseInverse) {
         for (int k = 0; k < 4; ++k) ref_unknowns[i][k] = ref.row[p.PoseVar(i, k)];
     }
     ExpectMarginalsOfTheInverse(r, ref.h, ref_unknowns, c.fix_height);
+    // The drive's mean scale: its scale unknowns weighted by the estimated path of each.
+    {
+        using VecL = Eigen::Matrix<long double, Eigen::Dynamic, 1>;
+        VecL w = VecL::Zero(ref.h.rows());
+        long double path_m = 0.0L;
+        for (std::size_t i = 1; i < n; ++i) path_m += s.obs[i].length_m;
+        for (std::size_t i = 1; i < n; ++i) {
+            w[ref.row[p.ScaleVar(s.scale_segment[i])]] += s.obs[i].length_m / path_m;
+        }
+        const VecL hw = ref.h.cast<long double>().llt().solve(w);
+        const double want = std::sqrt(static_cast<double>(w.dot(hw)));
+        ASSERT_GT(want, 0.0);
+        EXPECT_NEAR(r.mean_scale_sd, want, 1e-9 * want);
+    }
     // The same matrix, ordered differently.
     const Eigen::MatrixXd h = Eigen::MatrixXd(system.information);
     for (std::size_t i = 1; i < n; ++i) {
@@ -652,6 +666,9 @@ TEST(Covariance, ALongDriveInBlocksHasTheWholeDrivesMarginals) {
     EXPECT_GT(highest, 1.0) << "the blocks were not computed apart";
     // The statistics add up over the runs, their margins counted in each run that holds them.
     EXPECT_GT(blocks.observations, whole.observations);
+    // The mean scale needs the whole drive's unknowns at once.
+    EXPECT_GT(whole.mean_scale_sd, 0.0);
+    EXPECT_TRUE(std::isnan(blocks.mean_scale_sd));
 }
 
 // A drive longer than refine_block_poses has its final solve in overlapping blocks: the same

@@ -271,12 +271,13 @@ void PrintGlobalScale(std::FILE* out, const pipeline::CorrectionRun& run) {
     }
     const ScaleFitResult& f = *run.scale_fit;
     std::fprintf(out, "scale      found %.4f from the map", run.global_scale);
-    if (Usable(run.result.status) && !run.result.input_kept) {
+    const pipeline::DriveScale drive = pipeline::DriveScaleOf(run);
+    if (std::isfinite(drive.value)) {
         // The drive's scale as corrected: the corrected path over the input's.
-        const double overall = run.global_scale * PathLength(run.result.corrected) /
-                               std::max(PathLength(run.estimate), 1e-9);
-        std::fprintf(out, ", %.4f over the drive with the correction's scale walk (%.4f..%.4f)",
-                     overall, run.global_scale * run.result.scale_min,
+        std::fprintf(out, ", %.4f", drive.value);
+        if (std::isfinite(drive.sd)) std::fprintf(out, " +- %.4f (1 sigma)", drive.sd);
+        std::fprintf(out, " over the drive with the correction's scale walk (%.4f..%.4f)",
+                     run.global_scale * run.result.scale_min,
                      run.global_scale * run.result.scale_max);
     }
     std::fprintf(out, "; searched %.4g..%.4g, the leading path's best fits:", f.scales.front(),

@@ -278,10 +278,13 @@ int FirstNonPositivePivot(const Eigen::VectorXd& d, const SparseMatrix& h_lower)
 
 // Factors the Gauss-Newton Hessian of `terms` and inverts it on the factor's pattern; nothing
 // (and r.status, r.message set) when it is not positive definite. `h` receives the lower triangle.
+// With `functional` (one weight per unknown) r.mean_scale_sd is set to the standard deviation of
+// that linear combination of the unknowns, sqrt(w^T H^-1 w), by one solve with the factor.
 std::optional<SelectedInverse> Invert(const std::vector<LinearisedTerm>& terms,
                                       const Ordering& order, const WindowProblem& problem,
                                       const TrajectoryState& state, CovarianceResult& r,
-                                      SparseMatrix& h) {
+                                      SparseMatrix& h,
+                                      const Eigen::VectorXd* functional = nullptr) {
     h = AssembleLower(terms, order, problem, state);
     Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt(h);
     DRIFTCORR_CHECK(ldlt.permutationP().size() == 0, "the chain order must be kept");
@@ -292,6 +295,9 @@ std::optional<SelectedInverse> Invert(const std::vector<LinearisedTerm>& terms,
                     (bad >= 0 ? "pivot of unknown " + std::to_string(bad) : "a zero pivot") +
                     " of " + std::to_string(order.size) + "): a variable the terms do not observe";
         return std::nullopt;
+    }
+    if (functional) {
+        r.mean_scale_sd = std::sqrt(std::max(functional->dot(ldlt.solve(*functional)), 0.0));
     }
     const SparseMatrix& l = ldlt.matrixL().nestedExpression();
     r.factor_nonzeros = static_cast<std::size_t>(l.nonZeros());
@@ -429,6 +435,22 @@ namespace {
 
 // The covariance of a whole consistent state (ComputeCovariance without blocks); with `prior`,
 // pose 0 is not the known start but a variable under that prior (the past of a block).
+// The weights of the drive's mean step-length scale over the unknowns: each scale segment's
+// share of the estimated path (steps 1..n-1); a segment held fixed adds nothing.
+Eigen::VectorXd MeanScaleWeights(const TrajectoryState& state, const WindowProblem& problem,
+                                 const Ordering& order) {
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(order.size);
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < state.poses.size(); ++i) path_m += state.obs[i].length_m;
+    if (!(path_m > 0.0)) return w;
+    for (std::size_t i = 1; i < state.poses.size(); ++i) {
+        const int v = problem.ScaleVar(state.scale_segment[i]);
+        const int k = v >= 0 ? order.of_var[v] : -1;
+        if (k >= 0) w[k] += state.obs[i].length_m / path_m;
+    }
+    return w;
+}
+
 CovarianceResult WholeCovariance(const TrajectoryState& state, const TraversableField* field,
                                  const ModelConfig& model, const CovarianceConfig& config,
                                  CovarianceSystem* system,
@@ -450,12 +472,13 @@ CovarianceResult WholeCovariance(const TrajectoryState& state, const Traversable
     const Ordering order = ChainOrdering(problem, state, {&offset, &step_error});
     r.unknowns = order.size;
 
+    const Eigen::VectorXd mean_scale = MeanScaleWeights(state, problem, order);
     SparseMatrix h;
-    std::optional<SelectedInverse> sigma = Invert(terms, order, problem, state, r, h);
+    std::optional<SelectedInverse> sigma = Invert(terms, order, problem, state, r, h, &mean_scale);
     if (!sigma) return r;
     Statistics(terms, order, *sigma, r);
     if (config.family_variance_components && ScaleFamilies(r, terms)) {
-        sigma = Invert(terms, order, problem, state, r, h);
+        sigma = Invert(terms, order, problem, state, r, h, &mean_scale);
         if (!sigma) return r;
         Statistics(terms, order, *sigma, r);
     }
@@ -463,6 +486,7 @@ CovarianceResult WholeCovariance(const TrajectoryState& state, const Traversable
 
     r.variance_factor_applied = config.apply_variance_factor;
     const double factor = config.apply_variance_factor ? r.variance_factor : 1.0;
+    r.mean_scale_sd *= std::sqrt(factor);
     r.poses.assign(n, PoseCovariance{});
     for (std::size_t i = 1; i < n; ++i) {
         PoseCovariance c = PoseBlock(*sigma, order, problem, i, state.fix_height);

@@ -82,6 +82,9 @@ class Correction:
     anchor_yaw_deg: float               #: as given, or as estimated (yaw_deg: auto)
     anchor_origin_en: tuple
     global_scale: float                 #: the estimate's positions times it are metres (scale: auto)
+    drive_scale: float                  #: global_scale times the corrected path over the scaled
+                                        #: estimate's (NaN: no correction of its own written)
+    drive_scale_sd: float               #: its standard deviation from the covariance (NaN: none)
     timings: dict                       #: load_s, map_s, solve_s
     windows: int
     iterations: int

@@ -88,6 +88,9 @@ py::dict RunToDict(const pipeline::CorrectionRun& run) {
     d["anchor_yaw_deg"] = RadToDeg(run.anchor.yaw_rad);
     d["anchor_origin_en"] = py::make_tuple(run.anchor.origin_en.x(), run.anchor.origin_en.y());
     d["global_scale"] = run.global_scale;
+    const pipeline::DriveScale drive = pipeline::DriveScaleOf(run);
+    d["drive_scale"] = drive.value;
+    d["drive_scale_sd"] = drive.sd;
     py::dict t;
     t["load_s"] = run.timings.load_s;
     t["map_s"] = run.timings.map_s;

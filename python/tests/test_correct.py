@@ -30,6 +30,12 @@ def test_kitti07_cvo_same_figures_as_cli(cli, workdir):
     # Against docs/FORMAT.md's judging, recomputed from the returned arrays.
     again = driftcorr.metrics(py.corrected_en, py.ground_truth_en)
     assert again["ate_m"] == pytest.approx(py.metrics_after["ate_m"], rel=1e-12)
+    # The drive's scale: the corrected path over the input's (a metric input: global scale 1),
+    # with a standard deviation from the covariance.
+    path = lambda en: np.linalg.norm(np.diff(en[:, 1:3], axis=0), axis=1).sum()
+    assert py.global_scale == 1.0
+    assert py.drive_scale == pytest.approx(path(py.corrected_en) / path(py.estimate_en), rel=1e-9)
+    assert 0.0 < py.drive_scale_sd < 0.05
 
 
 def test_synthetic_same_as_cli_and_better_than_estimate(cli, synthetic, workdir):

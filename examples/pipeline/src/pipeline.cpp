@@ -713,6 +713,16 @@ Trajectory CorrectedInFrame(const PreparedScenario& ps, const PipelineConfig& co
 
 }  // namespace
 
+DriveScale DriveScaleOf(const CorrectionRun& run) {
+    DriveScale d;
+    if (!Usable(run.result.status) || run.result.input_kept) return d;
+    d.value = run.global_scale * PathLength(run.result.corrected) /
+              std::max(PathLength(run.estimate), 1e-9);
+    if (run.result.covariance.status == CovarianceStatus::kOk)
+        d.sd = run.global_scale * run.result.covariance.mean_scale_sd;
+    return d;
+}
+
 CorrectionRun RunCorrection(PreparedScenario ps, const PipelineConfig& config,
                             const ProgressCallback& progress) {
     CorrectionRun run;

@@ -53,6 +53,7 @@
 #include <Eigen/SparseCore>
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -162,6 +163,11 @@ struct CovarianceResult {
     /// holds the statistics after it.
     std::array<double, kTermFamilies> family_factors = UnitFactors();
     std::size_t factor_nonzeros = 0;  ///< entries of L below the diagonal (fill diagnostic)
+    /// Standard deviation of the drive's mean step-length scale, its scale segments weighted by
+    /// the estimated path each covers: the uncertainty of the corrected path over the input's.
+    /// After the variance components, scaled as the poses' are. NaN for a drive computed in
+    /// blocks (CovarianceConfig::block_poses).
+    double mean_scale_sd = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Whether an offset `d` [m] from a pose lies inside that pose's horizontal 95 % region, of

@@ -3,6 +3,7 @@
 // correction -> corrected trajectory in the trajectory's own frame, with metrics when the
 // scenario has ground truth. It wires the library together; the CLI only parses and prints.
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -204,6 +205,17 @@ CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig&
 /// The verdict on `result`, a correction of `prepared` by config.solver (optim/verdict.h).
 Verdict JudgeResult(const PreparedScenario& prepared, const PipelineConfig& config,
                     const CorrectionResult& result);
+
+/// The drive's scale as corrected: the global scale times the corrected path over the scaled
+/// estimate's, and its standard deviation (the correction's covariance of its mean step-length
+/// scale, CovarianceResult::mean_scale_sd, times the global scale). Both NaN when the run wrote
+/// no correction of its own (unusable, or the input kept); the deviation alone when the
+/// covariance was not computed whole.
+struct DriveScale {
+    double value = std::numeric_limits<double>::quiet_NaN();
+    double sd = std::numeric_limits<double>::quiet_NaN();
+};
+DriveScale DriveScaleOf(const CorrectionRun& run);
 
 /// Runs the whole correction (PrepareScenario, then Correct, then metrics). Throws InputError for
 /// bad input. Solver outcomes are reported in run.result, never thrown.
