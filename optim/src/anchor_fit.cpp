@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include "driftcorr/core/angles.h"
 
@@ -48,6 +50,23 @@ void Score(const Lead& lead, const Eigen::Vector2d& pivot, const TraversableFiel
     });
     pl.rms_m = fit.rms_m;
     pl.off_share = fit.off_share;
+}
+
+// Golden-section search for the minimum of rms(f(x)) over [a, b], 12 steps: the better of the
+// last two points and f there.
+template <class F, class Rms>
+auto GoldenSection(const F& f, const Rms& rms, double a, double b) {
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    double x1 = b - g * (b - a), x2 = a + g * (b - a);
+    auto f1 = f(x1), f2 = f(x2);
+    for (int it = 0; it < 12; ++it) {
+        if (rms(f1) <= rms(f2)) {
+            b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = f(x1);
+        } else {
+            a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = f(x2);
+        }
+    }
+    return rms(f1) <= rms(f2) ? std::make_pair(x1, f1) : std::make_pair(x2, f2);
 }
 
 bool Distinct(const AnchorPlacement& a, const AnchorPlacement& b, const AnchorFitConfig& c) {
@@ -192,22 +211,62 @@ ScaleFitResult FitScale(const PlanarTrajectory& estimate, const Eigen::Vector2d&
                 return std::abs(std::log(cand.scale / res.scales[k])) < 2.5 * log_step;
             });
         if (near) continue;
-        // Golden-section search of log(scale) between the neighbours.
-        double a = std::log(res.scales[k]) - log_step, b = std::log(res.scales[k]) + log_step;
-        const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-        double x1 = b - g * (b - a), x2 = a + g * (b - a);
-        AnchorPlacement f1 = fit(std::exp(x1)), f2 = fit(std::exp(x2));
-        for (int it = 0; it < 12; ++it) {
-            if (f1.rms_m <= f2.rms_m) {
-                b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = fit(std::exp(x1));
-            } else {
-                a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = fit(std::exp(x2));
-            }
-        }
+        // Refined in log(scale) between the neighbours.
+        const auto [x, refined] =
+            GoldenSection([&](double log_scale) { return fit(std::exp(log_scale)); },
+                          [](const AnchorPlacement& pl) { return pl.rms_m; },
+                          std::log(res.scales[k]) - log_step, std::log(res.scales[k]) + log_step);
         ScaleCandidate cand{res.scales[k], best[k]};
-        if (f1.rms_m < cand.placement.rms_m) cand = {std::exp(x1), f1};
-        if (f2.rms_m < cand.placement.rms_m) cand = {std::exp(x2), f2};
+        if (refined.rms_m < cand.placement.rms_m) cand = {std::exp(x), refined};
         res.candidates.push_back(cand);
+    }
+    return res;
+}
+
+SizeFit FitSizes(const PlanarTrajectory& t, const TraversableField& field, double range,
+                 const AnchorFitConfig& c) {
+    AnchorFitConfig whole = c;
+    whole.lead_path_m = std::numeric_limits<double>::infinity();
+    const Eigen::Vector2d pivot = t.p_en.front();
+    const Lead lead = LeadSamples(t, pivot, whole);
+    SizeFit res;
+    for (const Eigen::Vector2d& p : lead.p_rel) res.farthest_m = std::max(res.farthest_m, p.norm());
+    const auto fit = [&](double g) {
+        return FitToCentres(field, lead.p_rel.size(), c.reach_m,
+                            [&](std::size_t k) {
+                                const Eigen::Vector2d p = pivot + g * lead.p_rel[k];
+                                return Eigen::Vector3d(p.x(), p.y(), lead.up_m[k]);
+                            })
+            .rms_m;
+    };
+    res.rms_m = fit(1.0);
+    if (!(res.farthest_m > 2.0 * c.reach_m)) return res;  // no size the map could tell apart
+    const double log_step = std::log1p(c.reach_m / res.farthest_m);
+    const double log_range = std::log1p(range);
+    const int half = int(std::ceil(log_range / log_step));
+    std::vector<double> log_g, rms;
+    for (int k = -half; k <= half; ++k) {
+        log_g.push_back(k * log_step);
+        rms.push_back(k == 0 ? res.rms_m : fit(std::exp(k * log_step)));
+    }
+    const double distinct = std::log1p(2.0 * c.reach_m / res.farthest_m);
+    const int n = int(rms.size());
+    for (int k = 0; k < n; ++k) {
+        const bool minimum =
+            (k == 0 || rms[k] < rms[k - 1]) && (k + 1 == n || rms[k] <= rms[k + 1]);
+        if (!minimum || std::abs(log_g[k]) <= distinct) continue;
+        if (res.other && res.other->placement.rms_m <= rms[k]) continue;
+        // Refined in log(g) between the neighbours, staying distinct from g = 1.
+        const auto [x, refined] =
+            GoldenSection([&](double log_size) { return fit(std::exp(log_size)); },
+                          [](double r) { return r; }, log_g[k] - log_step, log_g[k] + log_step);
+        ScaleCandidate cand;
+        cand.scale = std::exp(log_g[k]);
+        cand.placement.rms_m = rms[k];
+        if (refined < rms[k] && std::abs(x) > distinct) {
+            cand.scale = std::exp(x), cand.placement.rms_m = refined;
+        }
+        res.other = cand;
     }
     return res;
 }

@@ -8,6 +8,7 @@
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/check.h"
 #include "driftcorr/core/format.h"
+#include "driftcorr/core/metrics.h"
 #include "driftcorr/core/observables.h"
 
 namespace driftcorr {
@@ -168,6 +169,25 @@ void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, dou
     } else if (v.off_map_share > c.off_map_degraded_share) {
         f.Degraded(what + ": the map does not support them");
     }
+}
+
+// The size of a road drive (VerdictConfig::size_rms_margin_m).
+void JudgeSize(const PlanarTrajectory& est, const PlanarTrajectory& cor,
+               const TraversableField& field, const ModelConfig& model, const VerdictConfig& c,
+               Findings& f) {
+    AnchorFitConfig fit_cfg;
+    fit_cfg.reach_m = model.map_giveup_m;
+    fit_cfg.sample_spacing_m = 5.0;
+    const SizeFit sizes = FitSizes(cor, field, model.scale_prior_sigma, fit_cfg);
+    const double changed = PathLength(cor) / std::max(PathLength(est), 1e-9);
+    if (!sizes.other || sizes.other->placement.rms_m > sizes.rms_m + c.size_rms_margin_m) return;
+    if (std::abs(std::log(changed)) * sizes.farthest_m <= 2.0 * model.map_giveup_m) return;
+    f.Failed("the corrected drive fits the map as well at " + FormatFixed(sizes.other->scale, 4) +
+             " times its size (RMS " + FormatFixed(sizes.other->placement.rms_m, 2) +
+             " m against " + FormatFixed(sizes.rms_m, 2) + " m; its farthest pose " +
+             FormatFixed(std::abs(sizes.other->scale - 1.0) * sizes.farthest_m, 0) +
+             " m away): the map does not tell the drive's size, and the correction changed it by " +
+             FormatFixed(100.0 * (changed - 1.0), 1) + " %");
 }
 
 // How far a corrected height change d_cor lies beyond the estimate's d_est over the same span
@@ -526,6 +546,8 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
     }
     if (field && !field->empty())
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
+    if (field && !field->empty() && field->planar() && scale_estimated && !result.input_kept)
+        JudgeSize(estimate, result.corrected, *field, model, config, f);
     if (field && !field->empty() && !field->planar()) {
         // The heights as the model observed them (a lift ride's lagged reading in the ride);
         // only the 3D checks read them.

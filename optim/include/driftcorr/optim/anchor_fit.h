@@ -120,6 +120,24 @@ ScaleFitResult FitScale(const PlanarTrajectory& estimate, const Eigen::Vector2d&
                         double min_scale, double max_scale, double step_ratio,
                         std::size_t max_candidates, const AnchorFitConfig& config);
 
+/// How the map fits a trajectory at other sizes: its positions scaled about its first pose by
+/// factors g from 1 / (1 + range) to 1 + range (log-spaced, neighbours moving the pose farthest
+/// from the start by at most config.reach_m), the poses one per config.sample_spacing_m of the
+/// whole path, each size scored as FitAnchor scores a placement (RMS of the distance to the
+/// nearest traversable centre, truncated at config.reach_m).
+struct SizeFit {
+    double rms_m = 0.0;       ///< the trajectory at its own size (g = 1)
+    double farthest_m = 0.0;  ///< the farthest pose from the start [m]
+    /// The size of lowest RMS among the local minima that move the farthest pose by more than
+    /// 2 config.reach_m (a placement the map tells apart from g = 1), refined between its
+    /// neighbours: its factor g and RMS (placement.rms_m; no turn or shift). None when no such
+    /// minimum exists.
+    std::optional<ScaleCandidate> other;
+};
+/// Precondition: t has >= 2 poses, range > 0, config valid.
+SizeFit FitSizes(const PlanarTrajectory& t, const TraversableField& field, double range,
+                 const AnchorFitConfig& config);
+
 /// `estimate` with its positions scaled by `scale` about (pivot_en, pivot_up_m); headings and
 /// times unchanged.
 PlanarTrajectory ScaleAbout(const PlanarTrajectory& estimate, const Eigen::Vector2d& pivot_en,

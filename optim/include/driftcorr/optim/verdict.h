@@ -106,6 +106,15 @@ struct VerdictConfig {
     /// An estimated start is ambiguous when the next distinct start's RMS is within this factor
     /// of the best one's.
     double anchor_ambiguous_ratio = 1.5;  ///< [-]
+    /// The size of a road drive (planar field; the solver estimates a scale): the corrected drive
+    /// is scaled about its start by up to the model's scale_prior_sigma either way and scored
+    /// against the map (FitSizes). Another size, distinct for the map (its farthest pose moved by
+    /// more than twice the map term's reach), that fits within size_rms_margin_m of the corrected
+    /// size's RMS, while the correction changed the drive's size (its path over the input's) by
+    /// more than the map tells apart, is failed: the map does not determine the drive's size (a
+    /// single turn after a long straight, onto one of a grid's streets; a straight the correction
+    /// stretched), and the correction chose one.
+    double size_rms_margin_m = 0.5;  ///< [m]
 
     /// The first value kVerdictParams or a rule between its values does not allow.
     std::optional<ParamProblem> FindProblem() const;
@@ -154,6 +163,9 @@ inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
      "...that fits the map with less than this share of the RMS: the start does not fit"},
     {"anchor_ambiguous_ratio", Field<&VerdictConfig::anchor_ambiguous_ratio>(), AtLeast(1.0),
      "an estimated start is ambiguous when the next one's RMS is within this factor"},
+    {"size_rms_margin_m", Field<&VerdictConfig::size_rms_margin_m>(), kNonNegative,
+     "roads: another size of the drive that fits the map within this RMS makes its size "
+     "undetermined"},
 };
 inline constexpr ParamTable<VerdictConfig> kVerdictParams{"verdict", kVerdictParamRows};
 
