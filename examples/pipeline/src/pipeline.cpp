@@ -303,64 +303,31 @@ void CheckMetricSpeeds(const PreparedScenario& ps, const PipelineConfig& config)
             "`scale: S` if its positions times S are metres, or `scale: 1` if it is metric");
 }
 
-// `scale: auto`: the estimate's global scale is searched over the scales that give it a
-// plausible median speed, by how its leading path fits the map (FitScale, every heading when the
-// yaw is auto too); the scales that fit best are each corrected whole and the estimate takes the
-// one of lowest NLL.
+// `scale: auto`: the estimate's global scale (FindGlobalScale), the leading path matched against
+// a field about the anchor and each trial corrected on a field along its own corridor.
 void PlaceScale(const WorldFrame& world, const PipelineConfig& config, PreparedScenario& ps) {
     const io::Scenario& sc = ps.scenario;
-    const double v = MedianMovingSpeed(ps.estimate, CorrectorFor(sc, config).stationary_m);
-    if (!(v > 0.0)) {
-        throw InputError(sc.yaml_path, 0, "anchor.scale",
-                         "`scale: auto` needs an estimate that moves (every step is a stop)");
-    }
-    const SpeedBand band = PlausibleSpeeds(sc);
-    AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
-    fit_cfg.lead_path_m = kScaleLeadPathM;
+    const AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
     const TraversableField lead_field = LeadField(
-        world, config, ps, fit_cfg.lead_path_m + sc.anchor.position_search_m + fit_cfg.reach_m);
-    const Eigen::Vector2d c = ps.anchor.origin_en;
-    ps.scale_fit = FitScale(ps.estimate, c, ps.anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
-                            band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
-    std::vector<ScaleCandidate>& candidates = ps.scale_fit->candidates;
-    if (candidates.empty()) {
-        throw InputError(sc.yaml_path, 0, "anchor.scale", "no scale of the estimate fits the map");
-    }
-    // The leading path alone may fit several scales about as well, and tells the scale only as
-    // well as its first kilometre does: each candidate is corrected whole (its start placed as
-    // the fit placed it), the one of lowest NLL is kept, and the global scale is its scale times
-    // the ratio of that correction's path to the scaled estimate's.
-    // A trial is scored, not written: no window restarts, final solve or covariance.
-    CorrectorConfig corrector = CorrectorFor(sc, config);
-    corrector.restart_nll_per_pose = std::numeric_limits<double>::infinity();
-    corrector.restart_offroad_share = 1.0;
-    corrector.refine = false;
-    corrector.compute_covariance = false;
-    std::size_t kept = 0;
-    double best_nll = std::numeric_limits<double>::infinity(), kept_ratio = 1.0;
+        world, config, ps, kScaleLeadPathM + sc.anchor.position_search_m + fit_cfg.reach_m);
     // Roads are read once; each trial rasterises its own corridor.
     const bool road = sc.mode == io::ScenarioMode::kRoad2d;
     const RoadNetwork roads = road ? LoadRoads(sc, world, config.roads) : RoadNetwork{};
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-        const PlanarTrajectory trial =
-            ApplyPlacement(ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, candidates[k].scale),
-                           c, candidates[k].placement);
-        const std::vector<FieldDisc> corridor =
-            FieldCorridor(trial, c, AnchorFitFor(sc, config), config.field);
+    const Eigen::Vector2d c = ps.anchor.origin_en;
+    const TrialField field_for =
+        [&](const PlanarTrajectory& trial,
+            std::optional<TraversableField>& storage) -> const TraversableField& {
+        const std::vector<FieldDisc> corridor = FieldCorridor(trial, c, fit_cfg, config.field);
         RoadNetwork unused;
-        const TraversableField field =
-            road ? RoadField(sc, roads, config, BoundsOf(trial), &corridor)
-                 : LoadMapField(sc, world, config, BoundsOf(trial), ps.anchor.origin_up_m, unused,
-                                &corridor, WalkHeights(trial, config.indoor_field));
-        const CorrectionResult r = CorrectTrajectory(trial, &field, corrector);
-        candidates[k].nll = Usable(r.status) ? r.nll : std::numeric_limits<double>::infinity();
-        if (candidates[k].nll < best_nll) {
-            best_nll = candidates[k].nll, kept = k;
-            kept_ratio = PathLength(r.corrected) / std::max(PathLength(trial), 1e-9);
-        }
-    }
-    ps.scale_fit->kept = kept;
-    ps.global_scale = candidates[kept].scale * (std::isfinite(best_nll) ? kept_ratio : 1.0);
+        storage = road ? RoadField(sc, roads, config, BoundsOf(trial), &corridor)
+                       : LoadMapField(sc, world, config, BoundsOf(trial), ps.anchor.origin_up_m,
+                                      unused, &corridor, WalkHeights(trial, config.indoor_field));
+        return *storage;
+    };
+    const GlobalScale found =
+        FindGlobalScale(sc, config, ps.estimate, ps.anchor, lead_field, field_for);
+    ps.scale_fit = found.fit;
+    ps.global_scale = found.scale;
     ps.estimate = ScaleAbout(ps.estimate, c, ps.anchor.origin_up_m, ps.global_scale);
 }
 
@@ -635,6 +602,57 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
 }
 
 }  // namespace
+
+GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                            const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                            const TraversableField& lead_field, const TrialField& field_for) {
+    const double v = MedianMovingSpeed(estimate, CorrectorFor(sc, config).stationary_m);
+    if (!(v > 0.0)) {
+        throw InputError(sc.yaml_path, 0, "anchor.scale",
+                         "`scale: auto` needs an estimate that moves (every step is a stop)");
+    }
+    const SpeedBand band = PlausibleSpeeds(sc);
+    AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
+    fit_cfg.lead_path_m = kScaleLeadPathM;
+    const Eigen::Vector2d c = anchor.origin_en;
+    GlobalScale out;
+    out.fit = FitScale(estimate, c, anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
+                       band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
+    std::vector<ScaleCandidate>& candidates = out.fit.candidates;
+    if (candidates.empty()) {
+        throw InputError(sc.yaml_path, 0, "anchor.scale", "no scale of the estimate fits the map");
+    }
+    // The leading path alone may fit several scales about as well, and tells the scale only as
+    // well as its first kilometre does: each candidate is corrected whole (its start placed as
+    // the fit placed it), the one of lowest NLL is kept, and the global scale is its scale times
+    // the ratio of that correction's path to the scaled estimate's.
+    // A trial is scored, not written: no window restarts, final solve or covariance.
+    CorrectorConfig corrector = CorrectorFor(sc, config);
+    corrector.restart_nll_per_pose = std::numeric_limits<double>::infinity();
+    corrector.restart_offroad_share = 1.0;
+    corrector.refine = false;
+    corrector.compute_covariance = false;
+    std::size_t kept = 0;
+    double best_nll = std::numeric_limits<double>::infinity(), kept_ratio = 1.0;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const PlanarTrajectory trial =
+            ApplyPlacement(ScaleAbout(estimate, c, anchor.origin_up_m, candidates[k].scale), c,
+                           candidates[k].placement);
+        std::optional<TraversableField> storage;
+        const TraversableField& field = field_for(trial, storage);
+        const CorrectionResult r = CorrectTrajectory(trial, &field, corrector);
+        candidates[k].nll = Usable(r.status) ? r.nll : std::numeric_limits<double>::infinity();
+        if (candidates[k].nll < best_nll) {
+            best_nll = candidates[k].nll, kept = k;
+            kept_ratio = PathLength(r.corrected) / std::max(PathLength(trial), 1e-9);
+        }
+    }
+    out.fit.kept = kept;
+    out.scale = candidates[kept].scale * (std::isfinite(best_nll) ? kept_ratio : 1.0);
+    return out;
+}
+
+double ScaleLeadPathM() { return kScaleLeadPathM; }
 
 TraversableField LoadMapField(const io::Scenario& sc, const WorldFrame& world,
                               const PipelineConfig& config, const Eigen::AlignedBox2d& region_en,

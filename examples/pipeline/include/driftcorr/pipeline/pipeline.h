@@ -206,6 +206,29 @@ CorrectionResult Correct(const PreparedScenario& prepared, const PipelineConfig&
 Verdict JudgeResult(const PreparedScenario& prepared, const PipelineConfig& config,
                     const CorrectionResult& result);
 
+/// `scale: auto`: the field a trial correction of a candidate scale runs on, for `trial` (its
+/// estimate at that scale, placed): a reference to a field that outlives the call, or one made
+/// into `storage`.
+using TrialField = std::function<const TraversableField&(const PlanarTrajectory& trial,
+                                                         std::optional<TraversableField>& storage)>;
+/// The global scale of an estimate whose size is unknown, found from the map.
+struct GlobalScale {
+    double scale = 1.0;  ///< the estimate's positions times it are metres
+    ScaleFitResult fit;  ///< the search and its candidates (fit.kept: the one kept)
+};
+/// `scale: auto` on `estimate` (world plane, at scale 1, placed by `anchor`): the scales that give
+/// it a plausible median speed for the mode (a vehicle 2-40 m/s, a walker 0.3-2.5 m/s) are searched
+/// on a log grid (2 % apart) by how the first ScaleLeadPathM() of the scaled path fit `lead_field`
+/// (every heading too when the anchor's yaw is auto); the best three minima are each corrected
+/// whole on field_for(trial) (no window restarts, final solve or covariance) and the one of lowest
+/// NLL is kept, its scale times the ratio of its correction's path to the scaled estimate's.
+/// Throws InputError naming anchor.scale when the estimate never moves or no scale fits.
+GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                            const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                            const TraversableField& lead_field, const TrialField& field_for);
+/// The leading path FindGlobalScale matches against the map [m].
+double ScaleLeadPathM();
+
 /// The drive's scale as corrected: the global scale times the corrected path over the scaled
 /// estimate's, and its standard deviation (the correction's covariance of its mean step-length
 /// scale, CovarianceResult::mean_scale_sd, times the global scale). Both NaN when the run wrote
