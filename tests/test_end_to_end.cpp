@@ -20,6 +20,7 @@
 #include "driftcorr/core/errors.h"
 #include "driftcorr/io/trajectory_io.h"
 #include "driftcorr/optim/online_corrector.h"
+#include "driftcorr/pipeline/online.h"
 #include "driftcorr/pipeline/pipeline.h"
 #include "test_support.h"
 
@@ -285,6 +286,53 @@ TEST(Monocular, ItsSizeIsFoundFromTheMapAndWithoutScaleAutoItIsNamed) {
     EXPECT_NE(mono.verdict.level, VerdictLevel::kFailed);
     EXPECT_LE(mono.after->ate_m, 1.5 * metric.after->ate_m);
     EXPECT_LT(mono.after->ate_m, 0.5 * mono.before->ate_m);
+}
+
+// KITTI 00's stereo drive as a monocular tracker would write it (a tenth of its size, drifting
+// 2 % per sqrt(100 m)), streamed with `scale: auto`: the first outputs are the input at the best
+// scale so far (flagged, no covariance); once that scale's leading path is 1000 m the scale is
+// found, the online correction takes every pose so far and its outputs are corrections; the
+// smoothed result is about as good as the batch's.
+TEST(Monocular, TheStreamFindsTheScaleThenCorrects) {
+    const std::string real =
+        std::string(DRIFTCORR_SHARED_DATASETS) + "/kitti00_cvo_stereo_geometric";
+    if (!fs::exists(real + "/scenario.yaml")) GTEST_SKIP() << "real data not present: " << real;
+    const std::string out = TmpDir("mono_stream");
+    ASSERT_EQ(MakeStressVariants(real, out, "--monocular 0.1"), 0);
+    const std::string mono = out + "/mono_0.1_auto";
+    const pipeline::CorrectionRun batch = pipeline::RunCorrection(mono, pipeline::PipelineConfig{});
+    ASSERT_TRUE(Usable(batch.result.status) && batch.after && batch.ground_truth);
+    OnlineConfig online;
+    online.synchronous = true;
+    online.corrector = pipeline::CorrectorFor(batch.scenario, pipeline::PipelineConfig{});
+    pipeline::StreamSession session(pipeline::LoadStreamSetup(mono, {}), online, VerdictConfig{});
+    std::size_t searching = 0, first_correction = 0;
+    for (std::size_t i = 0; i < batch.estimate_frame.size(); ++i) {
+        const auto o = session.Push(batch.estimate_frame.t_s[i], batch.estimate_frame.p_frame[i],
+                                    batch.estimate_frame.q_frame_body[i]);
+        ASSERT_TRUE(o.result.Accepted()) << i << ": " << o.result.message;
+        if (o.result.doubt & kDoubtScaleSearch) {
+            ++searching;
+            EXPECT_EQ(first_correction, 0u) << "flagged again at pose " << i;
+            EXPECT_FALSE(o.result.covariance_ok) << i;
+        } else if (first_correction == 0) {
+            first_correction = i;
+        }
+    }
+    EXPECT_GT(searching, 10u);
+    EXPECT_EQ(first_correction, searching) << "the outputs are corrections once the scale is found";
+    EXPECT_LT(first_correction, batch.estimate_frame.size() / 2);
+    const auto end = session.Finish();
+    ASSERT_TRUE(end && Usable(end->result.status)) << (end ? end->result.message : "");
+    ASSERT_TRUE(end->scale.has_value());
+    EXPECT_EQ(end->outputs_before_scale, searching);
+    EXPECT_NEAR(end->scale->scale, batch.global_scale, 0.1 * batch.global_scale);
+    const double smoothed = ComputeMetrics(end->result.corrected, *batch.ground_truth).ate_m;
+    std::printf(
+        "monocular stream: scale %.3f (batch %.3f) after %zu poses; smoothed ATE %.2f m, "
+        "batch %.2f m\n",
+        end->scale->scale, batch.global_scale, searching, smoothed, batch.after->ate_m);
+    EXPECT_LE(smoothed, 1.5 * batch.after->ate_m + 0.5);
 }
 
 // Rewrites the TUM estimate in `dir` with its steps stretched by `first` over the first half of

@@ -46,7 +46,12 @@ const char* kStreamUsage =
     "var_east var_east_north var_north [m^2] (nan when not known), and why the pose may be\n"
     "wrong (bits: 1 off the map, 2 the solve it chains from in a wrong basin, 4 a step-length\n"
     "scale outside the plausible range, 8 start-scale hypotheses that part, 16 a speed jump of\n"
-    "the input within the last 10 s; 0: none).\n"
+    "the input within the last 10 s, 32 the global scale still searched; 0: none).\n"
+    "An anchor with `scale: auto` (an estimate of unknown size): the global scale is searched on\n"
+    "the poses so far until its leading path is 1000 m (as correct does, its trial corrections\n"
+    "on the poses so far); until then each output is the input at the scale that fits the map\n"
+    "best so far (doubt 32, no covariance), then the online correction starts with every pose\n"
+    "so far at the scale found (that pose's line waits for the search).\n"
     "Back-pressure: while the input arrives faster than real time (a file piped in, a replay, a\n"
     "burst: its timestamps advance more than twice as fast as the wall clock), the next line is\n"
     "read only once the last pose is at most N epochs past the last solved one (--max-lag N,\n"
@@ -136,9 +141,9 @@ using Clock = std::chrono::steady_clock;
 class StreamSession {
 public:
     StreamSession(pipeline::StreamSetup setup, const OnlineConfig& cfg,
-                  const VerdictConfig& verdict_config, bool status_column)
+                  const pipeline::PipelineConfig& pipeline_config, bool status_column)
         : cfg_(cfg),
-          session_(std::move(setup), cfg, verdict_config),
+          session_(std::move(setup), cfg, pipeline_config.verdict, pipeline_config),
           status_column_(status_column) {}
 
     const pipeline::StreamSetup& setup() const { return session_.setup(); }
@@ -191,6 +196,13 @@ public:
         const pipeline::StreamSession::Ending end = *session_.Finish();  // the one Finish
         const CorrectionResult& result = end.result;
         const std::optional<OnlineVerdict>& judged = end.judged;
+        if (!quiet && end.scale) {
+            std::fprintf(stderr,
+                         "driftcorr stream: scale found %.4f from the map's fit of the first "
+                         "%zu poses; their outputs were the input at the best scale so far "
+                         "(doubt 32)\n",
+                         end.scale->scale, end.outputs_before_scale);
+        }
         if (!quiet) {
             std::fprintf(stderr, "driftcorr stream: smoothing: %s (%s)\n",
                          ToString(result.status).c_str(), result.message.c_str());
@@ -379,7 +391,7 @@ int RunStream(const StreamArgs& a) {
     online.synchronous = a.sync;
     if (!a.max_lag.empty()) online.max_lag_epochs = std::stoul(a.max_lag);
     if (std::string m = online.Validate(); !m.empty()) throw InputError(a.config, 0, "", m);
-    StreamSession session(std::move(setup), online, cfg.verdict, a.status_column);
+    StreamSession session(std::move(setup), online, cfg, a.status_column);
     if (!a.quiet) {
         // Poses a producer writes before this line wait in the pipe and arrive as one burst.
         std::fprintf(stderr, "driftcorr stream: map ready after %.2f s; reading poses\n",

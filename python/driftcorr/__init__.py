@@ -100,7 +100,9 @@ class StreamPose:
     outside_map: bool         #: outside the map field: odometry only
     doubt: int                #: why the pose may be wrong, bits: 1 off the map, 2 a window in
                               #: a wrong basin, 4 an implausible scale, 8 hypotheses that part,
-                              #: 16 a speed jump of the input within 10 s
+                              #: 16 a speed jump of the input within 10 s, 32 the global
+                              #: scale still searched (scale: auto; the input at the best
+                              #: scale so far)
     message: str
 
 
@@ -118,6 +120,10 @@ class StreamResult:
     covariance_message: str
     scale_min: float
     scale_max: float
+    #: scale: auto: the global scale found (None: the anchor's scale), and how many outputs came
+    #: before it (doubt 32)
+    global_scale: Optional[float]
+    outputs_before_scale: int
     warnings: List[str]
     #: ok | degraded | failed, as ``driftcorr stream`` judges it (the smoothed trajectory and the
     #: causal outputs against each other); None when not usable

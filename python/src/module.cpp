@@ -176,8 +176,10 @@ py::dict Metrics(const py::object& trajectory_en, const py::object& ground_truth
 /// trajectory and the stream's verdict.
 class Stream {
 public:
-    Stream(pipeline::StreamSetup setup, const OnlineConfig& cfg, const VerdictConfig& verdict)
-        : session_(std::make_unique<pipeline::StreamSession>(std::move(setup), cfg, verdict)) {}
+    Stream(pipeline::StreamSetup setup, const OnlineConfig& cfg,
+           const pipeline::PipelineConfig& pipeline_config)
+        : session_(std::make_unique<pipeline::StreamSession>(
+              std::move(setup), cfg, pipeline_config.verdict, pipeline_config)) {}
 
     ~Stream() {
         py::gil_scoped_release release;  // the worker may be finishing a solve
@@ -232,6 +234,9 @@ public:
         AddCovariance(result, d);
         d["scale_min"] = result.scale_min;
         d["scale_max"] = result.scale_max;
+        d["global_scale"] =
+            end->scale ? py::object(py::float_(end->scale->scale)) : py::object(py::none());
+        d["outputs_before_scale"] = end->outputs_before_scale;
         d["warnings"] = Strings(result.warnings);
         // The stream's verdict (optim/verdict.h JudgeOnline, as `driftcorr stream` prints it).
         d["verdict"] = py::none();
@@ -258,7 +263,7 @@ std::unique_ptr<Stream> MakeStream(pipeline::StreamSetup setup, const pipeline::
     online.corrector = pipeline::CorrectorFor(setup.scenario, cfg);
     online.synchronous = synchronous;
     if (std::string m = online.Validate(); !m.empty()) throw py::value_error("config: " + m);
-    return std::make_unique<Stream>(std::move(setup), online, cfg.verdict);
+    return std::make_unique<Stream>(std::move(setup), online, cfg);
 }
 
 std::unique_ptr<Stream> StreamFromScenario(const py::object& scenario, const py::object& config,

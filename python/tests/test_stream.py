@@ -29,6 +29,8 @@ def test_stream_same_as_cli(cli, synthetic_short, workdir):
     np.testing.assert_allclose(result.corrected, np.loadtxt(smoothed_file), rtol=0, atol=2e-6)
     assert result.covariance.shape == (len(sc.estimate), 8)
     assert result.verdict == "ok", result.reasons
+    # A metric stream: no scale searched.
+    assert result.global_scale is None and result.outputs_before_scale == 0
 
 
 def test_stream_from_map_and_anchor(synthetic_short):

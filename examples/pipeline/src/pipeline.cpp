@@ -603,9 +603,9 @@ PreparedScenario Prepare(io::Scenario scenario, Trajectory estimate_frame,
 
 }  // namespace
 
-GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
-                            const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
-                            const TraversableField& lead_field, const TrialField& field_for) {
+ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                              const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                              const TraversableField& lead_field) {
     const double v = MedianMovingSpeed(estimate, CorrectorFor(sc, config).stationary_m);
     if (!(v > 0.0)) {
         throw InputError(sc.yaml_path, 0, "anchor.scale",
@@ -614,14 +614,22 @@ GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config
     const SpeedBand band = PlausibleSpeeds(sc);
     AnchorFitConfig fit_cfg = AnchorFitFor(sc, config);
     fit_cfg.lead_path_m = kScaleLeadPathM;
-    const Eigen::Vector2d c = anchor.origin_en;
-    GlobalScale out;
-    out.fit = FitScale(estimate, c, anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
-                       band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
-    std::vector<ScaleCandidate>& candidates = out.fit.candidates;
-    if (candidates.empty()) {
+    ScaleFitResult fit =
+        FitScale(estimate, anchor.origin_en, anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
+                 band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
+    if (fit.candidates.empty()) {
         throw InputError(sc.yaml_path, 0, "anchor.scale", "no scale of the estimate fits the map");
     }
+    return fit;
+}
+
+GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                            const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                            const TraversableField& lead_field, const TrialField& field_for) {
+    const Eigen::Vector2d c = anchor.origin_en;
+    GlobalScale out;
+    out.fit = FitGlobalScale(sc, config, estimate, anchor, lead_field);
+    std::vector<ScaleCandidate>& candidates = out.fit.candidates;
     // The leading path alone may fit several scales about as well, and tells the scale only as
     // well as its first kilometre does: each candidate is corrected whole (its start placed as
     // the fit placed it), the one of lowest NLL is kept, and the global scale is its scale times

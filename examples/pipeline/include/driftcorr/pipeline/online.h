@@ -20,6 +20,9 @@ struct StreamSetup {
     RoadNetwork network;
     TraversableField field;  ///< over the whole road network (the route is not known in advance)
     double scale = 1.0;      ///< the anchor's `scale`: a pose's position times it is metres
+    /// `scale: auto`: the scale is found from the stream's leading path (StreamSession); `scale`
+    /// holds it once found.
+    bool scale_auto = false;
 };
 
 /// Loads a scenario's map (its estimate and ground truth are not read) and rasterises the field
@@ -30,9 +33,10 @@ StreamSetup LoadStreamSetup(const std::string& scenario_path, const PipelineConf
 StreamSetup LoadStreamSetup(io::Scenario scenario, const PipelineConfig& config);
 
 /// One pose of the setup's trajectory frame in the world plane (heading from the orientation;
-/// the position times setup.scale).
+/// the position times `scale`, by default setup.scale).
 PlanarPose ToPlanarPose(double t_s, const Eigen::Vector3d& p_frame,
-                        const Eigen::Quaterniond& q_frame_body, const StreamSetup& setup);
+                        const Eigen::Quaterniond& q_frame_body, const StreamSetup& setup,
+                        std::optional<double> scale = std::nullopt);
 
 /// Inverse for a corrected pose: position from `corrected`, orientation `q_frame_body` turned
 /// about Up by corrected.yaw - reference.yaw (as FromPlanar). Returns (p_frame, q_frame_body).
@@ -46,9 +50,19 @@ std::pair<Eigen::Vector3d, Eigen::Quaterniond> FromPlanarPose(
 /// trajectory back into the frame and to judge the stream at its end (JudgeOnline). Push,
 /// Finish, Statistics and the sizes may be called from several threads, one at a time: checking
 /// a pose against the last one and taking it are one step.
+///
+/// With `scale: auto` (setup.scale_auto) the online corrector starts once the global scale is
+/// found: FitGlobalScale on the poses so far, again each time their path has grown by a quarter,
+/// until the best scale's leading path reaches ScaleLeadPathM(); then FindGlobalScale on them
+/// (its trial corrections on the setup's field), and the corrector takes every pose so far at
+/// that scale. Until then each output is the input at the best scale so far, flagged
+/// kDoubtScaleSearch and without covariance, and the stream's judgement at the end leaves those
+/// outputs out (the causal check compares the corrector's outputs only).
 class StreamSession {
 public:
-    StreamSession(StreamSetup setup, const OnlineConfig& config, const VerdictConfig& verdict);
+    /// `pipeline` is read for the scale search of `scale: auto` only.
+    StreamSession(StreamSetup setup, const OnlineConfig& config, const VerdictConfig& verdict,
+                  const PipelineConfig& pipeline = PipelineConfig{});
     ~StreamSession();
     StreamSession(const StreamSession&) = delete;
     StreamSession& operator=(const StreamSession&) = delete;
@@ -66,6 +80,10 @@ public:
         std::optional<OnlineVerdict> judged;  ///< when the result is usable
         /// The smoothed trajectory in the frame, at the accepted poses, when the result is usable.
         std::optional<Trajectory> smoothed;
+        /// `scale: auto`: the scale found and its search, and how many outputs came before it
+        /// (kDoubtScaleSearch).
+        std::optional<GlobalScale> scale;
+        std::size_t outputs_before_scale = 0;
     };
     /// Ends the stream; nothing when it has ended already.
     std::optional<Ending> Finish();
@@ -76,10 +94,24 @@ public:
     const StreamSetup& setup() const { return *setup_; }
 
 private:
+    Output PushSearchingScale(double t_s, const Eigen::Vector3d& p_frame,
+                              const Eigen::Quaterniond& q_frame_body);
+    /// FindGlobalScale on the poses so far; starts the corrector with them at that scale.
+    void StartAtScale();
+
     std::unique_ptr<StreamSetup> setup_;  ///< owns the field the corrector points to
+    PipelineConfig pipeline_;             ///< for the scale search
     OnlineConfig config_;
     VerdictConfig verdict_;
-    std::unique_ptr<OnlineCorrector> corrector_;
+    std::unique_ptr<OnlineCorrector> corrector_;  ///< null while the scale is searched
+    // `scale: auto`, while the scale is searched.
+    PlanarTrajectory unit_;           ///< the accepted poses in the world plane at scale 1
+    double unit_path_ = 0.0;          ///< their path [units of the estimate]
+    double next_fit_path_ = 0.0;      ///< the path at which the next FitGlobalScale runs
+    double provisional_scale_ = 1.0;  ///< the best scale so far
+    bool fitted_ = false;             ///< provisional_scale_ comes from a fit
+    std::optional<GlobalScale> found_;
+    std::size_t before_scale_ = 0;  ///< outputs before the corrector started
     mutable std::mutex mutex_;
     bool finished_ = false;
     Trajectory accepted_;         ///< the accepted inputs, in the frame

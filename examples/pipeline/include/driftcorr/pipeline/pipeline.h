@@ -216,6 +216,11 @@ struct GlobalScale {
     double scale = 1.0;  ///< the estimate's positions times it are metres
     ScaleFitResult fit;  ///< the search and its candidates (fit.kept: the one kept)
 };
+/// The search of FindGlobalScale without its trial corrections: the scales that fit the leading
+/// path of `estimate` best (fit.candidates, best first). Throws as FindGlobalScale.
+ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                              const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                              const TraversableField& lead_field);
 /// `scale: auto` on `estimate` (world plane, at scale 1, placed by `anchor`): the scales that give
 /// it a plausible median speed for the mode (a vehicle 2-40 m/s, a walker 0.3-2.5 m/s) are searched
 /// on a log grid (2 % apart) by how the first ScaleLeadPathM() of the scaled path fit `lead_field`
