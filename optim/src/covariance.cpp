@@ -433,8 +433,6 @@ Eigen::MatrixXd DenseGaussNewtonHessian(const WindowProblem& problem, const doub
 
 namespace {
 
-// The covariance of a whole consistent state (ComputeCovariance without blocks); with `prior`,
-// pose 0 is not the known start but a variable under that prior (the past of a block).
 // The weights of the drive's mean step-length scale over the unknowns: each scale segment's
 // share of the estimated path (steps 1..n-1); a segment held fixed adds nothing.
 Eigen::VectorXd MeanScaleWeights(const TrajectoryState& state, const WindowProblem& problem,
@@ -451,6 +449,8 @@ Eigen::VectorXd MeanScaleWeights(const TrajectoryState& state, const WindowProbl
     return w;
 }
 
+// The covariance of a whole consistent state (ComputeCovariance without blocks); with `prior`,
+// pose 0 is not the known start but a variable under that prior (the past of a block).
 CovarianceResult WholeCovariance(const TrajectoryState& state, const TraversableField* field,
                                  const ModelConfig& model, const CovarianceConfig& config,
                                  CovarianceSystem* system,

@@ -105,6 +105,7 @@ void Append(PlanarTrajectory& t, const PlanarPose& p) {
 
 }  // namespace
 
+// Changes nothing when FindGlobalScale throws.
 void StreamSession::StartAtScale() {
     const TrialField on_setup_field =
         [this](const PlanarTrajectory&,
@@ -160,7 +161,13 @@ StreamSession::Output StreamSession::PushSearchingScale(double t_s, const Eigen:
             // every step a stop so far, or nothing fits yet: the next fit decides
         }
         next_fit_path_ = 1.25 * unit_path_;
-        if (fitted_ && provisional_scale_ * unit_path_ >= ScaleLeadPathM()) StartAtScale();
+        if (fitted_ && provisional_scale_ * unit_path_ >= ScaleLeadPathM()) {
+            try {
+                StartAtScale();
+            } catch (const InputError&) {
+                // not found on these poses: the search goes on (Finish tries once more)
+            }
+        }
     }
     out.input = ToPlanarPose(t_s, p_frame, q_frame_body, *setup_, provisional_scale_);
     out.result.index = accepted_.size() - 1;
@@ -170,7 +177,7 @@ StreamSession::Output StreamSession::PushSearchingScale(double t_s, const Eigen:
     std::tie(out.p_frame, out.q_frame_body) =
         FromPlanarPose(out.result.corrected, out.input, p_frame, q_frame_body,
                        setup_->scenario.frame, setup_->anchor);
-    // The smoothed trajectory and the judgement take the poses at the scale found.
+    // The output as written; Finish leaves it out of the causal check.
     causal_.t_s.push_back(out.result.corrected.t_s);
     causal_.p_en.push_back(out.result.corrected.p_en);
     causal_.up_m.push_back(out.result.corrected.up_m);
