@@ -294,6 +294,38 @@ VariantOutcome RoadRemoved(const InputScenario& input, const StressConfig& confi
 
 // mono_<g> and mono_<g>_auto: the estimate as a monocular tracker would have written it, with
 // the anchor as given and with `scale: auto`. Both share one draw of the scale's walk.
+// A monocular tracker's frame has its origin at the first pose: an input that starts elsewhere
+// (a generated drive in its map's frame) gets the frame moved there, horizontally, with the
+// anchor moved to the start's place (through WGS84, as anchor_off moves it) and the ground truth
+// kept in its place in the world. Nothing changes for an input that starts at its origin.
+std::string MoveOriginToStart(const InputScenario& input, VariantSpec& spec) {
+    const io::Scenario& sc = input.scenario;
+    const Eigen::Vector3d uvh0 = FrameToUvh(sc.frame, input.estimate.p_frame.front());
+    const Eigen::Vector2d start_uv = uvh0.head<2>();
+    if (start_uv.norm() == 0.0) return "";
+    if (!sc.anchor.IsGeographic() || !sc.anchor.yaw_deg) {
+        throw InputError(sc.yaml_path, 0, "anchor",
+                         "mono variants of an estimate that does not start at its origin need a "
+                         "lat/lon anchor with a yaw");
+    }
+    const double yaw_rad = DegToRad(*sc.anchor.yaw_deg);
+    const Eigen::Vector2d start_en = Eigen::Rotation2Dd(yaw_rad) * start_uv;
+    const LocalTangentPlane from({*sc.anchor.lat_deg, *sc.anchor.lon_deg, *sc.anchor.alt_m});
+    const GeoPoint moved = from.ToGeo(Eigen::Vector3d(start_en.x(), start_en.y(), 0.0));
+    spec.anchor.lat_deg = moved.lat_deg;
+    spec.anchor.lon_deg = moved.lon_deg;
+    if (input.ground_truth) {
+        const LocalTangentPlane to({moved.lat_deg, moved.lon_deg, *sc.anchor.alt_m});
+        Trajectory gt;
+        MoveGeographic(*input.ground_truth, sc.frame, yaw_rad, from, to, start_uv, gt);
+        spec.ground_truth = gt;
+    }
+    return Format(
+        "the frame's origin moved to the estimate's start (%.3f, %.3f m in the frame), "
+        "the anchor to lat/lon %.10f, %.10f",
+        start_uv.x(), start_uv.y(), moved.lat_deg, moved.lon_deg);
+}
+
 std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressConfig& config,
                                       std::size_t index) {
     const double g = config.monocular_scales[index];
@@ -301,8 +333,12 @@ std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressCo
     synth::NormalSampler normal(config.seed + kMonocularSeedOffset + index);
     std::vector<double> scales;
     VariantSpec spec = BaseSpec(input, name);
+    const std::string moved = MoveOriginToStart(input, spec);
+    const Eigen::Vector2d start_uv =
+        FrameToUvh(input.scenario.frame, input.estimate.p_frame.front()).head<2>();
     spec.estimate =
-        ScaleLikeMonocular(input.estimate, g, config.monocular_drift_per_100m, normal, &scales);
+        ScaleLikeMonocular(TranslateHorizontal(input.estimate, input.scenario.frame, -start_uv), g,
+                           config.monocular_drift_per_100m, normal, &scales);
     const auto [lo, hi] = std::minmax_element(scales.begin(), scales.end());
     spec.description = {
         Format("variant %s (seed %llu): a monocular tracker's estimate: every step's translation "
@@ -315,6 +351,7 @@ std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressCo
                "length %.1f m -> %.1f m",
                *lo, *hi, *lo / g, *hi / g, ExactNumber(g).c_str(), PathLength_m(input.estimate),
                PathLength_m(*spec.estimate))};
+    if (!moved.empty()) spec.description.push_back(moved);
     VariantSpec with_auto = spec;
     with_auto.name = name + "_auto";
     with_auto.anchor.scale_auto = true;

@@ -333,11 +333,26 @@ void PlaceScale(const WorldFrame& world, const PipelineConfig& config, PreparedS
 
 // The anchor check: the given start, scored against every other heading and against nearby
 // positions at the given heading; the better of the two searches is kept.
+// With `scale: auto` the leading path is checked at the scale it fits best within the model's
+// plausible scale range about the global one: a monocular estimate's scale drifts, and over its
+// first few hundred metres it may differ from the drive's by more than a start a few metres
+// off the roads shows.
 AnchorFitResult CheckAnchor(const PreparedScenario& ps, const PipelineConfig& config) {
     const AnchorFitConfig fit_cfg = AnchorFitFor(ps.scenario, config);
-    AnchorFitResult fit = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, true, 0.0, fit_cfg);
+    PlanarTrajectory leading = ps.estimate;
+    if (ps.scenario.anchor.scale_auto) {
+        const ModelConfig& model = CorrectorFor(ps.scenario, config).model;
+        const ScaleFitResult local =
+            FitScale(ps.estimate, ps.anchor.origin_en, ps.anchor.origin_up_m, ps.field, false,
+                     model.scale_range_min, model.scale_range_max, kScaleStepRatio, 1, fit_cfg);
+        if (!local.candidates.empty()) {
+            leading = ScaleAbout(ps.estimate, ps.anchor.origin_en, ps.anchor.origin_up_m,
+                                 local.candidates.front().scale);
+        }
+    }
+    AnchorFitResult fit = FitAnchor(leading, ps.anchor.origin_en, ps.field, true, 0.0, fit_cfg);
     if (fit_cfg.check_position_radius_m > 0.0) {
-        const AnchorFitResult moved = FitAnchor(ps.estimate, ps.anchor.origin_en, ps.field, false,
+        const AnchorFitResult moved = FitAnchor(leading, ps.anchor.origin_en, ps.field, false,
                                                 fit_cfg.check_position_radius_m, fit_cfg);
         if (moved.best.rms_m < fit.best.rms_m) fit.best = moved.best;
     }
@@ -616,7 +631,7 @@ ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& conf
     fit_cfg.lead_path_m = kScaleLeadPathM;
     ScaleFitResult fit =
         FitScale(estimate, anchor.origin_en, anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
-                 band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 3, fit_cfg);
+                 band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 6, fit_cfg);
     if (fit.candidates.empty()) {
         throw InputError(sc.yaml_path, 0, "anchor.scale", "no scale of the estimate fits the map");
     }

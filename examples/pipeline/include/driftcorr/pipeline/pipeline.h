@@ -224,7 +224,7 @@ ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& conf
 /// `scale: auto` on `estimate` (world plane, at scale 1, placed by `anchor`): the scales that give
 /// it a plausible median speed for the mode (a vehicle 2-40 m/s, a walker 0.3-2.5 m/s) are searched
 /// on a log grid (2 % apart) by how the first ScaleLeadPathM() of the scaled path fit `lead_field`
-/// (every heading too when the anchor's yaw is auto); the best three minima are each corrected
+/// (every heading too when the anchor's yaw is auto); the best six minima are each corrected
 /// whole on field_for(trial) (no window restarts, final solve or covariance) and the one of lowest
 /// NLL is kept, its scale times the ratio of its correction's path to the scaled estimate's.
 /// Throws InputError naming anchor.scale when the estimate never moves or no scale fits.
