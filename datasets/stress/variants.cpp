@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 #include "driftcorr/core/angles.h"
@@ -292,22 +293,17 @@ VariantOutcome RoadRemoved(const InputScenario& input, const StressConfig& confi
                    static_cast<long long>(best->way.id), best->way.along_m)};
 }
 
-// mono_<g> and mono_<g>_auto: the estimate as a monocular tracker would have written it, with
-// the anchor as given and with `scale: auto`. Both share one draw of the scale's walk.
 // A monocular tracker's frame has its origin at the first pose: an input that starts elsewhere
-// (a generated drive in its map's frame) gets the frame moved there, horizontally, with the
-// anchor moved to the start's place (through WGS84, as anchor_off moves it) and the ground truth
-// kept in its place in the world. Nothing changes for an input that starts at its origin.
-std::string MoveOriginToStart(const InputScenario& input, VariantSpec& spec) {
+// (`start_uv` in the frame's horizontal plane; a generated drive in its map's frame) gets the frame
+// moved there, horizontally, with the anchor moved to the start's place (through WGS84, as
+// anchor_off moves it) and the ground truth kept in its place in the world. Returns what it did
+// ("" for an input that starts at its origin); nothing when it cannot (not a lat/lon anchor with a
+// yaw).
+std::optional<std::string> MoveOriginToStart(const InputScenario& input,
+                                             const Eigen::Vector2d& start_uv, VariantSpec& spec) {
     const io::Scenario& sc = input.scenario;
-    const Eigen::Vector3d uvh0 = FrameToUvh(sc.frame, input.estimate.p_frame.front());
-    const Eigen::Vector2d start_uv = uvh0.head<2>();
-    if (start_uv.norm() == 0.0) return "";
-    if (!sc.anchor.IsGeographic() || !sc.anchor.yaw_deg) {
-        throw InputError(sc.yaml_path, 0, "anchor",
-                         "mono variants of an estimate that does not start at its origin need a "
-                         "lat/lon anchor with a yaw");
-    }
+    if (start_uv.norm() == 0.0) return std::string();
+    if (!sc.anchor.IsGeographic() || !sc.anchor.yaw_deg) return std::nullopt;
     const double yaw_rad = DegToRad(*sc.anchor.yaw_deg);
     const Eigen::Vector2d start_en = Eigen::Rotation2Dd(yaw_rad) * start_uv;
     const LocalTangentPlane from({*sc.anchor.lat_deg, *sc.anchor.lon_deg, *sc.anchor.alt_m});
@@ -326,6 +322,8 @@ std::string MoveOriginToStart(const InputScenario& input, VariantSpec& spec) {
         start_uv.x(), start_uv.y(), moved.lat_deg, moved.lon_deg);
 }
 
+// mono_<g> and mono_<g>_auto: the estimate as a monocular tracker would have written it, with
+// the anchor as given and with `scale: auto`. Both share one draw of the scale's walk.
 std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressConfig& config,
                                       std::size_t index) {
     const double g = config.monocular_scales[index];
@@ -333,9 +331,15 @@ std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressCo
     synth::NormalSampler normal(config.seed + kMonocularSeedOffset + index);
     std::vector<double> scales;
     VariantSpec spec = BaseSpec(input, name);
-    const std::string moved = MoveOriginToStart(input, spec);
     const Eigen::Vector2d start_uv =
         FrameToUvh(input.scenario.frame, input.estimate.p_frame.front()).head<2>();
+    const std::optional<std::string> moved = MoveOriginToStart(input, start_uv, spec);
+    if (!moved) {
+        const std::string why =
+            "the estimate does not start at its frame's origin and the anchor is not lat/lon "
+            "with a yaw: the frame cannot be moved to the start, as a tracker's is";
+        return {Skipped(name, why), Skipped(name + "_auto", why)};
+    }
     spec.estimate =
         ScaleLikeMonocular(TranslateHorizontal(input.estimate, input.scenario.frame, -start_uv), g,
                            config.monocular_drift_per_100m, normal, &scales);
@@ -351,7 +355,7 @@ std::vector<VariantOutcome> Monocular(const InputScenario& input, const StressCo
                "length %.1f m -> %.1f m",
                *lo, *hi, *lo / g, *hi / g, ExactNumber(g).c_str(), PathLength_m(input.estimate),
                PathLength_m(*spec.estimate))};
-    if (!moved.empty()) spec.description.push_back(moved);
+    if (!moved->empty()) spec.description.push_back(*moved);
     VariantSpec with_auto = spec;
     with_auto.name = name + "_auto";
     with_auto.anchor.scale_auto = true;
