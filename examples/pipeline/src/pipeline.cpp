@@ -200,6 +200,9 @@ std::optional<HeightRange> WalkHeights(const PlanarTrajectory& estimate,
 // ratio between neighbouring scales of the search.
 constexpr double kScaleLeadPathM = 1000.0;
 constexpr double kScaleStepRatio = 1.02;
+// The leading path's best fits that are corrected whole: on a regular grid of streets several
+// wrong scales fit the leading path better than the right one.
+constexpr std::size_t kScaleCandidates = 6;
 
 // The road field of `network` over `region_en`: along `corridor` when given and tiled, else the
 // whole region. A field the settings cannot make is bad input naming the map.
@@ -631,7 +634,7 @@ ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& conf
     fit_cfg.lead_path_m = kScaleLeadPathM;
     ScaleFitResult fit =
         FitScale(estimate, anchor.origin_en, anchor.origin_up_m, lead_field, !sc.anchor.yaw_deg,
-                 band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, 6, fit_cfg);
+                 band.lo_mps / v, band.hi_mps / v, kScaleStepRatio, kScaleCandidates, fit_cfg);
     if (fit.candidates.empty()) {
         throw InputError(sc.yaml_path, 0, "anchor.scale", "no scale of the estimate fits the map");
     }
