@@ -151,7 +151,7 @@ StreamSession::Output StreamSession::PushSearchingScale(double t_s, const Eigen:
     accepted_.q_frame_body.push_back(q_frame_body);
     // The best scale so far, refitted each time the path has grown by a quarter; the search
     // ends once that scale's leading path is as long as the batch's.
-    if (unit_path_ > 0.0 && unit_path_ >= next_fit_path_ && unit_.size() >= 3) {
+    if (unit_path_ > 0.0 && unit_path_ >= next_fit_path_) {
         try {
             const ScaleFitResult fit =
                 FitGlobalScale(setup_->scenario, pipeline_, unit_, setup_->anchor, setup_->field);

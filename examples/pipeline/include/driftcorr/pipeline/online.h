@@ -108,7 +108,7 @@ private:
     PlanarTrajectory unit_;           ///< the accepted poses in the world plane at scale 1
     double unit_path_ = 0.0;          ///< their path [units of the estimate]
     double next_fit_path_ = 0.0;      ///< the path at which the next FitGlobalScale runs
-    double provisional_scale_ = 1.0;  ///< the best scale so far
+    double provisional_scale_ = 1.0;  ///< the best scale so far (1 before the first move)
     bool fitted_ = false;             ///< provisional_scale_ comes from a fit
     std::optional<GlobalScale> found_;
     std::size_t before_scale_ = 0;  ///< outputs before the corrector started
