@@ -105,15 +105,18 @@ void Append(PlanarTrajectory& t, const PlanarPose& p) {
 
 }  // namespace
 
-// Changes nothing when FindGlobalScale throws.
-void StreamSession::StartAtScale() {
+// Changes nothing when the search throws. `fit`: FitGlobalScale on the poses so far, when the
+// caller has made it.
+void StreamSession::StartAtScale(std::optional<ScaleFitResult> fit) {
     const TrialField on_setup_field =
         [this](const PlanarTrajectory&,
                std::optional<TraversableField>&) -> const TraversableField& {
         return setup_->field;
     };
-    found_ = FindGlobalScale(setup_->scenario, pipeline_, unit_, setup_->anchor, setup_->field,
-                             on_setup_field);
+    if (!fit)
+        fit = FitGlobalScale(setup_->scenario, pipeline_, unit_, setup_->anchor, setup_->field);
+    found_ = ChooseGlobalScale(setup_->scenario, pipeline_, unit_, setup_->anchor, std::move(*fit),
+                               on_setup_field);
     setup_->scale = found_->scale;
     before_scale_ = accepted_.size();
     corrector_ = std::make_unique<OnlineCorrector>(&setup_->field, config_);
@@ -152,18 +155,18 @@ StreamSession::Output StreamSession::PushSearchingScale(double t_s, const Eigen:
     // The best scale so far, refitted each time the path has grown by a quarter; the search
     // ends once that scale's leading path is as long as the batch's.
     if (unit_path_ > 0.0 && unit_path_ >= next_fit_path_) {
+        std::optional<ScaleFitResult> fit;
         try {
-            const ScaleFitResult fit =
-                FitGlobalScale(setup_->scenario, pipeline_, unit_, setup_->anchor, setup_->field);
-            provisional_scale_ = fit.candidates.front().scale;
+            fit = FitGlobalScale(setup_->scenario, pipeline_, unit_, setup_->anchor, setup_->field);
+            provisional_scale_ = fit->candidates.front().scale;
             fitted_ = true;
         } catch (const InputError&) {
             // every step a stop so far, or nothing fits yet: the next fit decides
         }
         next_fit_path_ = 1.25 * unit_path_;
-        if (fitted_ && provisional_scale_ * unit_path_ >= ScaleLeadPathM()) {
+        if (fit && provisional_scale_ * unit_path_ >= ScaleLeadPathM()) {
             try {
-                StartAtScale();
+                StartAtScale(std::move(fit));
             } catch (const InputError&) {
                 // not found on these poses: the search goes on (Finish tries once more)
             }

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "driftcorr/core/angles.h"
+#include "driftcorr/core/check.h"
 #include "driftcorr/core/errors.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/core/metrics.h"
@@ -644,9 +645,17 @@ ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& conf
 GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
                             const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
                             const TraversableField& lead_field, const TrialField& field_for) {
+    return ChooseGlobalScale(sc, config, estimate, anchor,
+                             FitGlobalScale(sc, config, estimate, anchor, lead_field), field_for);
+}
+
+GlobalScale ChooseGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                              const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                              ScaleFitResult fit, const TrialField& field_for) {
+    DRIFTCORR_CHECK(!fit.candidates.empty(), "ChooseGlobalScale needs a candidate");
     const Eigen::Vector2d c = anchor.origin_en;
     GlobalScale out;
-    out.fit = FitGlobalScale(sc, config, estimate, anchor, lead_field);
+    out.fit = std::move(fit);
     std::vector<ScaleCandidate>& candidates = out.fit.candidates;
     // The leading path alone may fit several scales about as well, and tells the scale only as
     // well as its first kilometre does: each candidate is corrected whole (its start placed as

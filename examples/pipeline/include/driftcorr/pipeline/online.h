@@ -96,8 +96,9 @@ public:
 private:
     Output PushSearchingScale(double t_s, const Eigen::Vector3d& p_frame,
                               const Eigen::Quaterniond& q_frame_body);
-    /// FindGlobalScale on the poses so far; starts the corrector with them at that scale.
-    void StartAtScale();
+    /// The scale of the poses so far (ChooseGlobalScale on `fit`, or on a FitGlobalScale made
+    /// here); starts the corrector with them at that scale.
+    void StartAtScale(std::optional<ScaleFitResult> fit = std::nullopt);
 
     std::unique_ptr<StreamSetup> setup_;  ///< owns the field the corrector points to
     PipelineConfig pipeline_;             ///< for the scale search

@@ -231,6 +231,11 @@ ScaleFitResult FitGlobalScale(const io::Scenario& sc, const PipelineConfig& conf
 GlobalScale FindGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
                             const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
                             const TraversableField& lead_field, const TrialField& field_for);
+/// The second half of FindGlobalScale, on a search already made (FitGlobalScale's `fit`, at least
+/// one candidate): each candidate corrected whole, the one of lowest NLL kept.
+GlobalScale ChooseGlobalScale(const io::Scenario& sc, const PipelineConfig& config,
+                              const PlanarTrajectory& estimate, const PlanarAnchor& anchor,
+                              ScaleFitResult fit, const TrialField& field_for);
 /// The leading path FindGlobalScale matches against the map [m].
 double ScaleLeadPathM();
 
