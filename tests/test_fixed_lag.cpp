@@ -216,6 +216,50 @@ TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
     }
 }
 
+// Adopt replaces the solved prefix by another solution of it (a re-localisation): the smoother
+// scores the adopted poses and scales and hands them back as a solve's, and the next solve goes
+// on from the adopted boundary.
+TEST(FixedLagSmoother, AdoptedPrefixIsScoredAndSolvedOn) {
+    CorrectorConfig cfg;
+    cfg.model = Model();
+    cfg.model.heading_bias_segment_s = 0.0;
+    cfg.window_m = 20.0;
+    const PlanarTrajectory est = Curve(60);
+    TrajectoryState s = test::StateFrom(est, cfg.model, true);
+    FixedLagSmoother smoother(s.poses[0], true, nullptr, cfg);
+    for (std::size_t i = 1; i < est.size(); ++i) smoother.Append(s.poses[i], s.obs[i]);
+    const std::size_t end = 30;
+    ASSERT_TRUE(smoother.Solve(end, false).usable);
+    // The prefix stretched by 5 % about pose 0, with the scale that explains it.
+    const double stretch = 1.05;
+    std::vector<PoseState> poses(s.poses.begin(), s.poses.begin() + end + 1);
+    for (PoseState& p : poses)
+        p.p.head<2>() = s.poses[0].p.head<2>() + stretch * (p.p - s.poses[0].p).head<2>();
+    const std::vector<double> scales(end + 1, stretch);
+    const FixedLagSolution adopted = smoother.Adopt(poses, scales, {});
+    ASSERT_TRUE(adopted.usable);
+    EXPECT_FALSE(adopted.poor);
+    ASSERT_EQ(adopted.first, 1u);
+    ASSERT_EQ(adopted.poses.size(), end);
+    for (std::size_t i = 1; i <= end; ++i)
+        EXPECT_LT((adopted.poses[i - 1].p - poses[i].p).norm(), 1e-12) << i;
+    for (double v : adopted.scales) EXPECT_EQ(v, stretch);
+    // Scored as the adopted state is.
+    TrajectoryState expected = s;
+    for (std::size_t i = 0; i <= end; ++i) expected.poses[i] = poses[i];
+    for (int g = 0; g <= s.scale_segment[end]; ++g) expected.scales[g] = stretch;
+    EXPECT_NEAR(smoother.Nll(end), SoftNll(expected, nullptr, cfg.model, end), 1e-9);
+    // The next window's boundary prior has its mean at the prefix's Gauss-Newton minimum:
+    // without a map, the odometry at the prior's scale 1, so the window returns from the
+    // stretch (2.5 m at its boundary) to the estimate.
+    const FixedLagSolution next = smoother.Solve(end + 5, false);
+    ASSERT_TRUE(next.usable);
+    EXPECT_TRUE(next.boundary_prior);
+    EXPECT_GT((poses[next.first].p - s.poses[next.first].p).norm(), 2.0);
+    for (std::size_t i = next.first; i <= next.end; ++i)
+        EXPECT_LT((next.poses[i - next.first].p - s.poses[i].p).norm(), 1e-2) << i;
+}
+
 // Online, a step is read about the median of the steps so far (ModelConfig::step_length_exponent):
 // with the odometry alone each solved step is median_so_far^(1 - e) * L^e long.
 TEST(FixedLagSmoother, StepsAreReadAboutTheMedianOfTheStepsSoFar) {

@@ -397,6 +397,76 @@ TEST_F(OnlineSynthetic, AChainInAWrongBasinFlagsItsOutputs) {
     }
 }
 
+// A chain in doubt has its prefix solved as a whole (OnlineConfig::relocalise_min_m) and
+// continues from it when its own NLL is relocalise_nll_ratio times the prefix's: on the drive
+// turned by 90 degrees every window is poor; a ratio near 0 takes every usable such correction (the
+// first output after each flagged kDoubtRelocalised), a ratio no NLL reaches none, and
+// relocalise_min_m 0 runs none.
+TEST_F(OnlineSynthetic, AChainInDoubtIsRelocalisedFromItsPrefix) {
+    PlanarTrajectory turned = run_->estimate;
+    const Eigen::Rotation2Dd r(M_PI / 2.0);
+    for (std::size_t i = 0; i < turned.size(); ++i) {
+        turned.p_en[i] = turned.p_en[0] + r * (turned.p_en[i] - turned.p_en[0]);
+        turned.yaw_rad[i] += M_PI / 2.0;
+    }
+    auto run = [&](double min_m, double ratio) {
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.relocalise_min_m = min_m;
+        cfg.relocalise_nll_ratio = ratio;
+        OnlineCorrector online(&setup_->field, cfg);
+        std::size_t flagged = 0;
+        for (std::size_t i = 0; i < 1000; ++i) {
+            const PushResult p = online.Push(At(turned, i));
+            EXPECT_TRUE(p.Accepted()) << p.message;
+            flagged += (p.doubt & kDoubtRelocalised) != 0;
+        }
+        const OnlineStatistics st = online.Statistics();
+        EXPECT_EQ(flagged, st.relocalised);
+        return st;
+    };
+    // (A prefix whose correction is not usable is not taken.)
+    const OnlineStatistics every = run(200.0, 1e-12);
+    EXPECT_GE(every.relocalised, 2u);
+    EXPECT_LE(every.relocalised, every.relocalisations);
+    const OnlineStatistics none = run(200.0, 1e12);
+    EXPECT_GE(none.relocalisations, 2u);
+    EXPECT_EQ(none.relocalised, 0u);
+    EXPECT_EQ(run(0.0, 1e-12).relocalisations, 0u);
+}
+
+// With one start scale the first window is solved when the first chunk is complete: the outputs
+// before it are the input itself (the odometry from the known start); with
+// first_solve_at_chunk false, windows are solved within it and move them.
+TEST_F(OnlineSynthetic, TheFirstWindowIsSolvedWithTheFirstChunk) {
+    const PlanarTrajectory& est = run_->estimate;
+    const double chunk_m = OnlineConfig{}.corrector.chunk_m;
+    for (bool at_chunk : {true, false}) {
+        SCOPED_TRACE(at_chunk ? "at the chunk" : "from the start");
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.first_solve_at_chunk = at_chunk;
+        OnlineCorrector online(&setup_->field, cfg);
+        double path = 0.0, moved = 0.0;
+        std::size_t solved = 0;
+        for (std::size_t i = 0; path < chunk_m; ++i) {
+            ASSERT_LT(i + 1, est.size());
+            const PushResult p = online.Push(At(est, i));
+            ASSERT_TRUE(p.Accepted()) << p.message;
+            moved = std::max(moved, (p.corrected.p_en - est.p_en[i]).norm());
+            solved += p.correction_age_epochs < i;
+            path += (est.p_en[i + 1] - est.p_en[i]).norm();
+        }
+        if (at_chunk) {
+            EXPECT_EQ(solved, 0u);
+            EXPECT_LT(moved, 1e-9);
+        } else {
+            EXPECT_GT(solved, 0u);
+            EXPECT_GT(moved, 0.01);
+        }
+    }
+}
+
 // A 3D field (20 m x 20 m x 4 m, 0.5 m cells) whose corridor distance is corridor(p) everywhere.
 template <typename F>
 TraversableField LinearCorridorField(F corridor) {

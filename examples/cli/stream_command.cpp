@@ -256,6 +256,13 @@ private:
                      "driftcorr stream: output latency per line %s; input held back %zu "
                      "times, %.2f s in all (back-pressure)\n",
                      Milliseconds(latency_s_).c_str(), st.waits, st.wait_s);
+        if (st.relocalisations > 0) {
+            std::fprintf(stderr,
+                         "driftcorr stream: re-localisations: %zu (the prefix solved as a "
+                         "whole where the chain was in doubt), %.2f s in all; the chain "
+                         "continued from %zu of them\n",
+                         st.relocalisations, st.relocalise_s, st.relocalised);
+        }
         if (!st.worker_error.empty()) {
             std::fprintf(stderr,
                          "driftcorr stream: warning: %s; later outputs were composed "

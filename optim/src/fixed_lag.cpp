@@ -196,6 +196,39 @@ void FixedLagSmoother::Append(const PoseState& initial, const StepObservation& s
     dist_.push_back(dist_.back() + o.length_m);
 }
 
+FixedLagSolution FixedLagSmoother::Adopt(const std::vector<PoseState>& poses,
+                                         const std::vector<double>& scales,
+                                         const std::vector<double>& biases) {
+    const std::size_t n = solved_end_ + 1;
+    DRIFTCORR_CHECK(
+        poses.size() == n && scales.size() == n && (biases.empty() || biases.size() == n),
+        "Adopt needs a pose, a scale and a bias (or none) for every solved pose");
+    for (std::size_t i = 1; i < n; ++i) {
+        state_.poses[i] = poses[i];
+        state_.scales[state_.scale_segment[i]] = scales[i];
+        if (!state_.bias_segment.empty() && !biases.empty())
+            state_.biases[state_.bias_segment[i]] = biases[i];
+    }
+    window_first_ = 1;  // the next boundary prior: the whole prefix marginalised, pose 0 known
+    window_prior_.reset();
+    FixedLagSolution out = Package(1, solved_end_);
+    out.usable = true;
+    return out;
+}
+
+FixedLagSolution FixedLagSmoother::Package(std::size_t first, std::size_t end) const {
+    FixedLagSolution out;
+    out.first = first;
+    out.end = end;
+    out.poses.assign(state_.poses.begin() + first, state_.poses.begin() + end + 1);
+    out.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
+    if (!state_.bias_segment.empty()) {
+        out.biases.assign(state_.biases.begin(),
+                          state_.biases.begin() + state_.bias_segment[end] + 1);
+    }
+    return out;
+}
+
 // The batch windows' rule: about window_m of path, at most max_window_poses poses.
 std::size_t FixedLagSmoother::WindowFirst(std::size_t end) const {
     std::size_t first = end;
@@ -269,22 +302,14 @@ FixedLagSolution FixedLagSmoother::Solve(std::size_t end, bool restarts) {
     ComposeOdometry(state_, solved_end_ + 1, end);
     const std::size_t first = WindowFirst(end);
     const std::optional<PosePriorTerm> prior = BoundaryPrior(first - 1);
-    FixedLagSolution out;
-    out.end = end;
-    out.first = prior ? first - 1 : first;
-    out.boundary_prior = prior.has_value();
     const SolveReport rep =
         SolveSoftWindow(state_, field_, cfg_, first, end, prior, restarts, stats_);
     ++stats_.windows;
+    FixedLagSolution out = Package(prior ? first - 1 : first, end);
+    out.boundary_prior = prior.has_value();
     out.usable = Usable(rep.status);
     out.poor = field_ && PoorWindow(state_, *field_, cfg_, first, end, rep);
     if (!out.usable) ++stats_.window_failures;
-    out.poses.assign(state_.poses.begin() + out.first, state_.poses.begin() + end + 1);
-    out.scales.assign(state_.scales.begin(), state_.scales.begin() + state_.scale_segment[end] + 1);
-    if (!state_.bias_segment.empty()) {
-        out.biases.assign(state_.biases.begin(),
-                          state_.biases.begin() + state_.bias_segment[end] + 1);
-    }
     if (const std::optional<PoseMatrix> sigma = EndCovariance(first, end, prior)) {
         out.end_covariance = ToPoseCovariance(*sigma);
         out.end_covariance_ok = true;

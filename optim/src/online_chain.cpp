@@ -69,6 +69,7 @@ OnlineChain::OnlineChain(const TraversableField* field, const OnlineConfig& conf
       record_nll_(record_nll),
       first_at_chunk_(first_at_chunk) {
     front_scales_ = {start_scale_};
+    next_check_m_ = cfg_.relocalise_min_m;
     if (!cfg_.synchronous) worker_ = std::thread([this] { WorkerLoop(); });
 }
 
@@ -193,9 +194,9 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
         segment_.push_back(segment);
         bias_segment_.push_back(bias_segment);
         if (r.index > 0) ChainPose(r.index);
+        entries_.push_back(entry);
+        t_s_.push_back(pose.t_s);
     }
-    entries_.push_back(entry);
-    t_s_.push_back(pose.t_s);
     last_t_s_ = pose.t_s;
     last_p_ = entry.initial.p;
     last_yaw_u_ = yaw_u;
@@ -213,6 +214,8 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
         r.covariance = ToPoseCovariance(chain_sigma_);
         r.covariance_ok = chain_sigma_ok_;
         if (chain_poor_) r.doubt |= kDoubtPoorWindow;
+        if (relocalised_) r.doubt |= kDoubtRelocalised;
+        relocalised_ = false;
         const ModelConfig& m = cfg_.corrector.model;
         const double scale = FrontScale(segment_[r.index]);
         if (scale < m.scale_range_min || scale > m.scale_range_max) r.doubt |= kDoubtScale;
@@ -376,15 +379,78 @@ void OnlineChain::RunSolve(std::size_t end) {
     // hypotheses where it fell into a wrong basin (SolveSoftWindow): a chain that took a turn
     // before its junction, its scale collapsing to hold the poses on the road they left, would
     // otherwise carry that scale on through the boundary prior.
-    const FixedLagSolution solution = solver_->Solve(end, true);
+    FixedLagSolution solution = solver_->Solve(end, true);
+    const double solve_s = SecondsSince(t0);
+    bool relocalised = false;
+    if (cfg_.relocalise_min_m > 0.0 && field_ && solution.usable) {
+        const ModelConfig& m = cfg_.corrector.model;
+        const double scale = solution.scales.back();
+        const double path = solver_->PathTo(end);
+        if ((solution.poor || scale < m.scale_range_min || scale > m.scale_range_max) &&
+            path >= next_check_m_) {
+            next_check_m_ = path + std::max(cfg_.relocalise_min_m, cfg_.relocalise_share * path);
+            const auto t1 = std::chrono::steady_clock::now();
+            if (std::optional<FixedLagSolution> adopted = Relocalise(end)) {
+                solution = std::move(*adopted);
+                relocalised = true;
+            }
+            std::lock_guard<std::mutex> lock(mutex_);
+            ++stats_.relocalisations;
+            stats_.relocalise_s += SecondsSince(t1);
+        }
+    }
     const bool record = record_nll_ && solution.usable;
     const double nll = record ? solver_->Nll(solution.end) : 0.0;
-    const double solve_s = SecondsSince(t0);
     std::lock_guard<std::mutex> lock(mutex_);
+    if (relocalised) {
+        ++stats_.relocalised;
+        relocalised_ = true;
+    }
     Merge(solution, solve_s);
     if (record) nll_at_.emplace_back(solution.end, nll);
     busy_ = false;
     solved_.notify_all();
+}
+
+// The prefix [0, end] corrected as the batch corrects a drive, from the chain's start scale. The
+// chain continues from that correction when its own poses (each as its last window solved it)
+// score an NLL more than relocalise_nll_ratio times the correction's (both as
+// FixedLagSmoother::Nll scores them): the chain lost the map, not a window's worth of detail.
+std::optional<FixedLagSolution> OnlineChain::Relocalise(std::size_t end) {
+    std::vector<StepObservation> obs;
+    std::vector<PoseState> poses;
+    std::vector<double> t_s;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        t_s.assign(t_s_.begin(), t_s_.begin() + end + 1);
+        for (std::size_t i = 0; i <= end; ++i) {
+            obs.push_back(i == 0 ? StepObservation{} : entries_[i].step);
+            poses.push_back(entries_[i].initial);
+        }
+    }
+    CorrectorConfig config = cfg_.corrector;
+    config.start_scales = {start_scale_};
+    config.compute_covariance = true;
+    CorrectionResult result;
+    const IncrementalCorrector inc =
+        CorrectFromStarts(BatchState(std::move(obs), std::move(poses), config, fix_height_), t_s,
+                          field_, config, result);
+    if (!Usable(result.status)) return std::nullopt;
+    TrajectoryState solved = inc.state();
+    const double nll = SoftNll(solved, field_, cfg_.corrector.model, end);
+    if (!(solver_->Nll(end) > cfg_.relocalise_nll_ratio * nll)) return std::nullopt;
+    std::vector<double> scales(end + 1), biases;
+    for (std::size_t i = 0; i <= end; ++i) scales[i] = solved.scales[solved.scale_segment[i]];
+    if (!solved.bias_segment.empty()) {
+        biases.resize(end + 1);
+        for (std::size_t i = 0; i <= end; ++i) biases[i] = solved.biases[solved.bias_segment[i]];
+    }
+    FixedLagSolution adopted = solver_->Adopt(solved.poses, scales, biases);
+    if (result.covariance.status == CovarianceStatus::kOk) {
+        adopted.end_covariance = result.covariance.poses[end];
+        adopted.end_covariance_ok = true;
+    }
+    return adopted;
 }
 
 // Replaces the causal estimates of the solved window and re-composes the poses pushed since.

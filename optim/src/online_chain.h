@@ -64,6 +64,9 @@ private:
     void WaitForSolver(PushResult& r);
     void WorkerLoop();
     void RunSolve(std::size_t end);
+    /// The whole prefix [0, end] solved as the batch solves it, and the solution the chain
+    /// continues from if it does (OnlineConfig::relocalise_min_m). Worker.
+    std::optional<FixedLagSolution> Relocalise(std::size_t end);
     void Merge(const FixedLagSolution& solution, double solve_s);
     void Recompose(std::size_t end);
     void ChainPose(std::size_t i);
@@ -82,8 +85,10 @@ private:
            update_path_m_ = 0.0;
     Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
     std::size_t chunk_start_ = 0;
+    // Written by the caller thread under mutex_ (read by the worker under it, by the caller
+    // without it).
     std::vector<double> t_s_;
-    std::vector<Entry> entries_;        ///< every accepted pose, for SolveWhole
+    std::vector<Entry> entries_;        ///< every accepted pose, for SolveWhole and Relocalise
     std::size_t last_request_end_ = 0;  ///< end of the newest request so far (0: none)
     /// The input's (time, path) over the last 0.6 s, and until when a speed jump in it puts the
     /// outputs in doubt (kDoubtOdometry).
@@ -109,12 +114,14 @@ private:
     PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
     bool chain_sigma_ok_ = true;
     bool stop_ = false;
-    bool chain_poor_ = false;  ///< the newest merged solve failed the restart test (PoorWindow)
+    bool chain_poor_ = false;   ///< the newest merged solve failed the restart test (PoorWindow)
+    bool relocalised_ = false;  ///< the chain was re-localised since the last output
     OnlineStatistics stats_;
     std::vector<std::pair<std::size_t, double>> nll_at_;
 
     // Worker-only.
     std::unique_ptr<FixedLagSmoother> solver_;
+    double next_check_m_ = 0.0;  ///< the path from which a re-localisation may run [m]
     std::thread worker_;
 };
 

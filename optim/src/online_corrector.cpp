@@ -44,7 +44,8 @@ OnlineCorrector::OnlineCorrector(const TraversableField* field, const OnlineConf
     DRIFTCORR_CHECK(config.Validate().empty(), "invalid OnlineConfig");
     const std::vector<double>& starts = cfg_.corrector.start_scales;
     if (starts.size() == 1) {
-        chains_.emplace_back(new OnlineChain(field, cfg_, starts.front(), false, false));
+        chains_.emplace_back(
+            new OnlineChain(field, cfg_, starts.front(), false, cfg_.first_solve_at_chunk));
         return;
     }
     // The start nearest the scale prior's mean (the first of equally near ones) solves from the
@@ -189,6 +190,9 @@ OnlineStatistics OnlineCorrector::Statistics() const {
         all.solves += s.solves;
         all.failed_solves += s.failed_solves;
         all.prior_solves += s.prior_solves;
+        all.relocalisations += s.relocalisations;
+        all.relocalised += s.relocalised;
+        all.relocalise_s += s.relocalise_s;
         all.solve_s.insert(all.solve_s.end(), s.solve_s.begin(), s.solve_s.end());
         all.waits += s.waits;
         all.wait_s += s.wait_s;

@@ -102,7 +102,8 @@ class StreamPose:
                               #: a wrong basin, 4 an implausible scale, 8 hypotheses that part,
                               #: 16 a speed jump of the input within 10 s, 32 the global
                               #: scale still searched (scale: auto; the input at the best
-                              #: scale so far)
+                              #: scale so far), 64 the first output after the chain was
+                              #: re-localised from its prefix (it may jump)
     message: str
 
 

@@ -114,10 +114,27 @@ public:
     /// Precondition: 1 <= end <= solved_end().
     double Nll(std::size_t end);
 
+    /// Path length from pose 0 to pose i [m] (the odometry's, as read). Precondition: i < size().
+    double PathTo(std::size_t i) const { return dist_[i]; }
+
+    /// Replaces the solution of poses [0, solved_end()] by another correction of the same poses
+    /// (a re-localisation: the prefix solved as a whole): `poses` their states, `scales` and
+    /// `biases` per pose (the step-length scale and heading-rate bias each pose moved by; biases
+    /// may be empty: none). Each scale segment takes the scale of its last pose, each bias
+    /// segment its bias. The next window's boundary prior is then marginalised from the whole
+    /// prefix at the new solution. Precondition: the three sizes are solved_end() + 1 (biases:
+    /// or 0).
+    /// Returns the adopted solution as a solve's (poses [1, solved_end()], not poor; no
+    /// covariance).
+    FixedLagSolution Adopt(const std::vector<PoseState>& poses, const std::vector<double>& scales,
+                           const std::vector<double>& biases);
+
     /// Window statistics so far (windows, restarts, iterations, failures).
     const CorrectionResult& stats() const { return stats_; }
 
 private:
+    /// Poses [first, end], the scales and biases up to end's segments, as a solution.
+    FixedLagSolution Package(std::size_t first, std::size_t end) const;
     std::size_t WindowFirst(std::size_t end) const;
     std::optional<PosePriorTerm> BoundaryPrior(std::size_t boundary);
     std::optional<PoseMatrix> EndCovariance(std::size_t first, std::size_t end,

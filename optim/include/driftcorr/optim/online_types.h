@@ -42,6 +42,25 @@ struct OnlineConfig {
     /// alone, given the scales, and the earlier segments' scales stay fixed. Measured both ways:
     /// docs/results.md, "Online correction that keeps up".
     bool boundary_scale = true;
+    /// With one start scale (the road defaults): the first window is solved where the batch
+    /// solves its first, when the first chunk (corrector.chunk_m of path) is complete; the
+    /// outputs before it are the odometry from the known start. A window of a few metres cannot
+    /// tell the step-length scale from the map's offset, and its outputs would carry the scale
+    /// it guessed (measured: docs/results.md, "Online recovery"). false: from the first
+    /// update_fraction of a chunk. With several start scales the chain nearest the prior's mean
+    /// solves from the first pose and the others first at the chunk rule, either way.
+    bool first_solve_at_chunk = true;
+    /// Re-localisation (docs/method.md, "The online corrector"): after a window solve that is
+    /// in doubt (kDoubtPoorWindow, kDoubtScale), the whole prefix is solved as the batch solves
+    /// a drive (CorrectFromStarts from the chain's start scale), on the worker; when the
+    /// chain's own poses score an NLL more than relocalise_nll_ratio times that correction's,
+    /// the chain lost the map and continues from the correction (kDoubtRelocalised on the first
+    /// output that does). At most one such solve per max(relocalise_min_m, relocalise_share x
+    /// the path so far) of path, so that all of them cost a few whole corrections.
+    /// relocalise_min_m = 0: never.
+    double relocalise_min_m = 200.0;     ///< [m]
+    double relocalise_share = 0.25;      ///< [-]
+    double relocalise_nll_ratio = 10.0;  ///< [-]
 
     /// The first value kOnlineParams does not allow (corrector is not looked at).
     std::optional<ParamProblem> FindProblem() const;
@@ -67,6 +86,17 @@ inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
     {"boundary_scale", Field<&OnlineConfig::boundary_scale>(), kNoRange,
      "online windows: the boundary prior joint with its segment's scale, which the window "
      "re-estimates"},
+    {"first_solve_at_chunk", Field<&OnlineConfig::first_solve_at_chunk>(), kNoRange,
+     "one start scale: the first window solved when the first chunk is complete; false: after "
+     "update_fraction of it"},
+    {"relocalise_min_m", Field<&OnlineConfig::relocalise_min_m>(), kNonNegative,
+     "a chain in doubt has the whole prefix re-solved, at most once per this much path; 0: "
+     "never"},
+    {"relocalise_share", Field<&OnlineConfig::relocalise_share>(), kNonNegative,
+     "...and this share of the path so far apart"},
+    {"relocalise_nll_ratio", Field<&OnlineConfig::relocalise_nll_ratio>(), kPositive,
+     "the chain continues from the prefix's correction when its own NLL is this many times "
+     "higher"},
 };
 inline constexpr ParamTable<OnlineConfig> kOnlineParams{"online", kOnlineParamRows};
 
@@ -102,6 +132,8 @@ enum OnlineDoubt : unsigned {
     kDoubtScaleSearch = 32,  ///< `scale: auto`: the estimate's global scale is still searched;
                              ///< the output is the input at the scale that fits the map best so
                              ///< far, not a correction (pipeline::StreamSession)
+    kDoubtRelocalised = 64,  ///< the first output after the chain was re-localised: it continues
+                             ///< from the prefix solved as a whole (the output may jump)
 };
 
 struct PushResult {
@@ -138,19 +170,22 @@ struct PushResult {
 
 /// How the online corrector kept up (OnlineCorrector::Statistics).
 struct OnlineStatistics {
-    std::size_t poses = 0;           ///< accepted
-    std::size_t stale_poses = 0;     ///< returned without the newest requested solve (!fresh)
-    std::size_t max_age_epochs = 0;  ///< worst correction_age_epochs
-    double max_age_s = 0.0;          ///< worst correction_age_s [s]
-    std::size_t requests = 0;        ///< solves the schedule asked for
-    std::size_t solves = 0;          ///< solves run (requests - solves were skipped)
-    std::size_t failed_solves = 0;   ///< Ipopt gave no usable solution (state kept)
-    std::size_t prior_solves = 0;    ///< solves whose boundary carried a marginalised prior
-    std::vector<double> solve_s;     ///< wall time of every solve [s]
-    std::size_t waits = 0;           ///< Pushes that waited (back-pressure)
-    double wait_s = 0.0;             ///< total wait [s]
-    std::size_t ahead_poses = 0;     ///< poses that arrived faster than real time
-    std::string worker_error;        ///< a solve that threw (the worker then stopped)
+    std::size_t poses = 0;            ///< accepted
+    std::size_t stale_poses = 0;      ///< returned without the newest requested solve (!fresh)
+    std::size_t max_age_epochs = 0;   ///< worst correction_age_epochs
+    double max_age_s = 0.0;           ///< worst correction_age_s [s]
+    std::size_t requests = 0;         ///< solves the schedule asked for
+    std::size_t solves = 0;           ///< solves run (requests - solves were skipped)
+    std::size_t failed_solves = 0;    ///< Ipopt gave no usable solution (state kept)
+    std::size_t prior_solves = 0;     ///< solves whose boundary carried a marginalised prior
+    std::vector<double> solve_s;      ///< wall time of every solve [s]
+    std::size_t waits = 0;            ///< Pushes that waited (back-pressure)
+    double wait_s = 0.0;              ///< total wait [s]
+    std::size_t ahead_poses = 0;      ///< poses that arrived faster than real time
+    std::size_t relocalisations = 0;  ///< prefixes solved as a whole (relocalise_min_m)
+    std::size_t relocalised = 0;      ///< ...of which the chain continued from
+    double relocalise_s = 0.0;        ///< their wall time, all together [s]
+    std::string worker_error;         ///< a solve that threw (the worker then stopped)
 };
 
 }  // namespace driftcorr
