@@ -44,6 +44,16 @@ PlanarPose At(const PlanarTrajectory& t, std::size_t i) {
     return PlanarPose{t.t_s[i], t.p_en[i], t.up_m[i], t.yaw_rad[i]};
 }
 
+// `t` turned about its first pose by `angle_rad` (positions and headings).
+PlanarTrajectory TurnedAboutStart(PlanarTrajectory t, double angle_rad) {
+    const Eigen::Rotation2Dd r(angle_rad);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+        t.p_en[i] = t.p_en[0] + r * (t.p_en[i] - t.p_en[0]);
+        t.yaw_rad[i] += angle_rad;
+    }
+    return t;
+}
+
 struct OnlineOutcome {
     PlanarTrajectory causal;
     CorrectionResult smoothed;
@@ -372,12 +382,7 @@ TEST_F(OnlineSynthetic, GapAndOutsideMapAreFlagged) {
 // estimate turned by 90 degrees about the start leaves the map within metres, no scale hypothesis
 // brings it back, and the lines say so as it happens (the batch verdict only at the end).
 TEST_F(OnlineSynthetic, AChainInAWrongBasinFlagsItsOutputs) {
-    PlanarTrajectory turned = run_->estimate;
-    const Eigen::Rotation2Dd r(M_PI / 2.0);
-    for (std::size_t i = 0; i < turned.size(); ++i) {
-        turned.p_en[i] = turned.p_en[0] + r * (turned.p_en[i] - turned.p_en[0]);
-        turned.yaw_rad[i] += M_PI / 2.0;
-    }
+    const PlanarTrajectory turned = TurnedAboutStart(run_->estimate, M_PI / 2.0);
     OnlineConfig cfg;
     cfg.synchronous = true;
     OnlineCorrector online(&setup_->field, cfg);
@@ -403,12 +408,7 @@ TEST_F(OnlineSynthetic, AChainInAWrongBasinFlagsItsOutputs) {
 // first output after each flagged kDoubtRelocalised), a ratio no NLL reaches none, and
 // relocalise_min_m 0 runs none.
 TEST_F(OnlineSynthetic, AChainInDoubtIsRelocalisedFromItsPrefix) {
-    PlanarTrajectory turned = run_->estimate;
-    const Eigen::Rotation2Dd r(M_PI / 2.0);
-    for (std::size_t i = 0; i < turned.size(); ++i) {
-        turned.p_en[i] = turned.p_en[0] + r * (turned.p_en[i] - turned.p_en[0]);
-        turned.yaw_rad[i] += M_PI / 2.0;
-    }
+    const PlanarTrajectory turned = TurnedAboutStart(run_->estimate, M_PI / 2.0);
     auto run = [&](double min_m, double ratio) {
         OnlineConfig cfg;
         cfg.synchronous = true;
