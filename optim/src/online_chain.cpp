@@ -417,24 +417,19 @@ void OnlineChain::RunSolve(std::size_t end) {
 // score an NLL more than relocalise_nll_ratio times the correction's (both as
 // FixedLagSmoother::Nll scores them): the chain lost the map, not a window's worth of detail.
 std::optional<FixedLagSolution> OnlineChain::Relocalise(std::size_t end) {
-    std::vector<StepObservation> obs;
-    std::vector<PoseState> poses;
+    CorrectorConfig config = cfg_.corrector;
+    config.start_scales = {start_scale_};
+    config.compute_covariance = true;
+    std::optional<TrajectoryState> initial;
     std::vector<double> t_s;
     {
         std::lock_guard<std::mutex> lock(mutex_);
         t_s.assign(t_s_.begin(), t_s_.begin() + end + 1);
-        for (std::size_t i = 0; i <= end; ++i) {
-            obs.push_back(i == 0 ? StepObservation{} : entries_[i].step);
-            poses.push_back(entries_[i].initial);
-        }
+        initial = BatchStateOf(end, config);
     }
-    CorrectorConfig config = cfg_.corrector;
-    config.start_scales = {start_scale_};
-    config.compute_covariance = true;
     CorrectionResult result;
     const IncrementalCorrector inc =
-        CorrectFromStarts(BatchState(std::move(obs), std::move(poses), config, fix_height_), t_s,
-                          field_, config, result);
+        CorrectFromStarts(std::move(*initial), t_s, field_, config, result);
     if (!Usable(result.status)) return std::nullopt;
     TrajectoryState solved = inc.state();
     const double nll = SoftNll(solved, field_, cfg_.corrector.model, end);
@@ -487,6 +482,17 @@ void OnlineChain::ChainPose(std::size_t i) {
                               FrontBias(bias_segment_[i]));
 }
 
+// The batch's initial state of poses [0, end] as pushed (pose 0 the start).
+TrajectoryState OnlineChain::BatchStateOf(std::size_t end, const CorrectorConfig& config) const {
+    std::vector<StepObservation> obs(1);
+    std::vector<PoseState> poses(1, entries_.front().initial);
+    for (std::size_t i = 1; i <= end; ++i) {
+        obs.push_back(entries_[i].step);
+        poses.push_back(entries_[i].initial);
+    }
+    return BatchState(std::move(obs), std::move(poses), config, fix_height_);
+}
+
 CorrectionResult OnlineChain::SolveWhole(const CorrectorConfig& config) const {
     CorrectionResult result;
     if (t_s_.size() < 3) {
@@ -494,14 +500,7 @@ CorrectionResult OnlineChain::SolveWhole(const CorrectorConfig& config) const {
         return result;
     }
     // The batch solve over the same observations (the online solves do not change it).
-    std::vector<StepObservation> obs(1);
-    std::vector<PoseState> poses(1, entries_.front().initial);
-    for (std::size_t i = 1; i < entries_.size(); ++i) {
-        obs.push_back(entries_[i].step);
-        poses.push_back(entries_[i].initial);
-    }
-    CorrectFromStarts(BatchState(std::move(obs), std::move(poses), config, fix_height_), t_s_,
-                      field_, config, result);
+    CorrectFromStarts(BatchStateOf(entries_.size() - 1, config), t_s_, field_, config, result);
     // The input as pushed, judged against the correction as the batch judges it.
     PlanarTrajectory input;
     input.t_s = t_s_;

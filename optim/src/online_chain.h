@@ -67,6 +67,9 @@ private:
     /// The whole prefix [0, end] solved as the batch solves it, and the solution the chain
     /// continues from if it does (OnlineConfig::relocalise_min_m). Worker.
     std::optional<FixedLagSolution> Relocalise(std::size_t end);
+    /// The batch's initial state (BatchState) of the accepted poses [0, end]; reads entries_
+    /// (the worker: under mutex_).
+    TrajectoryState BatchStateOf(std::size_t end, const CorrectorConfig& config) const;
     void Merge(const FixedLagSolution& solution, double solve_s);
     void Recompose(std::size_t end);
     void ChainPose(std::size_t i);
