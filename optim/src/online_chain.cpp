@@ -18,6 +18,7 @@
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/format.h"
 #include "driftcorr/optim/corrector.h"
+#include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/incremental_corrector.h"
 
 namespace driftcorr {
@@ -208,11 +209,28 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
     PoseState out;
     {
         std::lock_guard<std::mutex> lock(mutex_);
+        // A solve merged since the previous output: where it puts that pose now, against the
+        // region the output claimed.
+        if (r.index > 0 && stats_.solves != solves_seen_) {
+            moved_by_m_ = current_[r.index - 1].p.head<2>() - last_out_en_;
+            moved_ = last_out_cov_ok_ && last_out_xy_m2_.determinant() > 0.0 &&
+                     !InsideRegion95(moved_by_m_, last_out_xy_m2_);
+        }
+        solves_seen_ = stats_.solves;
         out = current_[r.index];
         r.correction_age_epochs = r.index - std::min(solved_end_, r.index);
         r.fresh = solved_end_ >= requested_before;
         r.covariance = ToPoseCovariance(chain_sigma_);
         r.covariance_ok = chain_sigma_ok_;
+        last_out_en_ = out.p.head<2>();
+        last_out_xy_m2_ = r.covariance.xy_m2;
+        last_out_cov_ok_ = r.covariance_ok;
+        if (moved_) {
+            // Two estimates of the chain, the newest solve's and the one before, each as likely:
+            // their mixture about the newest.
+            r.doubt |= kDoubtMoved;
+            if (r.covariance_ok) r.covariance.xy_m2 += 0.5 * moved_by_m_ * moved_by_m_.transpose();
+        }
         if (chain_poor_) r.doubt |= kDoubtPoorWindow;
         if (relocalised_) r.doubt |= kDoubtRelocalised;
         relocalised_ = false;

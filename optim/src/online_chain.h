@@ -97,6 +97,15 @@ private:
     /// outputs in doubt (kDoubtOdometry).
     std::deque<std::pair<double, double>> recent_path_;
     double odometry_doubt_until_s_ = -1e300;
+    /// The previous output before projection, its covariance (East-North) and whether it had one;
+    /// the solves merged when it was taken; whether the newest solve since moved it outside its
+    /// 95 % region, and by how much (kDoubtMoved).
+    Eigen::Vector2d last_out_en_ = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d last_out_xy_m2_ = Eigen::Matrix2d::Zero();
+    bool last_out_cov_ok_ = false;
+    std::size_t solves_seen_ = 0;
+    bool moved_ = false;
+    Eigen::Vector2d moved_by_m_ = Eigen::Vector2d::Zero();
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;

@@ -103,7 +103,9 @@ class StreamPose:
                               #: 16 a speed jump of the input within 10 s, 32 the global
                               #: scale still searched (scale: auto; the input at the best
                               #: scale so far), 64 the first output after the chain was
-                              #: re-localised from its prefix (it may jump)
+                              #: re-localised from its prefix (it may jump), 128 the
+                              #: newest solve moved the previous output outside its
+                              #: 95 % region (the covariance holds the move)
     message: str
 
 

@@ -134,6 +134,8 @@ enum OnlineDoubt : unsigned {
                              ///< far, not a correction (pipeline::StreamSession)
     kDoubtRelocalised = 64,  ///< the first output after the chain was re-localised: it continues
                              ///< from the prefix solved as a whole (the output may jump)
+    kDoubtMoved = 128,  ///< the newest solve moved the previous output outside that output's own
+                        ///< 95 % region: successive solves disagree (the covariance holds both)
 };
 
 struct PushResult {
