@@ -465,6 +465,39 @@ TEST_F(OnlineSynthetic, ASolveThatMovesTheChainOutsideItsRegionIsFlagged) {
     EXPECT_LT(moved, n / 20) << "of " << n;
 }
 
+// A solve that moves the chain outside its region puts the chain in doubt for the
+// re-localisation too (OnlineConfig::relocalise_when_moved): on the drive with its steps shortened
+// to a third for 300 poses (odometry that drops motion), re-localised at every solve in doubt (no
+// spacing), the moves add re-localisations to those of the windows in doubt.
+TEST_F(OnlineSynthetic, ASolveThatMovesTheChainRunsARelocalisation) {
+    PlanarTrajectory shortened = run_->estimate;
+    for (std::size_t i = 301; i < shortened.size(); ++i) {
+        const double keep = i <= 600 ? 1.0 / 3.0 : 1.0;
+        shortened.p_en[i] =
+            shortened.p_en[i - 1] + keep * (run_->estimate.p_en[i] - run_->estimate.p_en[i - 1]);
+    }
+    auto run = [&](bool when_moved) {
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.relocalise_nll_ratio = 1e-12;
+        cfg.relocalise_min_m = 1.0;  // at every solve in doubt
+        cfg.relocalise_share = 0.0;
+        cfg.relocalise_when_moved = when_moved;
+        OnlineCorrector online(&setup_->field, cfg);
+        std::size_t moved = 0;
+        for (std::size_t i = 0; i < shortened.size() && i < 1500; ++i) {
+            const PushResult p = online.Push(At(shortened, i));
+            EXPECT_TRUE(p.Accepted()) << p.message;
+            moved += (p.doubt & kDoubtMoved) != 0;
+        }
+        return std::make_pair(online.Statistics().relocalisations, moved);
+    };
+    const auto [off, moved_off] = run(false);
+    const auto [on, moved_on] = run(true);
+    EXPECT_GT(moved_off, 0u);
+    EXPECT_GT(on, off) << "moved lines " << moved_on << " and " << moved_off;
+}
+
 // With one start scale the first window is solved when the first chunk is complete: the outputs
 // before it are the input itself (the odometry from the known start); with
 // first_solve_at_chunk false, windows are solved within it and move them.

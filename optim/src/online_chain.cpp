@@ -404,7 +404,16 @@ void OnlineChain::RunSolve(std::size_t end) {
         const ModelConfig& m = cfg_.corrector.model;
         const double scale = solution.scales.back();
         const double path = solver_->PathTo(end);
-        if ((solution.poor || scale < m.scale_range_min || scale > m.scale_range_max) &&
+        bool moved = false;  // the solve puts pose `end` outside the chain's region for it
+        if (cfg_.relocalise_when_moved && end >= solution.first) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            const Eigen::Matrix2d xy_m2 = ToPoseCovariance(chain_sigma_).xy_m2;
+            moved = chain_sigma_ok_ && end < current_.size() && xy_m2.determinant() > 0.0 &&
+                    !InsideRegion95(solution.poses[end - solution.first].p.head<2>() -
+                                        current_[end].p.head<2>(),
+                                    xy_m2);
+        }
+        if ((solution.poor || scale < m.scale_range_min || scale > m.scale_range_max || moved) &&
             path >= next_check_m_) {
             next_check_m_ = path + std::max(cfg_.relocalise_min_m, cfg_.relocalise_share * path);
             const auto t1 = std::chrono::steady_clock::now();

@@ -51,16 +51,19 @@ struct OnlineConfig {
     /// solves from the first pose and the others first at the chunk rule, either way.
     bool first_solve_at_chunk = true;
     /// Re-localisation (docs/method.md, "The online corrector"): after a window solve that is
-    /// in doubt (kDoubtPoorWindow, kDoubtScale), the whole prefix is solved as the batch solves
-    /// a drive (CorrectFromStarts from the chain's start scale), on the worker; when the
-    /// chain's own poses score an NLL more than relocalise_nll_ratio times that correction's,
-    /// the chain lost the map and continues from the correction (kDoubtRelocalised on the first
-    /// output that does). At most one such solve per max(relocalise_min_m, relocalise_share x
-    /// the path so far) of path, so that all of them cost a few whole corrections.
-    /// relocalise_min_m = 0: never.
+    /// in doubt (kDoubtPoorWindow, kDoubtScale; kDoubtMoved with relocalise_when_moved), the whole
+    /// prefix is solved as the batch solves a drive (CorrectFromStarts from the chain's start
+    /// scale), on the worker; when the chain's own poses score an NLL more than
+    /// relocalise_nll_ratio times that correction's, the chain lost the map and continues from the
+    /// correction (kDoubtRelocalised on the first output that does). At most one such solve per
+    /// max(relocalise_min_m, relocalise_share x the path so far) of path, so that all of them cost
+    /// a few whole corrections. relocalise_min_m = 0: never.
     double relocalise_min_m = 200.0;     ///< [m]
     double relocalise_share = 0.25;      ///< [-]
     double relocalise_nll_ratio = 10.0;  ///< [-]
+    /// A solve that moves the chain's newest pose outside that pose's 95 % region (kDoubtMoved)
+    /// puts the chain in doubt for the re-localisation too.
+    bool relocalise_when_moved = true;
 
     /// The first value kOnlineParams does not allow (corrector is not looked at).
     std::optional<ParamProblem> FindProblem() const;
@@ -97,6 +100,9 @@ inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
     {"relocalise_nll_ratio", Field<&OnlineConfig::relocalise_nll_ratio>(), kPositive,
      "the chain continues from the prefix's correction when its own NLL is this many times "
      "higher"},
+    {"relocalise_when_moved", Field<&OnlineConfig::relocalise_when_moved>(), kNoRange,
+     "a solve that moves the chain outside its 95 % region puts it in doubt for the "
+     "re-localisation as well"},
 };
 inline constexpr ParamTable<OnlineConfig> kOnlineParams{"online", kOnlineParamRows};
 
