@@ -330,6 +330,13 @@ TEST(VerdictOnline, CausalOutputsFartherThanTheInputFail) {
     EXPECT_EQ(moved.verdict.level, VerdictLevel::kFailed);
     EXPECT_TRUE(HasReason(moved.verdict, "which is the input itself"));
     EXPECT_FALSE(HasReason(moved.verdict, "wrong branch"));
+    // Outputs composed from the input itself (the odometry from the known start, before the
+    // first solve), equal to it but for rounding, leave a kept input as it was.
+    PlanarTrajectory composed = input;
+    for (Eigen::Vector2d& p : composed.p_en) p.x() += 1e-9;
+    const OnlineVerdict same = JudgeOnline(input, composed, &field, model, kept, config);
+    EXPECT_FALSE(same.check.disagree);
+    EXPECT_NE(same.verdict.level, VerdictLevel::kFailed);
 }
 
 // A street east along y = 0 for 3 km, and `north_x` streets north from it, 1.5 km long.
