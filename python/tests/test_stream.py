@@ -52,7 +52,7 @@ def test_threaded_stream_finishes(synthetic_short):
     stream = driftcorr.Stream(synthetic_short)
     out = [stream.push(row) for row in sc.estimate[:800]]
     assert [p.index for p in out] == list(range(800))
-    # Why a pose may be wrong, as the stream's status column says it: bits 1, 2, 4, 8, 16.
+    # Why a pose may be wrong, as the stream's status column says it: bits 1 to 128.
     assert all(isinstance(p.doubt, int) and 0 <= p.doubt <= 255 for p in out)
     assert all(bool(p.doubt & 1) == p.outside_map for p in out)
     result = stream.finish()
