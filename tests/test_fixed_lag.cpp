@@ -140,7 +140,9 @@ TEST(MarginalPrior, IsTheSchurComplementOfTheWindowInformation) {
             const auto marginal = MarginalPrior(s, nullptr, model, 5, 17, prior, with_scale);
             ASSERT_TRUE(marginal.has_value());
             ASSERT_EQ(marginal->HasScale(), with_scale);
-            if (with_scale) EXPECT_EQ(marginal->scale_segment, s.scale_segment[17]);
+            if (with_scale) {
+                EXPECT_EQ(marginal->scale_segment, s.scale_segment[17]);
+            }
             const PoseState& b = s.poses[17];
             JointVector at;
             at << b.p.x(), b.p.y(), b.p.z(), b.yaw_rad,
@@ -185,15 +187,21 @@ TEST(MarginalPrior, GrowsAlongTheOdometry) {
     }
 }
 
+// Windows of 20 m over Curve's 2 m steps, without a heading-rate bias: on the curve a bias trades
+// a few mm of position against the heading-preservation prior, and the checks below are that the
+// odometry alone is kept.
+CorrectorConfig CurveWindows() {
+    CorrectorConfig cfg;
+    cfg.model = Model();
+    cfg.model.heading_bias_segment_s = 0.0;
+    cfg.window_m = 20.0;
+    return cfg;
+}
+
 // The smoother's windows: bounded by window_m, the boundary carries the prior once the window has
 // left pose 0 (or is held fixed without marginalisation), and each solve reaches its end.
 TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
-    CorrectorConfig cfg;
-    cfg.model = Model();
-    // Without a heading-rate bias: on this curve a bias trades a few mm of position against the
-    // heading-preservation prior, and the check below is that the odometry alone is kept.
-    cfg.model.heading_bias_segment_s = 0.0;
-    cfg.window_m = 20.0;
+    const CorrectorConfig cfg = CurveWindows();
     const PlanarTrajectory est = Curve(60);
     for (bool marginalise : {true, false}) {
         SCOPED_TRACE(marginalise ? "marginalised" : "fixed boundary");
@@ -220,10 +228,7 @@ TEST(FixedLagSmoother, WindowsAreBoundedAndCarryThePrior) {
 // scores the adopted poses and scales and hands them back as a solve's, and the next solve goes
 // on from the adopted boundary.
 TEST(FixedLagSmoother, AdoptedPrefixIsScoredAndSolvedOn) {
-    CorrectorConfig cfg;
-    cfg.model = Model();
-    cfg.model.heading_bias_segment_s = 0.0;
-    cfg.window_m = 20.0;
+    const CorrectorConfig cfg = CurveWindows();
     const PlanarTrajectory est = Curve(60);
     TrajectoryState s = test::StateFrom(est, cfg.model, true);
     FixedLagSmoother smoother(s.poses[0], true, nullptr, cfg);

@@ -59,6 +59,12 @@ PlanarPose ToPlanarPose(double t_s, const PoseState& s) {
     return out;
 }
 
+// Whether a solve moved a pose by `d` outside the 95 % region of its covariance `xy_m2`, which
+// must be known (`ok`) and positive definite (kDoubtMoved, relocalise_when_moved).
+bool MovedOutside(const Eigen::Vector2d& d, const Eigen::Matrix2d& xy_m2, bool ok) {
+    return ok && xy_m2.determinant() > 0.0 && !InsideRegion95(d, xy_m2);
+}
+
 }  // namespace
 
 OnlineChain::OnlineChain(const TraversableField* field, const OnlineConfig& config,
@@ -213,8 +219,7 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
         // region the output claimed.
         if (r.index > 0 && stats_.solves != solves_seen_) {
             moved_by_m_ = current_[r.index - 1].p.head<2>() - last_out_en_;
-            moved_ = last_out_cov_ok_ && last_out_xy_m2_.determinant() > 0.0 &&
-                     !InsideRegion95(moved_by_m_, last_out_xy_m2_);
+            moved_ = MovedOutside(moved_by_m_, last_out_xy_m2_, last_out_cov_ok_);
         }
         solves_seen_ = stats_.solves;
         out = current_[r.index];
@@ -408,10 +413,10 @@ void OnlineChain::RunSolve(std::size_t end) {
         if (cfg_.relocalise_when_moved && end >= solution.first) {
             std::lock_guard<std::mutex> lock(mutex_);
             const Eigen::Matrix2d xy_m2 = ToPoseCovariance(chain_sigma_).xy_m2;
-            moved = chain_sigma_ok_ && end < current_.size() && xy_m2.determinant() > 0.0 &&
-                    !InsideRegion95(solution.poses[end - solution.first].p.head<2>() -
-                                        current_[end].p.head<2>(),
-                                    xy_m2);
+            moved = end < current_.size() &&
+                    MovedOutside(solution.poses[end - solution.first].p.head<2>() -
+                                     current_[end].p.head<2>(),
+                                 xy_m2, chain_sigma_ok_);
         }
         if ((solution.poor || scale < m.scale_range_min || scale > m.scale_range_max || moved) &&
             path >= next_check_m_) {
