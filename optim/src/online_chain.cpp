@@ -65,6 +65,47 @@ bool MovedOutside(const Eigen::Vector2d& d, const Eigen::Matrix2d& xy_m2, bool o
     return ok && xy_m2.determinant() > 0.0 && !InsideRegion95(d, xy_m2);
 }
 
+// The bins of the outputs' normalised squared differences (OnlineChain::settled_bins_):
+// kBinsPerDecade bins per decade of d^T Sigma^-1 d from 10^kLowestDecade; smaller values count
+// in the first bin, larger ones in the last.
+constexpr int kBinsPerDecade = 20, kLowestDecade = -6;
+// chi2 with 2 degrees of freedom at 0.95: the 95 % region's bound on d^T Sigma^-1 d.
+constexpr double kChi2Two95 = 5.991;
+// The fewest outputs whose 95 % quantile leaves one beyond it.
+constexpr std::size_t kMinSettled = 20;
+
+template <std::size_t N>
+void Count(std::array<std::size_t, N>& bins, double nis) {
+    const double at = (std::log10(std::max(nis, 1e-300)) - kLowestDecade) * kBinsPerDecade;
+    const double clamped = std::clamp(at, 0.0, double(N - 1));
+    ++bins[static_cast<std::size_t>(clamped)];
+}
+
+// The factor on the outputs' covariance (OnlineConfig::calibrate_covariance): the upper edge
+// of the bin that holds the 95 % quantile of the `n` values counted, over kChi2Two95; at least
+// 1.
+template <std::size_t N>
+double QuantileFactor(const std::array<std::size_t, N>& bins, std::size_t n) {
+    if (n < kMinSettled) return 1.0;
+    const auto rank = static_cast<std::size_t>(std::ceil(0.95 * double(n)));
+    std::size_t seen = 0;
+    for (std::size_t b = 0; b < N; ++b) {
+        seen += bins[b];
+        if (seen >= rank) {
+            const double upper = std::pow(10.0, kLowestDecade + double(b + 1) / kBinsPerDecade);
+            return std::max(1.0, upper / kChi2Two95);
+        }
+    }
+    return 1.0;
+}
+
+void Scale(PoseCovariance& c, double k) {
+    c.xy_m2 *= k;
+    c.z_m2 *= k;
+    c.yaw_rad2 *= k;
+    c.xy_yaw_m_rad *= k;
+}
+
 }  // namespace
 
 OnlineChain::OnlineChain(const TraversableField* field, const OnlineConfig& config,
@@ -221,15 +262,38 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
             moved_by_m_ = current_[r.index - 1].p.head<2>() - last_out_en_;
             moved_ = MovedOutside(moved_by_m_, last_out_xy_m2_, last_out_cov_ok_);
         }
+        // The outputs whose poses no window solves any more: their final estimates against
+        // what the outputs claimed.
+        while (!unsettled_.empty() && unsettled_.front().index < settled_before_) {
+            const Output& o = unsettled_.front();
+            const Eigen::Vector2d d = current_[o.index].p.head<2>() - o.p_en;
+            Count(settled_bins_, d.dot(o.xy_m2.inverse() * d));
+            ++settled_;
+            unsettled_.pop_front();
+            settled_factor_ = QuantileFactor(settled_bins_, settled_);
+        }
         solves_seen_ = stats_.solves;
         out = current_[r.index];
         r.correction_age_epochs = r.index - std::min(solved_end_, r.index);
         r.fresh = solved_end_ >= requested_before;
         r.covariance = ToPoseCovariance(chain_sigma_);
         r.covariance_ok = chain_sigma_ok_;
+        if (stats_.solves == 0) {
+            // Before the first solve the output is the odometry from the start at the prior's
+            // step-length scale, which errs by scale_prior_sigma of the displacement so far.
+            const Eigen::Vector2d d = out.p.head<2>() - current_.front().p.head<2>();
+            const double sd = cfg_.corrector.model.scale_prior_sigma;
+            r.covariance.xy_m2 += sd * sd * d * d.transpose();
+        }
         last_out_en_ = out.p.head<2>();
-        last_out_xy_m2_ = r.covariance.xy_m2;
+        last_out_xy_m2_ = r.covariance.xy_m2;  // the model's: kDoubtMoved judges against it
         last_out_cov_ok_ = r.covariance_ok;
+        if (cfg_.calibrate_covariance && r.covariance_ok) {
+            if (r.covariance.xy_m2.determinant() > 0.0) {
+                unsettled_.push_back({r.index, last_out_en_, r.covariance.xy_m2});
+            }
+            Scale(r.covariance, settled_factor_);
+        }
         if (moved_) {
             // Two estimates of the chain, the newest solve's and the one before, each as likely:
             // their mixture about the newest.
@@ -491,6 +555,7 @@ void OnlineChain::Merge(const FixedLagSolution& sol, double solve_s) {
     front_scales_ = sol.scales;
     front_biases_ = sol.biases;
     solved_end_ = sol.end;
+    settled_before_ = sol.first;
     chain_poor_ = sol.poor;
     chain_sigma_ok_ = sol.end_covariance_ok;
     if (chain_sigma_ok_) chain_sigma_ = ToPoseMatrix(sol.end_covariance);

@@ -5,6 +5,7 @@
 // runs ahead of the solver (back-pressure), and returns each pose composed onto the newest solved
 // window with its covariance carried there. How it schedules, chains and threads its solves:
 // docs/method.md, "The online corrector".
+#include <array>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -106,6 +107,19 @@ private:
     std::size_t solves_seen_ = 0;
     bool moved_ = false;
     Eigen::Vector2d moved_by_m_ = Eigen::Vector2d::Zero();
+    /// OnlineConfig::calibrate_covariance: the outputs that a window may still move (index,
+    /// position before projection, the model's covariance East-North), and the normalised
+    /// squared differences d^T Sigma^-1 d of those that no window moves any more, counted in
+    /// bins of log10 from 1e-6 to 1e6: the stream's quantiles in bounded memory.
+    struct Output {
+        std::size_t index = 0;
+        Eigen::Vector2d p_en = Eigen::Vector2d::Zero();
+        Eigen::Matrix2d xy_m2 = Eigen::Matrix2d::Zero();
+    };
+    std::deque<Output> unsettled_;
+    std::array<std::size_t, 240> settled_bins_{};
+    std::size_t settled_ = 0;
+    double settled_factor_ = 1.0;  ///< the factor they give (QuantileFactor)
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;
@@ -123,6 +137,7 @@ private:
     std::vector<double> front_scales_{1.0};  ///< solved scales, up to the last solved segment
     std::vector<double> front_biases_;       ///< solved biases, up to the last solved segment
     std::size_t solved_end_ = 0;             ///< last pose of the newest merged solve
+    std::size_t settled_before_ = 0;         ///< the newest merged solve moved no pose before
     PoseMatrix chain_sigma_ = PoseMatrix::Zero();  ///< covariance of the newest pose's estimate
     bool chain_sigma_ok_ = true;
     bool stop_ = false;

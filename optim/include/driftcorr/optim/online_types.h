@@ -64,6 +64,15 @@ struct OnlineConfig {
     /// A solve that moves the chain's newest pose outside that pose's 95 % region (kDoubtMoved)
     /// puts the chain in doubt for the re-localisation too.
     bool relocalise_when_moved = true;
+    /// The outputs' covariance scaled by how well it held the stream's own later estimates.
+    /// Once no window moves a pose any more, its final estimate differs from the output by d;
+    /// if the model's covariance Sigma of the output held the output's error, d^T Sigma^-1 d
+    /// would lie below chi2_2(0.95) = 5.991 for at least 95 % of the outputs (d misses the
+    /// errors the final estimates share, so never more). Once 20 outputs have settled (the
+    /// fewest that leave one beyond a 95 % quantile), every output's covariance is multiplied
+    /// by max(1, the 95 % quantile of their d^T Sigma^-1 d over the stream so far / 5.991).
+    /// The positions and the doubt bits (kDoubtMoved tests the model's region) are unchanged.
+    bool calibrate_covariance = true;
 
     /// The first value kOnlineParams does not allow (corrector is not looked at).
     std::optional<ParamProblem> FindProblem() const;
@@ -103,6 +112,9 @@ inline constexpr Param<OnlineConfig> kOnlineParamRows[] = {
     {"relocalise_when_moved", Field<&OnlineConfig::relocalise_when_moved>(), kNoRange,
      "a solve that moves the chain outside its 95 % region puts it in doubt for the "
      "re-localisation as well"},
+    {"calibrate_covariance", Field<&OnlineConfig::calibrate_covariance>(), kNoRange,
+     "the outputs' covariance scaled by the 95 % quantile of their normalised squared distance "
+     "to the final estimates, over chi2_2(0.95), where above 1"},
 };
 inline constexpr ParamTable<OnlineConfig> kOnlineParams{"online", kOnlineParamRows};
 
