@@ -106,6 +106,12 @@ class StreamPose:
                               #: re-localised from its prefix (it may jump), 128 the
                               #: newest solve moved the previous output outside its
                               #: 95 % region (the covariance holds the move)
+    correction_age_epochs: int  #: epochs since the last pose of the solve it chains from
+    correction_age_s: float     #: the same in stream seconds
+    fresh: bool               #: it chains from the newest solve requested before the pose
+    #: (7,) var_e cov_en var_n var_up var_yaw cov_e_yaw cov_n_yaw [m^2, rad^2, m rad], as the
+    #: status column's (online.calibrate_covariance); None when not known
+    covariance: Optional[np.ndarray]
     message: str
 
 

@@ -378,18 +378,32 @@ py::array_t<double> PlanarPoseToArray(const PlanarPose& pose) {
     return out;
 }
 
+namespace {
+// var_e cov_en var_n var_up var_yaw cov_e_yaw cov_n_yaw, as w(0) .. w(6).
+template <typename Row>
+void WriteCovariance(const PoseCovariance& c, Row&& w) {
+    w(0) = c.xy_m2(0, 0), w(1) = c.xy_m2(0, 1), w(2) = c.xy_m2(1, 1);
+    w(3) = c.z_m2, w(4) = c.yaw_rad2;
+    w(5) = c.xy_yaw_m_rad.x(), w(6) = c.xy_yaw_m_rad.y();
+}
+}  // namespace
+
 py::array_t<double> CovarianceToArray(const std::vector<double>& t_s,
                                       const std::vector<PoseCovariance>& poses) {
     const py::ssize_t n = py::ssize_t(poses.size());
     py::array_t<double> out({n, py::ssize_t(8)});
     auto w = out.mutable_unchecked<2>();
     for (py::ssize_t i = 0; i < n; ++i) {
-        const PoseCovariance& c = poses[i];
         w(i, 0) = t_s[i];
-        w(i, 1) = c.xy_m2(0, 0), w(i, 2) = c.xy_m2(0, 1), w(i, 3) = c.xy_m2(1, 1);
-        w(i, 4) = c.z_m2, w(i, 5) = c.yaw_rad2;
-        w(i, 6) = c.xy_yaw_m_rad.x(), w(i, 7) = c.xy_yaw_m_rad.y();
+        WriteCovariance(poses[i], [&](py::ssize_t k) -> double& { return w(i, k + 1); });
     }
+    return out;
+}
+
+py::array_t<double> PoseCovarianceToArray(const PoseCovariance& c) {
+    py::array_t<double> out(py::ssize_t(7));
+    auto w = out.mutable_unchecked<1>();
+    WriteCovariance(c, [&](py::ssize_t k) -> double& { return w(k); });
     return out;
 }
 

@@ -60,6 +60,8 @@ py::array_t<double> PlanarPoseToArray(const PlanarPose& pose);
 /// Covariance rows (layout above) with timestamps from `t_s`; precondition: same size.
 py::array_t<double> CovarianceToArray(const std::vector<double>& t_s,
                                       const std::vector<PoseCovariance>& poses);
+/// One pose's covariance as (7,): var_e cov_en var_n var_up var_yaw cov_e_yaw cov_n_yaw.
+py::array_t<double> PoseCovarianceToArray(const PoseCovariance& c);
 
 py::dict MetricsToDict(const ErrorMetrics& m);
 

@@ -207,6 +207,11 @@ public:
         d["gap"] = r.gap;
         d["outside_map"] = r.outside_map;
         d["doubt"] = r.doubt;
+        d["correction_age_epochs"] = r.correction_age_epochs;
+        d["correction_age_s"] = r.correction_age_s;
+        d["fresh"] = r.fresh;
+        d["covariance"] = r.covariance_ok ? py::object(PoseCovarianceToArray(r.covariance))
+                                          : py::object(py::none());
         d["message"] = r.message;
         return d;
     }

@@ -12,19 +12,31 @@ def test_stream_same_as_cli(cli, synthetic_short, workdir):
     smoothed_file = workdir / "stream_smoothed.tum"
     smoothed_file.unlink(missing_ok=True)
     proc = subprocess.run([str(cli), "stream", str(synthetic_short), "--replay", "--sync", "-q",
-                           "--smoothed-out", str(smoothed_file)],
+                           "--status-column", "--smoothed-out", str(smoothed_file)],
                           capture_output=True, text=True, check=True)
-    cli_causal = np.loadtxt(proc.stdout.splitlines(), ndmin=2)
+    cli_lines = np.loadtxt(proc.stdout.splitlines(), ndmin=2)
+    cli_causal, cli_status = cli_lines[:, :8], cli_lines[:, 8:]
 
     sc = driftcorr.load_scenario(synthetic_short)
     # --replay feeds the estimate as TUM text (6 decimals, quaternions 9): the same input here.
     replayed = np.hstack([np.round(sc.estimate[:, :4], 6), np.round(sc.estimate[:, 4:], 9)])
     stream = driftcorr.Stream(synthetic_short, synchronous=True)
-    causal = np.array([stream.push(row).pose for row in replayed])
+    pushed = [stream.push(row) for row in replayed]
+    causal = np.array([p.pose for p in pushed])
     result = stream.finish()
 
     assert causal.shape == cli_causal.shape == sc.estimate.shape
     np.testing.assert_allclose(causal, cli_causal, rtol=0, atol=2e-6)
+    # The status column: age in epochs and seconds, fresh, the horizontal covariance, the doubt.
+    nan = float("nan")
+    status = np.array([[p.correction_age_epochs, p.correction_age_s, p.fresh,
+                        *(p.covariance[:3] if p.covariance is not None else (nan, nan, nan)),
+                        p.doubt] for p in pushed])
+    assert all(p.covariance is None or p.covariance.shape == (7,) for p in pushed)
+    assert sum(p.covariance is not None for p in pushed) > len(pushed) // 2
+    np.testing.assert_array_equal(status[:, [0, 2, 6]], cli_status[:, [0, 2, 6]])
+    np.testing.assert_allclose(status[:, 1], cli_status[:, 1], rtol=0, atol=6e-4)
+    np.testing.assert_allclose(status[:, 3:6], cli_status[:, 3:6], rtol=1e-5, atol=1e-12)
     assert result.usable and result.poses == len(sc.estimate)
     np.testing.assert_allclose(result.corrected, np.loadtxt(smoothed_file), rtol=0, atol=2e-6)
     assert result.covariance.shape == (len(sc.estimate), 8)
