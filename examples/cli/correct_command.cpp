@@ -352,6 +352,15 @@ void PrintFreedoms(std::FILE* out, const CorrectionResult& r) {
                      d.price_refined, d.nll_walk, d.price_walk);
         label = "          ";
     }
+    if (r.step_reading) {
+        const StepReadingDecision& d = *r.step_reading;
+        std::fprintf(out,
+                     "%s step lengths %s: NLL %.1f read about the median (exponent %.2f), "
+                     "%.1f as read, price of reading them as read %.1f\n",
+                     label, d.as_read ? "as read" : "read about the median", d.nll_about_median,
+                     d.exponent, d.nll_as_read, d.price);
+        label = "          ";
+    }
     if (!r.heading_bias) return;
     std::fprintf(out,
                  "%s heading-rate bias %s: NLL %.1f with it, %.1f without, price of its "

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -399,7 +400,55 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
     if (Usable(result.status) && cfg.compute_covariance) kept->AddCovariance(result);
 }
 
+// The normalisation of a state's step-length terms, sum of ln sigma over its steps: what the NLL
+// leaves out as a constant of the model, which differs between readings of the step lengths.
+double StepLengthNormalisation(const TrajectoryState& s, const ModelConfig& model) {
+    double sum = 0.0;
+    for (std::size_t i = 1; i < s.obs.size(); ++i) {
+        const double sigma = StepNoiseOf(model, s.obs[i]).length_m;
+        if (sigma > 0.0) sum += std::log(sigma);
+    }
+    return sum;
+}
+
 }  // namespace
+
+IncrementalCorrector CorrectWithStepReading(
+    const std::function<TrajectoryState(const CorrectorConfig&)>& initial,
+    const std::vector<double>& t_s, const TraversableField* field, const CorrectorConfig& cfg,
+    CorrectionResult& result, const ProgressCallback& progress) {
+    if (!cfg.decide_step_reading || cfg.model.step_length_exponent == 1.0) {
+        return CorrectFromStarts(initial(cfg), t_s, field, cfg, result, progress);
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    CorrectorConfig read = cfg;
+    read.model.step_length_exponent = 1.0;
+    StepReadingDecision d;
+    d.exponent = cfg.model.step_length_exponent;
+    IncrementalCorrector about = CorrectFromStarts(initial(cfg), t_s, field, cfg, result, progress);
+    if (Usable(result.status)) {
+        d.nll_about_median = result.nll + StepLengthNormalisation(about.state(), cfg.model);
+    } else {
+        d.nll_about_median = nan;
+    }
+    CorrectionResult as_read;
+    IncrementalCorrector inc =
+        CorrectFromStarts(initial(read), t_s, field, read, as_read, progress);
+    d.nll_as_read = Usable(as_read.status)
+                        ? as_read.nll + StepLengthNormalisation(inc.state(), read.model)
+                        : nan;
+    d.price = 0.5 * std::log(double(t_s.size()));
+    d.as_read = !std::isnan(d.nll_as_read) &&
+                (std::isnan(d.nll_about_median) || d.nll_as_read + d.price < d.nll_about_median);
+    CorrectionResult work;
+    AddWork(result, work), AddWork(as_read, work);
+    if (d.as_read) result = std::move(as_read);
+    result.windows = 0, result.window_retries = 0, result.window_restarts = 0;
+    result.iterations = 0, result.incremental_s = 0.0, result.refine_s = 0.0;
+    AddWork(work, result);
+    result.step_reading = d;
+    return d.as_read ? std::move(inc) : std::move(about);
+}
 
 // Do no harm: scores the input by the correction's objective and keeps it when it scores better;
 // counts the poses whose input lies inside the correction's 95 % region and keeps the input
@@ -454,6 +503,12 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
     if (cfg.decide_scale_walk && cfg.start_scales.size() == 1 && !floor_hypotheses &&
         estimate.size() >= 3) {
         CorrectWithDecidedScaleWalk(estimate, field, cfg, result, progress);
+    } else if (cfg.decide_step_reading && cfg.model.step_length_exponent != 1.0 &&
+               estimate.size() >= 3) {
+        const bool planar = !field || field->planar();
+        CorrectWithStepReading(
+            [&](const CorrectorConfig& c) { return InitialState(estimate, c, planar); },
+            estimate.t_s, field, cfg, result, progress);
     } else {
         CorrectFromStarts(estimate, field, cfg, result, progress);
     }

@@ -597,7 +597,9 @@ CorrectionResult OnlineChain::SolveWhole(const CorrectorConfig& config) const {
         return result;
     }
     // The batch solve over the same observations (the online solves do not change it).
-    CorrectFromStarts(BatchStateOf(entries_.size() - 1, config), t_s_, field_, config, result);
+    CorrectWithStepReading(
+        [&](const CorrectorConfig& c) { return BatchStateOf(entries_.size() - 1, c); }, t_s_,
+        field_, config, result);
     // The input as pushed, judged against the correction as the batch judges it.
     PlanarTrajectory input;
     input.t_s = t_s_;

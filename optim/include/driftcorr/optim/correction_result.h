@@ -43,6 +43,16 @@ struct ScaleWalkDecision {
     enum class Kept { kOneScale, kRefined, kWalk } kept = Kept::kOneScale;
 };
 
+/// Whether the PDR's step lengths were read about their median or as they are
+/// (CorrectorConfig::decide_step_reading): the NLL of the correction with each reading, each
+/// with its step-length terms' normalisation (sum of ln sigma), which the two readings do not
+/// share (NaN: not usable), and the price the reading as read pays, 1/2 ln n (n poses).
+struct StepReadingDecision {
+    double exponent = 1.0;  ///< ModelConfig::step_length_exponent of the reading about the median
+    double nll_about_median = 0.0, nll_as_read = 0.0, price = 0.0;
+    bool as_read = false;  ///< the correction with the step lengths as read was kept
+};
+
 struct CorrectionResult {
     SolveStatus status = SolveStatus::kFailed;
     std::string message;         ///< human-readable outcome, names the failing stage
@@ -121,6 +131,9 @@ struct CorrectionResult {
     std::optional<HeadingBiasDecision> heading_bias;
     /// Set when the scale walk was decided on (corrector.cpp CorrectWithDecidedScaleWalk).
     std::optional<ScaleWalkDecision> scale_walk;
+    /// Set when the step-length reading was decided on (corrector.cpp
+    /// CorrectWithDecidedStepReading).
+    std::optional<StepReadingDecision> step_reading;
     /// Degenerate input or outcome worth a user's attention, one sentence each (the map covers
     /// none or little of the drive, the estimate does not move, the scale hit its bound, steps
     /// treated as discontinuities). The correction may still be usable.

@@ -3,6 +3,7 @@
 // new poses by composing odometry onto the corrected end, re-solve a trailing window), then
 // refines the whole trajectory in one solve. No I/O: progress goes through a callback, the outcome
 // into CorrectionResult.
+#include <functional>
 #include <vector>
 
 #include "driftcorr/core/types.h"
@@ -53,5 +54,16 @@ IncrementalCorrector CorrectFromStarts(TrajectoryState initial, const std::vecto
                                        const TraversableField* field, const CorrectorConfig& config,
                                        CorrectionResult& result,
                                        const ProgressCallback& progress = {});
+
+/// CorrectFromStarts of `initial(config)` with the reading of the step lengths decided
+/// (CorrectorConfig::decide_step_reading, with a step_length_exponent below 1; else that alone):
+/// `initial` builds the initial state under a configuration, whose step_length_exponent reads
+/// the step lengths; the corrections with the configured reading and with the step lengths as
+/// read both run, and the one of lower NLL plus step-term normalisation is kept and returned
+/// (CorrectionResult::step_reading). CorrectTrajectory and the online corrector's Finish use it.
+IncrementalCorrector CorrectWithStepReading(
+    const std::function<TrajectoryState(const CorrectorConfig&)>& initial,
+    const std::vector<double>& t_s, const TraversableField* field, const CorrectorConfig& config,
+    CorrectionResult& result, const ProgressCallback& progress = {});
 
 }  // namespace driftcorr

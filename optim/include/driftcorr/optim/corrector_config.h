@@ -103,6 +103,14 @@ struct CorrectorConfig {
     /// The lowest NLL plus price of the three is kept. Applies with one start scale and no
     /// floor hypotheses (else the walk is always in).
     bool decide_scale_walk = false;
+    /// The reading of the step lengths (ModelConfig::step_length_exponent below 1: about the
+    /// walk's median step) as a freedom decided per input: the drive is corrected with the
+    /// exponent and with the step lengths as read (exponent 1); the correction as read is kept
+    /// when its NLL is lower by more than the price of one unknown, 1/2 ln n (n poses), each
+    /// NLL with its step-length terms' normalisation (sum of ln sigma: the two readings observe
+    /// steps of different lengths). Not with decide_scale_walk (that decision runs instead).
+    /// No effect where the exponent is 1 (the road default).
+    bool decide_step_reading = true;
 
     /// The first value kCorrectorParams or a rule between its values does not allow (model and
     /// covariance are not looked at).
@@ -171,6 +179,9 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
     {"decide_scale_walk", Field<&CorrectorConfig::decide_scale_walk>(), kNoRange,
      "the scale walk kept only when it lowers the NLL by more than its BIC price (one scale "
      "for the drive otherwise)"},
+    {"decide_step_reading", Field<&CorrectorConfig::decide_step_reading>(), kNoRange,
+     "with a step_length_exponent below 1: the correction with the step lengths as read kept "
+     "instead when its NLL (with the step terms' normalisation) is lower by more than 1/2 ln n"},
     {"keep_agreeing_input", Field<&CorrectorConfig::keep_agreeing_input>(), kNoRange,
      "the input is the result when its share of poses inside the correction's 95 % region is "
      "not significantly below 95 % (needs compute_covariance), or when its NLL is lower"},
