@@ -316,11 +316,18 @@ TEST_F(CliOutputs, NanosecondTimestampsAreRefusedNamingFileAndLine) {
 
 TEST_F(CliOutputs, SigtermEndsTheStreamWithItsSummaryAndExit143) {
     // The poses, then an input that stays open (blank lines, which the stream skips, until the
-    // stream has gone and the pipe breaks): the stream waits for more until SIGTERM.
-    const std::string command = "(cat " + Quote((scenario_ / "estimate.tum").string()) +
-                                "; while sleep 0.2; do echo || exit 0; done) | " +
-                                Join({kCli, "stream", scenario_.string(), "--sync"}) +
-                                " & pid=$!; sleep 5; kill -TERM $pid; wait $pid";
+    // stream has gone and the pipe breaks): the stream waits for more until SIGTERM, sent once
+    // every pose's line is out (at most 300 s: a slow build takes seconds for them).
+    const std::string out = (dir_ / "sigterm_out.tum").string();
+    const std::string command =
+        ": > " + Quote(out) + "; (cat " + Quote((scenario_ / "estimate.tum").string()) +
+        "; while sleep 0.2; do echo || exit 0; done) | " +
+        Join({kCli, "stream", scenario_.string(), "--sync"}) + " > " + Quote(out) +
+        " & pid=$!; n=0; while [ $(grep -c . " + Quote(out) + ") -lt " +
+        std::to_string(PoseLines(estimate_before_)) +
+        " ] && [ $n -lt 1500 ]; do sleep 0.2; n=$((n + 1)); done; sleep 0.5; kill -TERM $pid; "
+        "wait $pid; s=$?; cat " +
+        Quote(out) + "; exit $s";
     const Shell r = RunShell(command, dir_);
     EXPECT_EQ(r.exit_code, 143) << r.err;
     EXPECT_NE(r.err.find("SIGTERM"), std::string::npos) << r.err;
