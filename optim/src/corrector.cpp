@@ -503,8 +503,7 @@ CorrectionResult CorrectTrajectory(const PlanarTrajectory& estimate, const Trave
     if (cfg.decide_scale_walk && cfg.start_scales.size() == 1 && !floor_hypotheses &&
         estimate.size() >= 3) {
         CorrectWithDecidedScaleWalk(estimate, field, cfg, result, progress);
-    } else if (cfg.decide_step_reading && cfg.model.step_length_exponent != 1.0 &&
-               estimate.size() >= 3) {
+    } else if (estimate.size() >= 3) {  // (fewer: CorrectFromStarts's check names them)
         const bool planar = !field || field->planar();
         CorrectWithStepReading(
             [&](const CorrectorConfig& c) { return InitialState(estimate, c, planar); },
