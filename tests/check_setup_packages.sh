@@ -51,16 +51,27 @@ fi
 
 # 2. Owners. dpkg knows a file under the name its package shipped it with; with Debian's merged
 # /usr that may be /lib/... or /usr/lib/..., and a symlink's target may be the owned file.
-declare -A owners
-spellings() {
-    local p=$1 r
-    r=$(readlink -f "$p")
-    printf '%s\n' "$p" "$r" "${p#/usr}" "/usr$p" "${r#/usr}" "/usr$r" | grep '^/' | sort -u
-}
-mapfile -t candidates < <(for p in "${used[@]}"; do spellings "$p"; done | sort -u)
-while IFS= read -r line; do
-    owners["${line#*: }"]=$(echo "${line%%: *}" | tr -d ' ' | tr ',' ' ' | sed 's/:[a-z0-9]*//g')
-done < <(printf '%s\n' "${candidates[@]}" | xargs -r dpkg -S 2>/dev/null | grep -v '^diversion')
+# The spellings of every file, made in the shell (a process or two per file would take minutes).
+declare -A owners spelled
+mapfile -t resolved < <(printf '%s\0' "${used[@]}" | xargs -0 -r realpath -e --)
+[ ${#resolved[@]} -eq ${#used[@]} ] || { echo "could not resolve the files the build used" >&2; exit 2; }
+for i in "${!used[@]}"; do
+    p=${used[$i]} r=${resolved[$i]} list=""
+    for c in "$p" "$r" "${p#/usr}" "/usr$p" "${r#/usr}" "/usr$r"; do
+        [[ $c == /* ]] || continue
+        [[ $'\n'$list == *$'\n'$c$'\n'* ]] || list+=$c$'\n'  # once each
+    done
+    spelled[$p]=$list
+done
+mapfile -t candidates < <(printf '%s' "${spelled[@]}" | sort -u)
+# dpkg's file lists, read once (dpkg -S matches every name against all of them: over a minute).
+while IFS=$'\t' read -r path pkgs; do
+    owners[$path]=$pkgs
+done < <(printf '%s\n' "${candidates[@]}" | awk '
+    FNR == NR { want[$0] = 1; next }
+    ($0 in want) { pkg = FILENAME; sub(/.*\//, "", pkg); sub(/\.list$/, "", pkg); sub(/:.*/, "", pkg)
+                   own[$0] = own[$0] " " pkg }
+    END { for (f in own) print f "\t" substr(own[f], 2) }' - /var/lib/dpkg/info/*.list)
 
 # 3. What setup.sh installs, with its dependencies, and what every Debian system has.
 mapfile -t named < <(bash "$repo/setup.sh" packages)
@@ -86,13 +97,13 @@ for p in "${used[@]}"; do
             ok=1
             [ -d "$p" ] || used_pkgs[$pkg]=1
         done
-    done < <(spellings "$p")
+    done <<<"${spelled[$p]%$'\n'}"
     if [ -z "$found" ]; then
         # Files that configure or the compiler generate (no package owns them) are only allowed
         # outside /usr/include and /usr/lib, where packages put what a build consumes.
         case "$p" in /usr/include/*|/usr/lib/*|/lib/*) unowned+=("$p") ;; esac
     elif [ -z "$ok" ]; then
-        for s in $(spellings "$p"); do
+        for s in ${spelled[$p]}; do
             for pkg in ${owners[$s]:-}; do missing_pkgs[$pkg]+="$p "; done
         done
     fi
