@@ -352,6 +352,20 @@ void PrintFreedoms(std::FILE* out, const CorrectionResult& r) {
                      d.price_refined, d.nll_walk, d.price_walk);
         label = "          ";
     }
+    if (r.one_scale_start) {
+        const OneScaleStart& d = *r.one_scale_start;
+        if (d.from_one_scale) {
+            std::fprintf(out,
+                         "%s scale walk from one scale: NLL %.1f corrected with it, %.1f with "
+                         "one scale, %.1f that refined with the walk\n",
+                         label, d.nll_walk, d.nll_one_scale, d.nll_refined);
+        } else {
+            std::fprintf(out,
+                         "%s scale walk as the windows left it: NLL %.1f, with one scale %.1f\n",
+                         label, d.nll_walk, d.nll_one_scale);
+        }
+        label = "          ";
+    }
     if (r.step_reading) {
         const StepReadingDecision& d = *r.step_reading;
         std::fprintf(out,

@@ -340,6 +340,15 @@ void AddWork(const CorrectionResult& from, CorrectionResult& to) {
     to.incremental_s += from.incremental_s, to.refine_s += from.refine_s;
 }
 
+// A state of one scale for the whole drive with the walk's segments instead (one per
+// model.scale_segment_m), each at that scale: its final solve repeated with the walk
+// (CorrectorConfig::decide_scale_walk, one_scale_start).
+TrajectoryState WithWalkSegments(TrajectoryState state, const ModelConfig& model) {
+    state.scale_segment = ScaleSegments(state.obs, model.scale_segment_m);
+    state.scales.assign(state.scale_segment.back() + 1, state.scales.front());
+    return state;
+}
+
 // The scale walk as a freedom (CorrectorConfig::decide_scale_walk): one scale for the whole drive
 // first; its final solve repeated with the walk's segments; when that lowers the NLL by more than
 // the walk's price, the whole correction with the walk. Keeps the lowest NLL plus price, with its
@@ -358,9 +367,7 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
     d.nll_refined = d.nll_walk = d.price_refined = d.price_walk = nan;
     d.nll_one_scale = Usable(result.status) ? result.nll : nan;
     d.price_one_scale = FreedomPrice(kept->state());
-    TrajectoryState state = kept->state();
-    state.scale_segment = ScaleSegments(state.obs, cfg.model.scale_segment_m);
-    state.scales.assign(state.scale_segment.back() + 1, state.scales.front());
+    TrajectoryState state = WithWalkSegments(kept->state(), cfg.model);
     if (Usable(result.status) && state.scales.size() > 1) {
         const double price = FreedomPrice(state);
         IncrementalCorrector inc(std::move(state), field, walk, IncrementalCorrector::Corrected{});
@@ -400,6 +407,94 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
     if (Usable(result.status) && cfg.compute_covariance) kept->AddCovariance(result);
 }
 
+// The state `s` with one scale for the whole drive: the median of its segments' scales, each
+// weighted by its steps (CorrectorConfig::one_scale_start).
+TrajectoryState WithOneScale(TrajectoryState s) {
+    std::vector<std::pair<double, std::size_t>> by_scale;  // (scale, steps)
+    for (std::size_t k = 0; k < s.scales.size(); ++k) by_scale.emplace_back(s.scales[k], 0);
+    for (std::size_t i = 1; i < s.scale_segment.size(); ++i) ++by_scale[s.scale_segment[i]].second;
+    std::sort(by_scale.begin(), by_scale.end());
+    std::size_t total = 0, below = 0;
+    for (const auto& [scale, steps] : by_scale) total += steps;
+    double median = by_scale.front().first;
+    for (const auto& [scale, steps] : by_scale) {
+        median = scale;
+        below += steps;
+        if (2 * below >= total) break;
+    }
+    std::fill(s.scale_segment.begin(), s.scale_segment.end(), 0);
+    s.scales.assign(1, median);
+    return s;
+}
+
+// How far one scale's NLL must lie below the walk's to be another basin, not the solvers'
+// tolerance.
+constexpr double kLowerNll = 1e-3;
+
+// CorrectorConfig::one_scale_start: the correction with the walk; its solution with one scale
+// (the median) solved again with one scale, a solution of the same model (every step of the walk
+// zero). Where that NLL is lower, the walk's solution is a poorer basin: the one-scale solution,
+// refined with the walk's segments, is kept, with its covariance, and its corrector returned.
+// The work counters add up.
+IncrementalCorrector CorrectFromOneScaleToo(TrajectoryState initial, const std::vector<double>& t_s,
+                                            const TraversableField* field,
+                                            const CorrectorConfig& cfg, CorrectionResult& result,
+                                            const ProgressCallback& progress) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    CorrectorConfig one = cfg, walk = cfg;
+    one.compute_covariance = walk.compute_covariance = false;
+    // One segment, as decide_scale_walk's (repaired steps are longer than estimated).
+    one.model.scale_segment_m = 2.0 * PathPositions(initial.obs).back() + 1.0;
+    std::optional<IncrementalCorrector> kept;
+    kept.emplace(CorrectFromStarts(std::move(initial), t_s, field, walk, result, progress));
+    OneScaleStart d;
+    d.nll_walk = Usable(result.status) ? result.nll : nan;
+    d.nll_one_scale = d.nll_refined = nan;
+    CorrectionResult from_one, refined;
+    if (Usable(result.status) && kept->state().scales.size() > 1) {
+        IncrementalCorrector one_inc(WithOneScale(kept->state()), field, one,
+                                     IncrementalCorrector::Corrected{});
+        from_one = one_inc.Finish(t_s);
+        if (Usable(from_one.status)) d.nll_one_scale = from_one.nll;
+        if (Usable(from_one.status) && from_one.nll < result.nll - kLowerNll) {
+            IncrementalCorrector inc(WithWalkSegments(one_inc.state(), cfg.model), field, walk,
+                                     IncrementalCorrector::Corrected{});
+            refined = inc.Finish(t_s);
+            if (Usable(refined.status)) {
+                d.nll_refined = refined.nll;
+                d.from_one_scale = true;
+                kept.emplace(std::move(inc));
+                refined.heading_bias = result.heading_bias;
+                refined.start_scales = result.start_scales;
+                refined.start_nll = result.start_nll;
+                refined.start_rms_m = result.start_rms_m;
+                refined.start_chosen = result.start_chosen;
+            }
+        }
+    }
+    CorrectionResult work;  // every solve's counters
+    AddWork(result, work), AddWork(from_one, work), AddWork(refined, work);
+    if (d.from_one_scale) result = std::move(refined);
+    result.windows = 0, result.window_retries = 0, result.window_restarts = 0;
+    result.iterations = 0, result.incremental_s = 0.0, result.refine_s = 0.0;
+    AddWork(work, result);
+    result.one_scale_start = d;
+    if (Usable(result.status) && cfg.compute_covariance) kept->AddCovariance(result);
+    return std::move(*kept);
+}
+
+// One correction of `initial` (CorrectFromStarts), from one scale too where
+// CorrectorConfig::one_scale_start applies: a scale walk, one start scale, no floor hypotheses.
+IncrementalCorrector CorrectOnce(TrajectoryState initial, const std::vector<double>& t_s,
+                                 const TraversableField* field, const CorrectorConfig& cfg,
+                                 CorrectionResult& result, const ProgressCallback& progress) {
+    if (cfg.one_scale_start && cfg.start_scales.size() == 1 &&
+        !FloorHypotheses(field, initial.fix_height, cfg) && t_s.size() >= 3) {
+        return CorrectFromOneScaleToo(std::move(initial), t_s, field, cfg, result, progress);
+    }
+    return CorrectFromStarts(std::move(initial), t_s, field, cfg, result, progress);
+}
+
 // The normalisation of a state's step-length terms, sum of ln sigma over its steps: what the NLL
 // leaves out as a constant of the model, which differs between readings of the step lengths.
 double StepLengthNormalisation(const TrajectoryState& s, const ModelConfig& model) {
@@ -418,22 +513,21 @@ IncrementalCorrector CorrectWithStepReading(
     const std::vector<double>& t_s, const TraversableField* field, const CorrectorConfig& cfg,
     CorrectionResult& result, const ProgressCallback& progress) {
     if (!cfg.decide_step_reading || cfg.model.step_length_exponent == 1.0) {
-        return CorrectFromStarts(initial(cfg), t_s, field, cfg, result, progress);
+        return CorrectOnce(initial(cfg), t_s, field, cfg, result, progress);
     }
     const double nan = std::numeric_limits<double>::quiet_NaN();
     CorrectorConfig read = cfg;
     read.model.step_length_exponent = 1.0;
     StepReadingDecision d;
     d.exponent = cfg.model.step_length_exponent;
-    IncrementalCorrector about = CorrectFromStarts(initial(cfg), t_s, field, cfg, result, progress);
+    IncrementalCorrector about = CorrectOnce(initial(cfg), t_s, field, cfg, result, progress);
     if (Usable(result.status)) {
         d.nll_about_median = result.nll + StepLengthNormalisation(about.state(), cfg.model);
     } else {
         d.nll_about_median = nan;
     }
     CorrectionResult as_read;
-    IncrementalCorrector inc =
-        CorrectFromStarts(initial(read), t_s, field, read, as_read, progress);
+    IncrementalCorrector inc = CorrectOnce(initial(read), t_s, field, read, as_read, progress);
     d.nll_as_read = Usable(as_read.status)
                         ? as_read.nll + StepLengthNormalisation(inc.state(), read.model)
                         : nan;

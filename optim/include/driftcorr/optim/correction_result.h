@@ -43,6 +43,15 @@ struct ScaleWalkDecision {
     enum class Kept { kOneScale, kRefined, kWalk } kept = Kept::kOneScale;
 };
 
+/// The second start of a road correction (CorrectorConfig::one_scale_start): the NLL of the
+/// correction with the scale walk, of its solution solved again with one scale for the whole
+/// drive (a solution of the same model), and of that one refined with the walk, run only when
+/// one scale's NLL is the lower (NaN: not run or not usable).
+struct OneScaleStart {
+    double nll_walk = 0.0, nll_one_scale = 0.0, nll_refined = 0.0;
+    bool from_one_scale = false;  ///< the refined one-scale solution was kept
+};
+
 /// Whether the PDR's step lengths were read about their median or as they are
 /// (CorrectorConfig::decide_step_reading): the NLL of the correction with each reading, each
 /// with its step-length terms' normalisation (sum of ln sigma), which the two readings do not
@@ -131,6 +140,7 @@ struct CorrectionResult {
     std::optional<HeadingBiasDecision> heading_bias;
     /// Set when the scale walk was decided on (corrector.cpp CorrectWithDecidedScaleWalk).
     std::optional<ScaleWalkDecision> scale_walk;
+    std::optional<OneScaleStart> one_scale_start;
     /// Set when the step-length reading was decided on (corrector.cpp
     /// CorrectWithDecidedStepReading).
     std::optional<StepReadingDecision> step_reading;

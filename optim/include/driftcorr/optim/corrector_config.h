@@ -103,6 +103,12 @@ struct CorrectorConfig {
     /// The lowest NLL plus price of the three is kept. Applies with one start scale and no
     /// floor hypotheses (else the walk is always in).
     bool decide_scale_walk = false;
+    /// A second start for a road correction with the scale walk: its solution is solved again
+    /// with one scale for the whole drive (the median of the walk's), a solution of the same
+    /// model; where its NLL is the lower, the walk's solution lies in a poorer basin (the windows
+    /// of a long straight can stretch its last segments into one), and the one-scale solution,
+    /// refined with the walk, is kept. Applies as decide_scale_walk does, which runs instead.
+    bool one_scale_start = true;
     /// The reading of the step lengths (ModelConfig::step_length_exponent below 1: about the
     /// walk's median step) as a freedom decided per input: the drive is corrected with the
     /// exponent and with the step lengths as read (exponent 1); the correction as read is kept
@@ -179,6 +185,9 @@ inline constexpr Param<CorrectorConfig> kCorrectorParamRows[] = {
     {"decide_scale_walk", Field<&CorrectorConfig::decide_scale_walk>(), kNoRange,
      "the scale walk kept only when it lowers the NLL by more than its BIC price (one scale "
      "for the drive otherwise)"},
+    {"one_scale_start", Field<&CorrectorConfig::one_scale_start>(), kNoRange,
+     "the walk's solution solved again with one scale; where that NLL is lower, it is "
+     "kept, refined with the walk"},
     {"decide_step_reading", Field<&CorrectorConfig::decide_step_reading>(), kNoRange,
      "with a step_length_exponent below 1: the correction with the step lengths as read kept "
      "instead when its NLL (with the step terms' normalisation) is lower by more than 1/2 ln n"},
