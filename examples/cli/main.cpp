@@ -6,6 +6,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#if defined(__GLIBC__)  // (set by the headers above)
+#include <malloc.h>
+#endif
 
 #include "commands.h"
 
@@ -64,7 +67,24 @@ int CheckStandardOutput(int code) {
     return code == driftcorr::cli::kExitOk ? driftcorr::cli::kExitBadInput : code;
 }
 
+namespace {
+
+// The windows, final solves and covariance allocate and free blocks of up to tens of MB, over
+// and over. glibc maps each block above its mmap threshold afresh and unmaps it on free, and
+// every first touch of a mapped page is a page fault. Blocks up to 32 MB (the largest threshold
+// glibc takes) come from the heap instead, and up to 64 MB of freed heap is kept for the next
+// solve rather than returned.
+void KeepFreedMemoryForReuse() {
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_THRESHOLD, 32 * 1024 * 1024);
+    mallopt(M_TRIM_THRESHOLD, 64 * 1024 * 1024);
+#endif
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+    KeepFreedMemoryForReuse();
     // A file-size limit (ulimit -f) makes write() fail with EFBIG, reported with the file's name,
     // instead of killing the process by SIGXFSZ with nothing said.
     std::signal(SIGXFSZ, SIG_IGN);
