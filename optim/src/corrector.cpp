@@ -430,6 +430,8 @@ TrajectoryState WithOneScale(TrajectoryState s) {
 // How far one scale's NLL must lie below the walk's to be another basin, not the solvers'
 // tolerance.
 constexpr double kLowerNll = 1e-3;
+// The most iterations of the one-scale solve (CorrectFromOneScaleToo).
+constexpr int kProbeIterations = 10;
 
 // CorrectorConfig::one_scale_start: the correction with the walk; its solution with one scale
 // (the median) solved again with one scale, a solution of the same model (every step of the walk
@@ -445,6 +447,10 @@ IncrementalCorrector CorrectFromOneScaleToo(TrajectoryState initial, const std::
     one.compute_covariance = walk.compute_covariance = false;
     // One segment, as decide_scale_walk's (repaired steps are longer than estimated).
     one.model.scale_segment_m = 2.0 * PathPositions(initial.obs).back() + 1.0;
+    // A probe (at most kProbeIterations of Newton, then of Ipopt): a one-scale basin lies a few
+    // Newton steps away, and a drive that one scale does not describe (dropped odometry steps)
+    // would take a hundred; a probe stopped short is not usable, and the walk's solution stays.
+    one.refine_ipopt.max_iterations = std::min(one.refine_ipopt.max_iterations, kProbeIterations);
     std::optional<IncrementalCorrector> kept;
     kept.emplace(CorrectFromStarts(std::move(initial), t_s, field, walk, result, progress));
     OneScaleStart d;
@@ -460,8 +466,8 @@ IncrementalCorrector CorrectFromOneScaleToo(TrajectoryState initial, const std::
             IncrementalCorrector inc(WithWalkSegments(one_inc.state(), cfg.model), field, walk,
                                      IncrementalCorrector::Corrected{});
             refined = inc.Finish(t_s);
-            if (Usable(refined.status)) {
-                d.nll_refined = refined.nll;
+            if (Usable(refined.status)) d.nll_refined = refined.nll;
+            if (Usable(refined.status) && refined.nll < result.nll - kLowerNll) {
                 d.from_one_scale = true;
                 kept.emplace(std::move(inc));
                 refined.heading_bias = result.heading_bias;
