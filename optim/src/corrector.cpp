@@ -340,6 +340,21 @@ void AddWork(const CorrectionResult& from, CorrectionResult& to) {
     to.incremental_s += from.incremental_s, to.refine_s += from.refine_s;
 }
 
+// Sets `to`'s work counters to `work`'s (every solve's, added up).
+void SetWork(const CorrectionResult& work, CorrectionResult& to) {
+    to.windows = 0, to.window_retries = 0, to.window_restarts = 0;
+    to.iterations = 0, to.incremental_s = 0.0, to.refine_s = 0.0;
+    AddWork(work, to);
+}
+
+// A final solve repeated from `correction`'s solution (`refined`) stands for that correction:
+// it takes the correction's heading-bias decision and start scales.
+void TakeStartsOf(const CorrectionResult& correction, CorrectionResult& refined) {
+    refined.heading_bias = correction.heading_bias;
+    refined.start_scales = correction.start_scales, refined.start_nll = correction.start_nll;
+    refined.start_rms_m = correction.start_rms_m, refined.start_chosen = correction.start_chosen;
+}
+
 // A state of one scale for the whole drive with the walk's segments instead (one per
 // model.scale_segment_m), each at that scale: its final solve repeated with the walk
 // (CorrectorConfig::decide_scale_walk, one_scale_start).
@@ -394,14 +409,10 @@ void CorrectWithDecidedScaleWalk(const PlanarTrajectory& estimate, const Travers
         } else if (refined_score < best) {
             d.kept = ScaleWalkDecision::Kept::kRefined;
             kept.emplace(std::move(inc));
-            refined.heading_bias = result.heading_bias;
-            refined.start_scales = result.start_scales, refined.start_nll = result.start_nll;
-            refined.start_rms_m = result.start_rms_m, refined.start_chosen = result.start_chosen;
+            TakeStartsOf(result, refined);
             result = std::move(refined);
         }
-        result.windows = 0, result.window_retries = 0, result.window_restarts = 0;
-        result.iterations = 0, result.incremental_s = 0.0, result.refine_s = 0.0;
-        AddWork(work, result);
+        SetWork(work, result);
     }
     result.scale_walk = d;
     if (Usable(result.status) && cfg.compute_covariance) kept->AddCovariance(result);
@@ -470,20 +481,14 @@ IncrementalCorrector CorrectFromOneScaleToo(TrajectoryState initial, const std::
             if (Usable(refined.status) && refined.nll < result.nll - kLowerNll) {
                 d.from_one_scale = true;
                 kept.emplace(std::move(inc));
-                refined.heading_bias = result.heading_bias;
-                refined.start_scales = result.start_scales;
-                refined.start_nll = result.start_nll;
-                refined.start_rms_m = result.start_rms_m;
-                refined.start_chosen = result.start_chosen;
+                TakeStartsOf(result, refined);
             }
         }
     }
     CorrectionResult work;  // every solve's counters
     AddWork(result, work), AddWork(from_one, work), AddWork(refined, work);
     if (d.from_one_scale) result = std::move(refined);
-    result.windows = 0, result.window_retries = 0, result.window_restarts = 0;
-    result.iterations = 0, result.incremental_s = 0.0, result.refine_s = 0.0;
-    AddWork(work, result);
+    SetWork(work, result);
     result.one_scale_start = d;
     if (Usable(result.status) && cfg.compute_covariance) kept->AddCovariance(result);
     return std::move(*kept);
@@ -543,9 +548,7 @@ IncrementalCorrector CorrectWithStepReading(
     CorrectionResult work;
     AddWork(result, work), AddWork(as_read, work);
     if (d.as_read) result = std::move(as_read);
-    result.windows = 0, result.window_retries = 0, result.window_restarts = 0;
-    result.iterations = 0, result.incremental_s = 0.0, result.refine_s = 0.0;
-    AddWork(work, result);
+    SetWork(work, result);
     result.step_reading = d;
     return d.as_read ? std::move(inc) : std::move(about);
 }
