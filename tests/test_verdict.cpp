@@ -416,5 +416,54 @@ TEST(SizeFit, TheVerdictFailsASizeTheMapDoesNotTell) {
     EXPECT_FALSE(HasReason(judge(shorter, Streets({2000.0, 2300.0})), finding));
 }
 
+// A 2 km drive east with small heading changes of its own (the odometry's), one pose every 2 m;
+// a correction of it (`corrected`) turns by up to 0.001 rad a step more or less everywhere, and
+// with `detour` bends the stretch from 1000 to 1200 m: 20 steps turning 0.05 rad left, 40 right,
+// 20 left, as a correction that put the drive on another road than the estimate drove.
+PlanarTrajectory Weaving(bool corrected, bool detour = false) {
+    PlanarTrajectory t;
+    Eigen::Vector2d p(0.0, 0.0);
+    double heading = 0.0;
+    for (int i = 0; i <= 1000; ++i) {
+        if (i > 0) {
+            heading += 0.002 * std::sin(0.37 * i) + 0.001 * std::cos(1.3 * i);
+            if (corrected) heading += 0.001 * std::sin(2.1 * i);
+            if (detour && i > 500 && i <= 580) heading += (i <= 520 || i > 560) ? 0.05 : -0.05;
+            p += 2.0 * Eigen::Vector2d(std::cos(heading), std::sin(heading));
+        }
+        t.t_s.push_back(0.2 * i);
+        t.p_en.push_back(p);
+        t.up_m.push_back(0.0);
+        t.yaw_rad.push_back(heading);
+    }
+    return t;
+}
+
+// The correction turns where the estimate does not: degraded, and the poses of that window are
+// flagged; the correction without the detour, turned as a whole and scaled, is not.
+TEST(VerdictRoads, TurnsTheEstimateDoesNotMakeAreNotOk) {
+    const TraversableField field = Streets({1000.0});
+    ModelConfig road;
+    road.map_giveup_m = 1000.0;  // every pose within the map term's reach: no off-map finding
+    road.scale_range_min = 0.5, road.scale_range_max = 2.0;
+    const PlanarTrajectory estimate = Weaving(false);
+    const PlanarTrajectory correction = Weaving(true);
+    const std::string finding = "turns where the estimate does not";
+    const Verdict bent = JudgeCorrection(estimate, &field, road, Result(Weaving(true, true)),
+                                         nullptr, false, false, VerdictConfig{});
+    EXPECT_EQ(bent.level, VerdictLevel::kDegraded);
+    EXPECT_TRUE(HasReason(bent, finding));
+    EXPECT_TRUE(bent.pose_flags[540] & kPoseTurnUnsupported);
+    EXPECT_FALSE(bent.pose_flags[300] & kPoseTurnUnsupported);
+    EXPECT_FALSE(bent.pose_flags[800] & kPoseTurnUnsupported);
+    const PlanarTrajectory turned =
+        ApplyPlacement(ScaleAbout(correction, Eigen::Vector2d::Zero(), 0.0, 1.05),
+                       Eigen::Vector2d::Zero(), AnchorPlacement{0.3, Eigen::Vector2d(5.0, -3.0)});
+    const Verdict same = JudgeCorrection(estimate, &field, road, Result(turned), nullptr, false,
+                                         false, VerdictConfig{});
+    EXPECT_FALSE(HasReason(same, finding));
+    for (std::uint8_t flags : same.pose_flags) EXPECT_FALSE(flags & kPoseTurnUnsupported);
+}
+
 }  // namespace
 }  // namespace driftcorr

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <vector>
 
 #include "driftcorr/core/angles.h"
 #include "driftcorr/core/check.h"
@@ -149,6 +150,79 @@ void JudgeInputJumps(const PlanarTrajectory& est, const VerdictConfig& c, Verdic
                    " time(s) (dropped or doubled odometry steps); the correction there is not "
                    "supported");
     }
+}
+
+// Turns the estimate does not make (VerdictConfig::turn_window_m, turn_ratio): per window of
+// corrected path, the mean square of the corrected minus the estimated heading change per step,
+// from the steps' directions where both steps are longer than turn_min_step_m. A window is
+// flagged beyond turn_ratio times the drive's median window and beyond the model's own heading
+// noise over its steps (the heading random walk over the step's time and heading_sigma_rel of
+// the estimate's turn), so that the drive's straights, where a noiseless estimate and its
+// correction agree exactly, do not make every turn an outlier.
+void JudgeTurns(const PlanarTrajectory& est, const PlanarTrajectory& cor, const ModelConfig& model,
+                const VerdictConfig& c, Verdict& v, Findings& f) {
+    struct Window {
+        double sum = 0.0, noise = 0.0;
+        std::size_t count = 0, first = 0, last = 0;
+    };
+    std::vector<Window> windows;
+    const auto direction = [](const PlanarTrajectory& t, std::size_t i) {
+        const Eigen::Vector2d d = t.p_en[i] - t.p_en[i - 1];
+        return std::atan2(d.y(), d.x());
+    };
+    const auto moving = [&](std::size_t i) {
+        return (est.p_en[i] - est.p_en[i - 1]).norm() > c.turn_min_step_m &&
+               (cor.p_en[i] - cor.p_en[i - 1]).norm() > c.turn_min_step_m;
+    };
+    double path_m = 0.0;
+    for (std::size_t i = 1; i < cor.size() && i < est.size(); ++i) {
+        path_m += (cor.p_en[i] - cor.p_en[i - 1]).norm();
+        const auto k = static_cast<std::size_t>(path_m / c.turn_window_m);
+        if (windows.size() <= k) {
+            windows.resize(k + 1);
+            windows[k].first = i;
+        }
+        windows[k].last = i;
+        if (i < 2 || !moving(i) || !moving(i - 1)) continue;
+        const double turn_cor = WrapAngle(direction(cor, i) - direction(cor, i - 1));
+        const double turn_est = WrapAngle(direction(est, i) - direction(est, i - 1));
+        const double r = WrapAngle(turn_cor - turn_est);
+        const double dt = std::max(est.t_s[i] - est.t_s[i - 1], 0.0);
+        const double rw = model.heading_rw_rad_per_sqrt_s, rel = model.heading_sigma_rel;
+        windows[k].sum += r * r;
+        windows[k].noise += rw * rw * dt + (rel * turn_est) * (rel * turn_est);
+        ++windows[k].count;
+    }
+    constexpr std::size_t kMinSteps = 10, kMinWindows = 3;
+    std::vector<double> ms;
+    for (const Window& w : windows) {
+        if (w.count >= kMinSteps) ms.push_back(w.sum / double(w.count));
+    }
+    if (ms.size() < kMinWindows) return;
+    std::vector<double> sorted = ms;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    if (!(median > 0.0)) return;
+    std::size_t flagged = 0;
+    double worst = 0.0, worst_at_m = 0.0;
+    for (std::size_t k = 0; k < windows.size(); ++k) {
+        const Window& w = windows[k];
+        if (w.count < kMinSteps) continue;
+        const double ratio = w.sum / double(w.count) / median;
+        if (ratio <= c.turn_ratio || w.sum <= w.noise) continue;
+        for (std::size_t i = w.first; i <= w.last; ++i) v.pose_flags[i] |= kPoseTurnUnsupported;
+        flagged += w.last - w.first + 1;
+        if (ratio > worst) worst = ratio, worst_at_m = double(k) * c.turn_window_m;
+    }
+    if (flagged == 0) return;
+    f.Degraded(
+        "the correction turns where the estimate does not over " +
+        FormatPercent(double(flagged) / double(est.size())) +
+        " of the drive (its heading changes differ from the estimate's " + FormatFixed(worst, 0) +
+        " times more than over the drive's median " + FormatFixed(c.turn_window_m, 0) +
+        " m, from " + FormatFixed(worst_at_m, 0) +
+        " m of the corrected path): the odometry does not support the path there (another road, a "
+        "start off the map)");
 }
 
 void JudgeOffMap(const PlanarTrajectory& cor, const TraversableField& field, double reach_m,
@@ -544,6 +618,8 @@ Verdict JudgeCorrection(const PlanarTrajectory& estimate, const TraversableField
         JudgeScale(estimate, result.step_length_m, result.tread_steps, result.corrected,
                    model.scale_segment_m, c, v, f);
     }
+    if (field && !field->empty() && field->planar() && !result.input_kept)
+        JudgeTurns(estimate, result.corrected, model, config, v, f);
     if (field && !field->empty())
         JudgeOffMap(result.corrected, *field, model.map_giveup_m, config, v, f);
     if (field && !field->empty() && field->planar() && scale_estimated && !result.input_kept)

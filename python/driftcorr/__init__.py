@@ -13,7 +13,8 @@ Array layouts (float64, one row per pose):
 - per-pose covariance (``covariance``): ``(N, 8)``
   ``t var_e cov_en var_n var_up var_yaw cov_e_yaw cov_n_yaw`` ([m^2], [rad^2], [m rad]);
 - per-pose verdict flags (``flags``): ``(N,)`` uint8, bits 1 off the map, 2 input jump,
-  4 implausible scale, 8 a height change the estimate denies.
+  4 implausible scale, 8 a height change the estimate denies, 16 a floor not determined,
+  32 a turn the estimate does not make.
 
 Errors: a bad argument (wrong shape, NaN, missing map file, unknown key) raises ``ValueError`` or
 ``TypeError`` whose message starts with the argument's name; a bad file raises

@@ -23,6 +23,9 @@
 //  - input jumps: the estimate's speed changes faster than any platform can accelerate (frame-to-
 //    frame odometry dropping or doubling motion), which a smooth scale cannot follow;
 //  - off the map: corrected poses farther from every traversable place than the map term reaches;
+//  - roads: turns the estimate does not make: a stretch whose heading changes differ from the
+//    estimate's far more than the rest of the drive's and than the model's heading noise (the
+//    correction followed another road there, or left a start off the map);
 //  - 3D: corrected height changes the estimate's deny, level walking between floors, and a floor
 //    that another floor explains as well (neither the barometer nor the map tells them apart).
 // No I/O.
@@ -53,6 +56,9 @@ enum PoseFlag : std::uint8_t {
     /// on a floor that another floor explains as well (the barometer's floor changes read both,
     /// and the path, shifted by up to the map's reach, lies on both floors' map)
     kPoseFloorAmbiguous = 16,
+    /// in a stretch where the correction turns where the estimate does not (its heading changes
+    /// differ from the estimate's far more than over the rest of the drive)
+    kPoseTurnUnsupported = 32,
 };
 
 struct VerdictConfig {
@@ -115,6 +121,19 @@ struct VerdictConfig {
     /// single turn after a long straight, onto one of a grid's streets; a straight the correction
     /// stretched), and the correction chose one.
     double size_rms_margin_m = 0.5;  ///< [m]
+    /// Turns the estimate does not make: per turn_window_m of corrected path, the mean square of
+    /// the difference between the corrected and the estimated heading change per step (headings
+    /// of the steps' directions, steps longer than turn_min_step_m in both), against the median
+    /// over the drive's windows (at least three). A window beyond turn_ratio times that median,
+    /// and beyond the model's own heading noise over its steps (heading_rw_rad_per_sqrt_s over
+    /// each step's time, heading_sigma_rel of the estimate's turn), is a stretch the correction
+    /// bent onto a road the odometry did not drive (another road, a start off the map):
+    /// degraded, its poses flagged kPoseTurnUnsupported. The ratio is an
+    /// order of magnitude beyond the largest window of a correct result on the drives and
+    /// generated sets measured (docs/results.md, "Turns the estimate does not make").
+    double turn_window_m = 200.0;  ///< [m]
+    double turn_min_step_m = 0.3;  ///< [m]
+    double turn_ratio = 100.0;     ///< [-]
 
     /// The first value kVerdictParams or a rule between its values does not allow.
     std::optional<ParamProblem> FindProblem() const;
@@ -166,6 +185,13 @@ inline constexpr Param<VerdictConfig> kVerdictParamRows[] = {
     {"size_rms_margin_m", Field<&VerdictConfig::size_rms_margin_m>(), kNonNegative,
      "roads: another size of the drive that fits the map within this RMS makes its size "
      "undetermined"},
+    {"turn_window_m", Field<&VerdictConfig::turn_window_m>(), kPositive,
+     "turns the estimate does not make: window of corrected path"},
+    {"turn_min_step_m", Field<&VerdictConfig::turn_min_step_m>(), kNonNegative,
+     "...over the steps longer than this in the correction and the estimate"},
+    {"turn_ratio", Field<&VerdictConfig::turn_ratio>(), AtLeast(1.0),
+     "...a window whose heading changes differ from the estimate's more than this times the "
+     "drive's median window and more than the model's heading noise is degraded"},
 };
 inline constexpr ParamTable<VerdictConfig> kVerdictParams{"verdict", kVerdictParamRows};
 
