@@ -490,9 +490,8 @@ void WriteCovariance(const std::string& path, const pipeline::CorrectionRun& run
     AtomicFile file(path);
     std::ostream& out = file.stream();
     out << "# t var_e_m2 cov_en_m2 var_n_m2 var_up_m2 var_yaw_rad2 flags"
-           " (flags: 1 off the map, 2 input jump, 4 implausible scale, 8 height change denied, 16 "
-           "floor"
-           " not determined, 32 turn the estimate does not make)\n";
+           " (flags: 1 off the map, 2 input jump, 4 implausible scale, 8 height change denied,"
+           " 16 floor not determined, 32 turn the estimate does not make)\n";
     char line[256];
     for (std::size_t i = 0; i < cov.poses.size(); ++i) {
         const auto& c = cov.poses[i];

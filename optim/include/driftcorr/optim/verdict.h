@@ -128,9 +128,7 @@ struct VerdictConfig {
     /// and beyond the model's own heading noise over its steps (heading_rw_rad_per_sqrt_s over
     /// each step's time, heading_sigma_rel of the estimate's turn), is a stretch the correction
     /// bent onto a road the odometry did not drive (another road, a start off the map):
-    /// degraded, its poses flagged kPoseTurnUnsupported. The ratio is an
-    /// order of magnitude beyond the largest window of a correct result on the drives and
-    /// generated sets measured (docs/results.md, "Turns the estimate does not make").
+    /// degraded, its poses flagged kPoseTurnUnsupported.
     double turn_window_m = 200.0;  ///< [m]
     double turn_min_step_m = 0.3;  ///< [m]
     double turn_ratio = 100.0;     ///< [-]
