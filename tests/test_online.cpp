@@ -669,6 +669,53 @@ TEST(Online, WithoutHeadingsStraightLineIsKept) {
     EXPECT_TRUE(Usable(online.Finish().status));
 }
 
+// Dropped odometry steps put the outputs in doubt (kDoubtOdometry) from the speed jump until a
+// solve has seen the estimate turn after the episode: on odometry alone, 10 m/s East with 2 s of
+// steps shortened to 0.4 of their length at t = 20 s, straight on to t = 60 s, a left turn of
+// 90 degrees over 3 s, then North. The lines of the straight after the episode are in doubt, 10 s
+// after the jump as well; the lines well after the turn are not; the same drive without the
+// episode has no line in doubt.
+TEST(Online, DroppedStepsKeepTheOutputsInDoubtUntilATurnAfterThem) {
+    auto drive = [](bool drop) {
+        std::vector<PlanarPose> poses;
+        Eigen::Vector2d p = Eigen::Vector2d::Zero();
+        double yaw = 0.0;
+        for (int i = 0; i <= 900; ++i) {
+            const double t = 0.1 * i;
+            if (i > 0) {
+                if (t > 60.0 && t <= 63.0) yaw += (M_PI / 2.0) / 30.0;
+                const double step = drop && t > 20.0 && t <= 22.0 ? 0.4 : 1.0;
+                p += step * Eigen::Vector2d(std::cos(yaw), std::sin(yaw));
+            }
+            poses.push_back(PlanarPose{t, p, 0.0, yaw});
+        }
+        return poses;
+    };
+    OnlineConfig cfg;
+    cfg.synchronous = true;
+    for (const bool drop : {true, false}) {
+        OnlineCorrector online(nullptr, cfg);
+        std::size_t before = 0, straight = 0, late_straight = 0, after_turn = 0;
+        for (const PlanarPose& pose : drive(drop)) {
+            const PushResult r = online.Push(pose);
+            ASSERT_TRUE(r.Accepted()) << r.message;
+            const bool doubt = (r.doubt & kDoubtOdometry) != 0;
+            if (pose.t_s < 19.0) before += doubt;
+            if (pose.t_s > 22.0 && pose.t_s < 60.0) straight += !doubt;  // lines not in doubt
+            if (pose.t_s > 35.0 && pose.t_s < 60.0) late_straight += doubt;
+            if (pose.t_s > 80.0) after_turn += doubt;
+        }
+        EXPECT_EQ(before, 0u) << drop;
+        EXPECT_EQ(after_turn, 0u) << drop;
+        if (drop) {
+            EXPECT_EQ(straight, 0u);
+            EXPECT_EQ(late_straight, 249u);
+        } else {
+            EXPECT_EQ(late_straight, 0u);
+        }
+    }
+}
+
 // Two start scales on odometry alone (no map): each hypothesis keeps its scale, their NLLs differ
 // only by the scale prior (0.5 (0.2 / 0.2)^2 = 0.5), so the output of the lower (scale 1) carries
 // the other's offset, 0.2 of the path, with a weight of exp(-0.5) / (1 + exp(-0.5)) = 0.38 in its

@@ -26,8 +26,12 @@ namespace {
 
 // kDoubtOdometry: the input's speed is compared over windows of kSpeedWindowS (three KITTI
 // frames, as the verdict's input-jump test and the dropped-step repair do), and a jump keeps the
-// outputs in doubt for kSpeedEpisodeS (the longest episode the repair takes).
+// outputs in doubt for kSpeedEpisodeS (the longest episode the repair takes), and beyond it until
+// a solve has seen the estimate turn by kFixingTurnRad from its heading at the episode's end:
+// what the dropped steps lost, and the step-length scale the windows took from them, lie along
+// the track, which the map fixes only where the road turns after the episode.
 constexpr double kSpeedWindowS = 0.3, kSpeedEpisodeS = 10.0;
+constexpr double kFixingTurnRad = 30.0 * kPi / 180.0;
 // The worker runs the solves at a lower scheduling priority than the thread that calls Push, so
 // that on a busy or single core an arriving pose pre-empts a running solve instead of waiting for
 // its time slice (the output latency is the Push path's, not the solver's): nice + 10, and the
@@ -249,8 +253,18 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
     last_p_ = entry.initial.p;
     last_yaw_u_ = yaw_u;
     path_m_ += entry.step.length_m;
-    if (SpeedJump(pose.t_s)) odometry_doubt_until_s_ = pose.t_s + kSpeedEpisodeS;
-    if (pose.t_s <= odometry_doubt_until_s_) r.doubt |= kDoubtOdometry;
+    if (SpeedJump(pose.t_s)) {
+        odometry_doubt_until_s_ = pose.t_s + kSpeedEpisodeS;
+        episode_yaw_u_.reset();
+        fixing_turn_.reset();
+        awaiting_turn_ = true;
+    }
+    if (awaiting_turn_ && !episode_yaw_u_ && pose.t_s > odometry_doubt_until_s_) {
+        episode_yaw_u_ = yaw_u;
+    }
+    if (episode_yaw_u_ && !fixing_turn_ && std::abs(yaw_u - *episode_yaw_u_) >= kFixingTurnRad) {
+        fixing_turn_ = r.index;
+    }
     const std::size_t requested_before = last_request_end_;
     UpdateSchedule(r.index);  // synchronous: solves here
     PoseState out;
@@ -273,6 +287,8 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
             settled_factor_ = QuantileFactor(settled_bins_, settled_);
         }
         solves_seen_ = stats_.solves;
+        if (awaiting_turn_ && fixing_turn_ && solved_end_ >= *fixing_turn_) awaiting_turn_ = false;
+        if (pose.t_s <= odometry_doubt_until_s_ || awaiting_turn_) r.doubt |= kDoubtOdometry;
         out = current_[r.index];
         r.correction_age_epochs = r.index - std::min(solved_end_, r.index);
         r.fresh = solved_end_ >= requested_before;

@@ -98,6 +98,12 @@ private:
     /// outputs in doubt (kDoubtOdometry).
     std::deque<std::pair<double, double>> recent_path_;
     double odometry_doubt_until_s_ = -1e300;
+    /// Since the last speed jump: the heading (unwrapped) at the end of its episode, the first
+    /// pose turned by kFixingTurnRad from it, and whether the outputs stay in doubt until a solve
+    /// reaches that pose.
+    std::optional<double> episode_yaw_u_;
+    std::optional<std::size_t> fixing_turn_;
+    bool awaiting_turn_ = false;
     /// The previous output before projection, its covariance (East-North) and whether it had one;
     /// the solves merged when it was taken; whether the newest solve since moved it outside its
     /// 95 % region, and by how much (kDoubtMoved).

@@ -101,7 +101,8 @@ class StreamPose:
     outside_map: bool         #: outside the map field: odometry only
     doubt: int                #: why the pose may be wrong, bits: 1 off the map, 2 a window in
                               #: a wrong basin, 4 an implausible scale, 8 hypotheses that part,
-                              #: 16 a speed jump of the input within 10 s, 32 the global
+                              #: 16 a speed jump of the input within 10 s or with no
+                              #: turn solved since (dropped steps), 32 the global
                               #: scale still searched (scale: auto; the input at the best
                               #: scale so far), 64 the first output after the chain was
                               #: re-localised from its prefix (it may jump), 128 the

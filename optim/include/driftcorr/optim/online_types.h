@@ -146,7 +146,8 @@ enum OnlineDoubt : unsigned {
                            ///< chosen output's 95 % region (the covariance holds the mixture)
     kDoubtOdometry = 16,   ///< the input's speed over 0.3 s changed faster than
                            ///< model.outlier_accel_mps2 within the last 10 s (dropped or doubled
-                           ///< odometry steps, the longest episode the repair takes)
+                           ///< odometry steps, the longest episode the repair takes), or since
+                           ///< then no solve has seen the estimate turn by 30 degrees
     kDoubtScaleSearch = 32,  ///< `scale: auto`: the estimate's global scale is still searched;
                              ///< the output is the input at the scale that fits the map best so
                              ///< far, not a correction (pipeline::StreamSession)
