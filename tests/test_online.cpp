@@ -550,6 +550,56 @@ TEST_F(OnlineSynthetic, TheCovarianceIsScaledByHowItHeldTheFinalEstimates) {
     EXPECT_GT(inside_scaled, inside_model);
 }
 
+// The outputs in doubt for the odometry (kDoubtOdometry) are scaled by how those outputs held
+// their final estimates, where that is worse than all outputs did: on the synthetic drive with
+// steps dropped to 0.3 of their length in 2 s episodes every 30 s, where the doubt ends, the last
+// output in doubt is scaled by more than the next, which is not in doubt (one scale for every
+// output would change by at most one bin of its quantile, 12 %, from one output to the next);
+// the outputs' positions and flags are those of the uncalibrated stream.
+TEST_F(OnlineSynthetic, OutputsInDoubtForTheOdometryAreCalibratedApart) {
+    PlanarTrajectory dropped = run_->estimate;
+    for (std::size_t i = 1; i < dropped.size(); ++i) {
+        const double keep = i >= 200 && i % 300 < 20 ? 0.3 : 1.0;
+        dropped.p_en[i] =
+            dropped.p_en[i - 1] + keep * (run_->estimate.p_en[i] - run_->estimate.p_en[i - 1]);
+    }
+    const std::size_t n = std::min<std::size_t>(dropped.size(), 2000);
+    auto run = [&](bool calibrate) {
+        OnlineConfig cfg;
+        cfg.synchronous = true;
+        cfg.calibrate_covariance = calibrate;
+        OnlineCorrector online(&setup_->field, cfg);
+        std::vector<PushResult> out;
+        for (std::size_t i = 0; i < n; ++i) out.push_back(online.Push(At(dropped, i)));
+        return out;
+    };
+    const std::vector<PushResult> model = run(false), scaled = run(true);
+    double largest_step = 0.0;  // factor of the last output in doubt over the next one's
+    std::size_t ends = 0;
+    double previous = 0.0;  // the previous output's factor, 0 when not in doubt or none
+    for (std::size_t i = 0; i < n; ++i) {
+        const PushResult& a = model[i];
+        const PushResult& b = scaled[i];
+        ASSERT_TRUE(a.Accepted() && b.Accepted()) << i;
+        EXPECT_EQ(a.corrected.p_en, b.corrected.p_en) << "pose " << i;
+        EXPECT_EQ(a.doubt, b.doubt) << "pose " << i;
+        if (!a.covariance_ok || !(a.covariance.xy_m2.trace() > 0.0)) {
+            previous = 0.0;
+            continue;
+        }
+        const double factor = b.covariance.xy_m2.trace() / a.covariance.xy_m2.trace();
+        const bool doubt = (a.doubt & kDoubtOdometry) != 0;
+        if (!doubt && previous > 0.0) {
+            largest_step = std::max(largest_step, previous / factor), ++ends;
+        }
+        previous = doubt ? factor : 0.0;
+    }
+    std::printf("dropped steps: %zu ends of the doubt, the largest factor's fall at one %.2f\n",
+                ends, largest_step);
+    EXPECT_GT(ends, 0u);
+    EXPECT_GT(largest_step, 1.5);
+}
+
 // Before the first solve an output is the odometry from the start at the prior's step-length
 // scale: its covariance holds that scale's uncertainty along the displacement so far (at least
 // scale_prior_sigma of it, one sigma).

@@ -69,7 +69,7 @@ bool MovedOutside(const Eigen::Vector2d& d, const Eigen::Matrix2d& xy_m2, bool o
     return ok && xy_m2.determinant() > 0.0 && !InsideRegion95(d, xy_m2);
 }
 
-// The bins of the outputs' normalised squared differences (OnlineChain::settled_bins_):
+// The bins of the outputs' normalised squared differences (OnlineChain::Settled::bins):
 // kBinsPerDecade bins per decade of d^T Sigma^-1 d from 10^kLowestDecade; smaller values count
 // in the first bin, larger ones in the last.
 constexpr int kBinsPerDecade = 20, kLowestDecade = -6;
@@ -281,14 +281,20 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
         while (!unsettled_.empty() && unsettled_.front().index < settled_before_) {
             const Output& o = unsettled_.front();
             const Eigen::Vector2d d = current_[o.index].p.head<2>() - o.p_en;
-            Count(settled_bins_, d.dot(o.xy_m2.inverse() * d));
-            ++settled_;
+            const double nis = d.dot(o.xy_m2.inverse() * d);
+            for (std::size_t k = 0; k < settled_.size(); ++k) {
+                if (k == 1 && !o.odometry_doubt) continue;  // [1]: the odometry's doubt only
+                Settled& s = settled_[k];
+                Count(s.bins, nis);
+                ++s.count;
+                s.factor = QuantileFactor(s.bins, s.count);
+            }
             unsettled_.pop_front();
-            settled_factor_ = QuantileFactor(settled_bins_, settled_);
         }
         solves_seen_ = stats_.solves;
         if (awaiting_turn_ && fixing_turn_ && solved_end_ >= *fixing_turn_) awaiting_turn_ = false;
-        if (pose.t_s <= odometry_doubt_until_s_ || awaiting_turn_) r.doubt |= kDoubtOdometry;
+        const bool odometry = pose.t_s <= odometry_doubt_until_s_ || awaiting_turn_;
+        if (odometry) r.doubt |= kDoubtOdometry;
         out = current_[r.index];
         r.correction_age_epochs = r.index - std::min(solved_end_, r.index);
         r.fresh = solved_end_ >= requested_before;
@@ -306,9 +312,10 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
         last_out_cov_ok_ = r.covariance_ok;
         if (cfg_.calibrate_covariance && r.covariance_ok) {
             if (r.covariance.xy_m2.determinant() > 0.0) {
-                unsettled_.push_back({r.index, last_out_en_, r.covariance.xy_m2});
+                unsettled_.push_back({r.index, last_out_en_, r.covariance.xy_m2, odometry});
             }
-            Scale(r.covariance, settled_factor_);
+            Scale(r.covariance,
+                  odometry ? std::max(settled_[0].factor, settled_[1].factor) : settled_[0].factor);
         }
         if (moved_) {
             // Two estimates of the chain, the newest solve's and the one before, each as likely:

@@ -114,18 +114,24 @@ private:
     bool moved_ = false;
     Eigen::Vector2d moved_by_m_ = Eigen::Vector2d::Zero();
     /// OnlineConfig::calibrate_covariance: the outputs that a window may still move (index,
-    /// position before projection, the model's covariance East-North), and the normalised
-    /// squared differences d^T Sigma^-1 d of those that no window moves any more, counted in
-    /// bins of log10 from 1e-6 to 1e6: the stream's quantiles in bounded memory.
+    /// position before projection, the model's covariance East-North, whether in doubt for the
+    /// odometry, kDoubtOdometry), and the normalised squared differences d^T Sigma^-1 d of those
+    /// that no window moves any more, counted in bins of log10 from 1e-6 to 1e6: the stream's
+    /// quantiles in bounded memory: of every output ([0]), and of those in doubt for the odometry
+    /// ([1]), which are scaled by the larger of the two factors.
     struct Output {
         std::size_t index = 0;
         Eigen::Vector2d p_en = Eigen::Vector2d::Zero();
         Eigen::Matrix2d xy_m2 = Eigen::Matrix2d::Zero();
+        bool odometry_doubt = false;
+    };
+    struct Settled {
+        std::array<std::size_t, 240> bins{};
+        std::size_t count = 0;
+        double factor = 1.0;  ///< the factor they give (QuantileFactor)
     };
     std::deque<Output> unsettled_;
-    std::array<std::size_t, 240> settled_bins_{};
-    std::size_t settled_ = 0;
-    double settled_factor_ = 1.0;  ///< the factor they give (QuantileFactor)
+    std::array<Settled, 2> settled_;
 
     // Shared with the worker, guarded by mutex_.
     mutable std::mutex mutex_;

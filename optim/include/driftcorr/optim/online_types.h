@@ -70,7 +70,9 @@ struct OnlineConfig {
     /// would lie below chi2_2(0.95) = 5.991 for at least 95 % of the outputs (d misses the
     /// errors the final estimates share, so never more). Once 20 outputs have settled (the
     /// fewest that leave one beyond a 95 % quantile), every output's covariance is multiplied
-    /// by max(1, the 95 % quantile of their d^T Sigma^-1 d over the stream so far / 5.991).
+    /// by max(1, the 95 % quantile of their d^T Sigma^-1 d over the stream so far / 5.991); an
+    /// output in doubt for the odometry (kDoubtOdometry) by the larger of that and the same
+    /// factor over the settled outputs that were in that doubt.
     /// The positions and the doubt bits (kDoubtMoved tests the model's region) are unchanged.
     bool calibrate_covariance = true;
 
