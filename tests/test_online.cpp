@@ -55,6 +55,32 @@ PlanarTrajectory TurnedAboutStart(PlanarTrajectory t, double angle_rad) {
     return t;
 }
 
+// The estimate re-integrated with step i's translation times keep(i).
+template <typename Keep>
+PlanarTrajectory WithStepsKept(const PlanarTrajectory& estimate, Keep keep) {
+    PlanarTrajectory t = estimate;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+        t.p_en[i] = t.p_en[i - 1] + keep(i) * (estimate.p_en[i] - estimate.p_en[i - 1]);
+    }
+    return t;
+}
+
+// The first n poses of `t` through a synchronous stream, with or without the covariance's
+// calibration (OnlineConfig::calibrate_covariance); every push is accepted.
+std::vector<PushResult> StreamCalibrated(const PlanarTrajectory& t, std::size_t n,
+                                         const TraversableField& field, bool calibrate) {
+    OnlineConfig cfg;
+    cfg.synchronous = true;
+    cfg.calibrate_covariance = calibrate;
+    OnlineCorrector online(&field, cfg);
+    std::vector<PushResult> out;
+    for (std::size_t i = 0; i < n; ++i) {
+        out.push_back(online.Push(At(t, i)));
+        EXPECT_TRUE(out.back().Accepted()) << out.back().message;
+    }
+    return out;
+}
+
 struct OnlineOutcome {
     PlanarTrajectory causal;
     CorrectionResult smoothed;
@@ -506,26 +532,11 @@ TEST_F(OnlineSynthetic, ASolveThatMovesTheChainRunsARelocalisation) {
 // bits are the same either way, and no output's covariance shrinks.
 TEST_F(OnlineSynthetic, TheCovarianceIsScaledByHowItHeldTheFinalEstimates) {
     ASSERT_TRUE(run_->ground_truth);
-    PlanarTrajectory shortened = run_->estimate;
-    for (std::size_t i = 301; i < shortened.size(); ++i) {
-        const double keep = i <= 450 ? 0.7 : 1.0;
-        shortened.p_en[i] =
-            shortened.p_en[i - 1] + keep * (run_->estimate.p_en[i] - run_->estimate.p_en[i - 1]);
-    }
+    const PlanarTrajectory shortened = WithStepsKept(
+        run_->estimate, [](std::size_t i) { return i >= 301 && i <= 450 ? 0.7 : 1.0; });
     const std::size_t n = std::min<std::size_t>(shortened.size(), 1500);
-    auto run = [&](bool calibrate) {
-        OnlineConfig cfg;
-        cfg.synchronous = true;
-        cfg.calibrate_covariance = calibrate;
-        OnlineCorrector online(&setup_->field, cfg);
-        std::vector<PushResult> out;
-        for (std::size_t i = 0; i < n; ++i) {
-            out.push_back(online.Push(At(shortened, i)));
-            EXPECT_TRUE(out.back().Accepted()) << out.back().message;
-        }
-        return out;
-    };
-    const std::vector<PushResult> model = run(false), scaled = run(true);
+    const std::vector<PushResult> model = StreamCalibrated(shortened, n, setup_->field, false);
+    const std::vector<PushResult> scaled = StreamCalibrated(shortened, n, setup_->field, true);
     const PlanarTrajectory& truth = *run_->ground_truth;
     std::size_t inside_model = 0, inside_scaled = 0, larger = 0, with = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -557,23 +568,11 @@ TEST_F(OnlineSynthetic, TheCovarianceIsScaledByHowItHeldTheFinalEstimates) {
 // output would change by at most one bin of its quantile, 12 %, from one output to the next);
 // the outputs' positions and flags are those of the uncalibrated stream.
 TEST_F(OnlineSynthetic, OutputsInDoubtForTheOdometryAreCalibratedApart) {
-    PlanarTrajectory dropped = run_->estimate;
-    for (std::size_t i = 1; i < dropped.size(); ++i) {
-        const double keep = i >= 200 && i % 300 < 20 ? 0.3 : 1.0;
-        dropped.p_en[i] =
-            dropped.p_en[i - 1] + keep * (run_->estimate.p_en[i] - run_->estimate.p_en[i - 1]);
-    }
+    const PlanarTrajectory dropped = WithStepsKept(
+        run_->estimate, [](std::size_t i) { return i >= 200 && i % 300 < 20 ? 0.3 : 1.0; });
     const std::size_t n = std::min<std::size_t>(dropped.size(), 2000);
-    auto run = [&](bool calibrate) {
-        OnlineConfig cfg;
-        cfg.synchronous = true;
-        cfg.calibrate_covariance = calibrate;
-        OnlineCorrector online(&setup_->field, cfg);
-        std::vector<PushResult> out;
-        for (std::size_t i = 0; i < n; ++i) out.push_back(online.Push(At(dropped, i)));
-        return out;
-    };
-    const std::vector<PushResult> model = run(false), scaled = run(true);
+    const std::vector<PushResult> model = StreamCalibrated(dropped, n, setup_->field, false);
+    const std::vector<PushResult> scaled = StreamCalibrated(dropped, n, setup_->field, true);
     double largest_step = 0.0;  // factor of the last output in doubt over the next one's
     std::size_t ends = 0;
     double previous = 0.0;  // the previous output's factor, 0 when not in doubt or none

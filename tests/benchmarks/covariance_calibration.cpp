@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/pipeline/pipeline.h"
+#include "scenario_correction.h"
 #include "scenario_list.h"
 
 namespace {
@@ -180,15 +182,12 @@ void PrintVariants(const TrajectoryState& state, const TraversableField& field,
 }
 
 void Evaluate(const std::string& dir) {
-    const pipeline::PipelineConfig config;
-    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(dir, config);
-    if (!ps.ground_truth) {
-        std::printf("%s: no ground truth, skipped\n", ps.scenario.name.c_str());
-        return;
-    }
-    const CorrectorConfig& cfg = pipeline::CorrectorFor(ps.scenario, config);
-    CorrectionResult result;
-    const IncrementalCorrector inc = CorrectFromStarts(ps.estimate, &ps.field, cfg, result);
+    const std::unique_ptr<bench::ScenarioCorrection> c = bench::CorrectWithGroundTruth(dir);
+    if (!c) return;
+    const pipeline::PreparedScenario& ps = c->scenario;
+    const CorrectorConfig& cfg = c->config;
+    const CorrectionResult& result = c->result;
+    const IncrementalCorrector& inc = *c->corrector;
     const CovarianceResult& cov = result.covariance;
     if (!Usable(result.status) || cov.status != CovarianceStatus::kOk) {
         std::printf("%s: correction %s, covariance %s: %s\n", ps.scenario.name.c_str(),

@@ -20,6 +20,7 @@
 #include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@
 #include "driftcorr/optim/covariance.h"
 #include "driftcorr/optim/incremental_corrector.h"
 #include "driftcorr/pipeline/pipeline.h"
+#include "scenario_correction.h"
 #include "scenario_list.h"
 
 namespace {
@@ -90,15 +92,12 @@ double WalkFactor(const TrajectoryState& state, const TraversableField& field,
 }
 
 void Evaluate(const std::string& dir) {
-    const pipeline::PipelineConfig config;
-    const pipeline::PreparedScenario ps = pipeline::PrepareScenario(dir, config);
-    if (!ps.ground_truth) {
-        std::printf("%s: no ground truth, skipped\n", ps.scenario.name.c_str());
-        return;
-    }
-    const CorrectorConfig& cfg = pipeline::CorrectorFor(ps.scenario, config);
-    CorrectionResult result;
-    const IncrementalCorrector inc = CorrectFromStarts(ps.estimate, &ps.field, cfg, result);
+    const std::unique_ptr<bench::ScenarioCorrection> c = bench::CorrectWithGroundTruth(dir);
+    if (!c) return;
+    const pipeline::PreparedScenario& ps = c->scenario;
+    const CorrectorConfig& cfg = c->config;
+    const CorrectionResult& result = c->result;
+    const IncrementalCorrector& inc = *c->corrector;
     if (!Usable(result.status) || inc.state().scales.size() < 2) {
         std::printf("%s: correction %s, %zu scale segment(s): skipped\n", ps.scenario.name.c_str(),
                     ToString(result.status).c_str(), inc.state().scales.size());
