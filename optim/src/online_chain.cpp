@@ -282,13 +282,12 @@ PushResult OnlineChain::Take(const PlanarPose& pose, bool ahead_of_real_time) {
             const Output& o = unsettled_.front();
             const Eigen::Vector2d d = current_[o.index].p.head<2>() - o.p_en;
             const double nis = d.dot(o.xy_m2.inverse() * d);
-            for (std::size_t k = 0; k < settled_.size(); ++k) {
-                if (k == 1 && !o.odometry_doubt) continue;  // [1]: the odometry's doubt only
-                Settled& s = settled_[k];
+            const auto add = [nis](Settled& s) {
                 Count(s.bins, nis);
-                ++s.count;
-                s.factor = QuantileFactor(s.bins, s.count);
-            }
+                s.factor = QuantileFactor(s.bins, ++s.count);
+            };
+            add(settled_[0]);
+            if (o.odometry_doubt) add(settled_[1]);
             unsettled_.pop_front();
         }
         solves_seen_ = stats_.solves;

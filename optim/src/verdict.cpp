@@ -199,9 +199,8 @@ void JudgeTurns(const PlanarTrajectory& est, const PlanarTrajectory& cor, const 
         if (w.count >= kMinSteps) ms.push_back(w.sum / double(w.count));
     }
     if (ms.size() < kMinWindows) return;
-    std::vector<double> sorted = ms;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double median = sorted[sorted.size() / 2];
+    std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+    const double median = ms[ms.size() / 2];
     if (!(median > 0.0)) return;
     std::size_t flagged = 0;
     double worst = 0.0, worst_at_m = 0.0;
