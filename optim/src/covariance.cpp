@@ -79,6 +79,31 @@ private:
     long last_stretch_ = -1;
 };
 
+// Keeps of each map term's horizontal Jacobian only its component across the pose's direction of
+// travel (method step 1b).
+void KeepMapTermsAcrossTravel(const TrajectoryState& s, const WindowProblem& p,
+                              std::vector<LinearisedTerm>& terms) {
+    for (LinearisedTerm& t : terms) {
+        if (t.family != TermFamily::kMapDistance) continue;
+        const auto pose = static_cast<std::size_t>(t.pose);
+        const int x_var = p.PoseVar(pose, 0);
+        if (x_var < 0) continue;
+        const double yaw = s.poses[pose].yaw_rad;
+        const Eigen::Vector2d across(-std::sin(yaw), std::cos(yaw));
+        int at[2] = {-1, -1};
+        Eigen::Vector2d j = Eigen::Vector2d::Zero();
+        for (int a = 0; a < t.size; ++a) {
+            for (int c = 0; c < 2; ++c) {
+                if (t.var[a] == x_var + c) at[c] = a, j[c] = t.jacobian[a];
+            }
+        }
+        const Eigen::Vector2d kept = j.dot(across) * across;
+        for (int c = 0; c < 2; ++c) {
+            if (at[c] >= 0) t.jacobian[at[c]] = kept[c];
+        }
+    }
+}
+
 // Makes each map term's residual d(p - b_k) ~ d - grad d . b_k (variance (1 - share)
 // map_sigma^2) and adds, per component, the process b_0 ~ N(0, share map_sigma^2),
 // b_k+1 - rho b_k ~ N(0, (1 - rho^2) share map_sigma^2) with rho = exp(-path between the
@@ -465,6 +490,7 @@ CovarianceResult WholeCovariance(const TrajectoryState& state, const Traversable
     std::vector<LinearisedTerm> terms;
     terms.reserve(6 * n);
     problem.LineariseTerms(x.data(), terms);
+    if (config.map_across_travel) KeepMapTermsAcrossTravel(state, problem, terms);
     const std::vector<double> path_m = PathPositions(state.obs);  // the processes run along it
     const PathProcess offset = AddMapOffset(path_m, problem, model, config, terms);
     const PathProcess step_error =

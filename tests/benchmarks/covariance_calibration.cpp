@@ -147,12 +147,14 @@ void PrintVariants(const TrajectoryState& state, const TraversableField& field,
         double share, correlation_m;
         bool components;
         double step_sd, step_correlation_m;
+        bool across = true;  // CovarianceConfig::map_across_travel
     };
     const CovarianceConfig& d = cfg.covariance;
     const double share = d.map_offset_share, corr_m = d.map_offset_correlation_m;
     const bool comp = d.family_variance_components;
     const double step_sd = d.step_error_sd, step_m = d.step_error_correlation_m;
-    std::vector<Variant> variants{{"solver model", 0.0, corr_m, false, 0.0, step_m},
+    std::vector<Variant> variants{{"solver model", 0.0, corr_m, false, 0.0, step_m, false},
+                                  {"map along grad d", share, corr_m, comp, step_sd, step_m, false},
                                   {"offset only", share, corr_m, false, 0.0, step_m},
                                   {"components", 0.0, corr_m, true, 0.0, step_m},
                                   {"share 0.25", 0.25, corr_m, comp, step_sd, step_m},
@@ -176,6 +178,7 @@ void PrintVariants(const TrajectoryState& state, const TraversableField& field,
         c.family_variance_components = v.components;
         c.step_error_sd = v.step_sd;
         c.step_error_correlation_m = v.step_correlation_m;
+        c.map_across_travel = v.across && d.map_across_travel;
         const CovarianceResult r = ComputeCovariance(state, &field, cfg.model, c);
         Print(v.label.c_str(), Compare(corrected, truth, r.poses, 1.0));
     }

@@ -9,6 +9,14 @@
 //     (within a centre line's interpolation band along the line's unit normal). Positive
 //     semi-definite by construction, and equal to the exact Hessian where every residual is zero.
 //     Pose 0 (the known start) and fixed heights (planar mode) are not unknowns.
+//  1b. The map term informs only across its pose's direction of travel (CovarianceConfig::
+//     map_across_travel): its horizontal Jacobian J becomes (J . n) n, n the unit normal of the
+//     pose's yaw. Moving a pose along the road it drives on leaves its distance to that road as
+//     it is, so the min over the roads' distances rises by at most that road's term; at a junction
+//     passed straight through, the crossing street's centre line is the nearer one and grad d
+//     points along the travel, a curvature that holds only until the road driven on is nearer
+//     again. Along-track information comes from the poses after a turn, whose travel is across
+//     the road before it.
 //  2. The map's error is not independent from pose to pose: the lane the platform keeps and the
 //     map's own offset stay the same along a street, so more poses on it do not average it away
 //     (independent terms would make the covariance shrink with the pose rate). A share of the map
@@ -78,6 +86,13 @@ struct CovarianceConfig {
     double map_offset_share = 0.5;
     /// Correlation length of that offset along the path [m]: a street between junctions.
     double map_offset_correlation_m = 100.0;
+    /// Each map term informs only across its pose's direction of travel (method step 1b); false:
+    /// along grad d as the solver's model has it. Along the road a pose drives on its distance to
+    /// the map stays the same, so moving the pose along its travel costs at most that road's
+    /// term: where a crossing street's centre line is nearer (a junction passed straight
+    /// through) grad d points along the travel, and its curvature would fix the pose along the
+    /// track where no turn does.
+    bool map_across_travel = true;
     /// Standard deviation of the step length's slowly varying error, as a share of the step
     /// (method step 2b), >= 0; 0: the step lengths' errors are independent, the solver's own
     /// model. Pedestrian dead reckoning's step length errs with the gait for tens of steps at a
@@ -112,6 +127,8 @@ inline constexpr Param<CovarianceConfig> kCovarianceParamRows[] = {
      "share of the map variance that is an offset common along a street"},
     {"map_offset_correlation_m", Field<&CovarianceConfig::map_offset_correlation_m>(), kPositive,
      "correlation length of that offset along the path"},
+    {"map_across_travel", Field<&CovarianceConfig::map_across_travel>(), kNoRange,
+     "map terms inform only across each pose's direction of travel"},
     {"step_error_sd", Field<&CovarianceConfig::step_error_sd>(), kNonNegative,
      "slowly varying step length error, share of the step; 0: independent"},
     {"step_error_correlation_m", Field<&CovarianceConfig::step_error_correlation_m>(), kPositive,
