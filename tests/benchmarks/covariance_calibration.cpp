@@ -5,7 +5,9 @@
 // settings) and compares the true horizontal error e = corrected - ground truth (East, North) of
 // every pose after the first with its covariance Sigma_xy:
 //  - the share of poses inside their 95 % region, e^T Sigma^-1 e <= 5.991 (chi2, 2 dof), with the
-//    raw Gauss-Newton curvature and with the a posteriori variance factor applied;
+//    raw Gauss-Newton curvature and with the a posteriori variance factor applied, and the mean
+//    and largest e^T Sigma^-1 e (a covariance that is the error's has mean 2); where the CLI
+//    would keep the input (KeepAgreeingInput), the same for the input and its covariance;
 //  - the size, median and 90th percentile of sqrt(trace Sigma) [m];
 //  - along-track / cross-track (against the corrected heading): RMS of the error, median sigma,
 //    and the share inside the 1D 95 % interval (e^2 / sigma^2 <= 3.841);
@@ -52,6 +54,7 @@ struct Calibration {
     double inside = 0.0, inside_along = 0.0, inside_cross = 0.0;  // shares
     std::vector<double> size_m, sigma_along_m, sigma_cross_m;
     double rms_along_m = 0.0, rms_cross_m = 0.0;
+    double mean_d2 = 0.0, max_d2 = 0.0;  // e^T Sigma^-1 e: mean 2 where Sigma is the error's
 };
 
 // The ground truth's own error in the world frame, per axis [m^2] (--reference-rms-m).
@@ -70,7 +73,9 @@ Calibration Compare(const PlanarTrajectory& corrected, const PlanarTrajectory& t
         const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-u.y(), u.x());
         const double var_a = u.dot(s * u), var_c = v.dot(s * v);
         const double ea = u.dot(e), ec = v.dot(e);
-        c.inside += e.dot(s.ldlt().solve(e)) <= kChi2Two95;
+        const double d2 = e.dot(s.ldlt().solve(e));
+        c.inside += d2 <= kChi2Two95;
+        c.mean_d2 += d2, c.max_d2 = std::max(c.max_d2, d2);
         c.inside_along += ea * ea <= kChi2One95 * var_a;
         c.inside_cross += ec * ec <= kChi2One95 * var_c;
         c.size_m.push_back(std::sqrt(s.trace()));
@@ -80,7 +85,7 @@ Calibration Compare(const PlanarTrajectory& corrected, const PlanarTrajectory& t
         c.rms_cross_m += ec * ec;
     }
     const double m = double(n - 1);
-    c.inside /= m, c.inside_along /= m, c.inside_cross /= m;
+    c.inside /= m, c.inside_along /= m, c.inside_cross /= m, c.mean_d2 /= m;
     c.rms_along_m = std::sqrt(c.rms_along_m / m), c.rms_cross_m = std::sqrt(c.rms_cross_m / m);
     return c;
 }
@@ -88,10 +93,11 @@ Calibration Compare(const PlanarTrajectory& corrected, const PlanarTrajectory& t
 void Print(const char* label, const Calibration& c) {
     std::printf(
         "  %-12s inside 95%%: %5.1f %% (along %5.1f %%, cross %5.1f %%) | sqrt(tr) median "
-        "%7.2f m, p90 %7.2f m | sigma along median %7.2f m, cross %6.2f m\n",
+        "%7.2f m, p90 %7.2f m | sigma along median %7.2f m, cross %6.2f m | e'S^-1e mean "
+        "%.2f, max %.2f\n",
         label, 100.0 * c.inside, 100.0 * c.inside_along, 100.0 * c.inside_cross,
         Quantile(c.size_m, 0.5), Quantile(c.size_m, 0.9), Quantile(c.sigma_along_m, 0.5),
-        Quantile(c.sigma_cross_m, 0.5));
+        Quantile(c.sigma_cross_m, 0.5), c.mean_d2, c.max_d2);
 }
 
 // Share of corrected poses within a centre line's interpolation band (|grad d| < 0.9), and the
@@ -221,6 +227,12 @@ void Evaluate(const std::string& dir) {
                 raw.rms_along_m, raw.rms_cross_m, mean_error.x(), mean_error.y());
     Print("default", raw);
     Print("with factor", Compare(corrected, truth, cov.poses, cov.variance_factor / applied));
+    // Where the input agrees with the map the CLI writes the input, with its covariance.
+    CorrectionResult written = result;
+    KeepAgreeingInput(ps.estimate, &ps.field, cfg, written);
+    if (written.input_kept && written.covariance.status == CovarianceStatus::kOk) {
+        Print("input kept", Compare(written.corrected, truth, written.covariance.poses, 1.0));
+    }
     PrintFamilies(cov);
     PrintVariants(inc.state(), ps.field, cfg, corrected, truth);
     std::fflush(stdout);
