@@ -465,5 +465,33 @@ TEST(VerdictRoads, TurnsTheEstimateDoesNotMakeAreNotOk) {
     for (std::uint8_t flags : same.pose_flags) EXPECT_FALSE(flags & kPoseTurnUnsupported);
 }
 
+// An input with a gap in its times (a tracker lost for 2.2 s: ten poses missing from the
+// estimate and so from its correction) whose correction placed the drive after the gap 4 m to
+// the side: the step over the gap is a 20 m chord, whose direction the correction turned by
+// 0.2 rad with its end. That is not a turn the correction made where the estimate did not.
+TEST(VerdictRoads, AStepOverAGapInTheInputIsNotATurn) {
+    const TraversableField field = Streets({1000.0});
+    ModelConfig road;
+    road.map_giveup_m = 1000.0;
+    road.scale_range_min = 0.5, road.scale_range_max = 2.0;
+    const auto without_gap = [](const PlanarTrajectory& t, const Eigen::Vector2d& shift) {
+        PlanarTrajectory out;
+        for (std::size_t i = 0; i < t.size(); ++i) {
+            if (i > 300 && i <= 310) continue;
+            out.t_s.push_back(t.t_s[i]);
+            out.p_en.push_back(t.p_en[i] + (i > 310 ? shift : Eigen::Vector2d::Zero()));
+            out.up_m.push_back(t.up_m[i]);
+            out.yaw_rad.push_back(t.yaw_rad[i]);
+        }
+        return out;
+    };
+    const PlanarTrajectory estimate = without_gap(Weaving(false), Eigen::Vector2d::Zero());
+    const PlanarTrajectory corrected = without_gap(Weaving(true), Eigen::Vector2d(0.0, 4.0));
+    const Verdict v = JudgeCorrection(estimate, &field, road, Result(corrected), nullptr, false,
+                                      false, VerdictConfig{});
+    EXPECT_FALSE(HasReason(v, "turns where the estimate does not"));
+    for (std::uint8_t flags : v.pose_flags) EXPECT_FALSE(flags & kPoseTurnUnsupported);
+}
+
 }  // namespace
 }  // namespace driftcorr

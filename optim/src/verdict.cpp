@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -170,9 +171,21 @@ void JudgeTurns(const PlanarTrajectory& est, const PlanarTrajectory& cor, const 
         const Eigen::Vector2d d = t.p_en[i] - t.p_en[i - 1];
         return std::atan2(d.y(), d.x());
     };
+    // A step of more than kGapSteps times the input's median step time spans frames the
+    // odometry did not report (a tracker lost or initialising): its direction is a chord over
+    // whatever the platform drove meanwhile, which the correction bends with its ends.
+    constexpr double kGapSteps = 3.0;
+    std::vector<double> dts;
+    for (std::size_t i = 1; i < est.size(); ++i) dts.push_back(est.t_s[i] - est.t_s[i - 1]);
+    double gap_s = std::numeric_limits<double>::infinity();
+    if (!dts.empty()) {
+        std::nth_element(dts.begin(), dts.begin() + dts.size() / 2, dts.end());
+        if (dts[dts.size() / 2] > 0.0) gap_s = kGapSteps * dts[dts.size() / 2];
+    }
     const auto moving = [&](std::size_t i) {
         return (est.p_en[i] - est.p_en[i - 1]).norm() > c.turn_min_step_m &&
-               (cor.p_en[i] - cor.p_en[i - 1]).norm() > c.turn_min_step_m;
+               (cor.p_en[i] - cor.p_en[i - 1]).norm() > c.turn_min_step_m &&
+               est.t_s[i] - est.t_s[i - 1] <= gap_s;
     };
     double path_m = 0.0;
     for (std::size_t i = 1; i < cor.size() && i < est.size(); ++i) {

@@ -3,7 +3,8 @@
 
 For each (scenario directory, corrected TUM file) pair: per window of corrected path, the mean
 square of the corrected minus the estimated heading change per step (the steps' directions, where
-both steps are longer than --min-step-m), and the largest window's ratio to the median window
+both steps are longer than --min-step-m and span no gap in the input's times, over 3 times its
+median step time), and the largest window's ratio to the median window
 (VerdictConfig::turn_window_m, turn_min_step_m, turn_ratio; optim/src/verdict.cpp JudgeTurns).
 Prints the ratio, where it lies, and the window's mean square against the model's heading noise
 over its steps (the verdict flags a window beyond both).
@@ -27,8 +28,8 @@ def load_estimate(scenario_dir):
     e = np.loadtxt(os.path.join(scenario_dir, m.group(1).strip()))
     if e.shape[1] == 8:  # TUM, ENU
         return e[:, 0], e[:, 1:3], (1, 2)
-    if e.shape[1] == 13:  # KITTI with frame indices
-        e = e[:, 1:]
+    if e.shape[1] == 13:  # KITTI with frame indices (10 Hz)
+        return e[:, 0] * 0.1, e[:, 1:][:, [3, 11]], (1, 3)
     return np.arange(len(e)) * 0.1, e[:, [3, 11]], (1, 3)
 
 
@@ -44,7 +45,9 @@ def turn_windows(scenario_dir, corrected_path, window_m, min_step_m, rw, rel):
     le, lc = np.hypot(*de.T), np.hypot(*dc.T)
     moving_c = lc[lc > 0]
     ratio = np.median(moving_c) / np.median(le[le > 0]) if moving_c.size else 1.0
-    moving = (lc > min_step_m) & (le * ratio > min_step_m)
+    dts = np.diff(t)
+    no_gap = dts <= 3.0 * np.median(dts) if np.median(dts) > 0 else np.ones_like(dts, bool)
+    moving = (lc > min_step_m) & (le * ratio > min_step_m) & no_gap
     he, hc = np.arctan2(de[:, 1], de[:, 0]), np.arctan2(dc[:, 1], dc[:, 0])
     wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi
     path = np.cumsum(lc)

@@ -123,7 +123,8 @@ struct VerdictConfig {
     double size_rms_margin_m = 0.5;  ///< [m]
     /// Turns the estimate does not make: per turn_window_m of corrected path, the mean square of
     /// the difference between the corrected and the estimated heading change per step (headings
-    /// of the steps' directions, steps longer than turn_min_step_m in both), against the median
+    /// of the steps' directions, steps longer than turn_min_step_m in both and not spanning a gap
+    /// in the input's times, over 3 times its median step time), against the median
     /// over the drive's windows (at least three). A window beyond turn_ratio times that median,
     /// and beyond the model's own heading noise over its steps (heading_rw_rad_per_sqrt_s over
     /// each step's time, heading_sigma_rel of the estimate's turn), is a stretch the correction
