@@ -79,6 +79,23 @@ private:
     long last_stretch_ = -1;
 };
 
+// Where a map term's Jacobian holds its pose's East and North (entries at[c], -1: not there)
+// and their values.
+struct HorizontalEntries {
+    int at[2] = {-1, -1};
+    Eigen::Vector2d j = Eigen::Vector2d::Zero();
+};
+
+HorizontalEntries Horizontal(const LinearisedTerm& t, int x_var) {
+    HorizontalEntries h;
+    for (int a = 0; a < t.size; ++a) {
+        for (int c = 0; c < 2; ++c) {
+            if (t.var[a] == x_var + c) h.at[c] = a, h.j[c] = t.jacobian[a];
+        }
+    }
+    return h;
+}
+
 // Keeps of each map term's horizontal Jacobian only its component across the pose's direction of
 // travel (method step 1b).
 void KeepMapTermsAcrossTravel(const TrajectoryState& s, const WindowProblem& p,
@@ -90,16 +107,10 @@ void KeepMapTermsAcrossTravel(const TrajectoryState& s, const WindowProblem& p,
         if (x_var < 0) continue;
         const double yaw = s.poses[pose].yaw_rad;
         const Eigen::Vector2d across(-std::sin(yaw), std::cos(yaw));
-        int at[2] = {-1, -1};
-        Eigen::Vector2d j = Eigen::Vector2d::Zero();
-        for (int a = 0; a < t.size; ++a) {
-            for (int c = 0; c < 2; ++c) {
-                if (t.var[a] == x_var + c) at[c] = a, j[c] = t.jacobian[a];
-            }
-        }
-        const Eigen::Vector2d kept = j.dot(across) * across;
+        const HorizontalEntries h = Horizontal(t, x_var);
+        const Eigen::Vector2d kept = h.j.dot(across) * across;
         for (int c = 0; c < 2; ++c) {
-            if (at[c] >= 0) t.jacobian[at[c]] = kept[c];
+            if (h.at[c] >= 0) t.jacobian[h.at[c]] = kept[c];
         }
     }
 }
@@ -125,12 +136,7 @@ PathProcess AddMapOffset(const std::vector<double>& path_m, const WindowProblem&
         const int b = stretches.Var(pose, path_m[pose]);
         t.information /= 1.0 - config.map_offset_share;
         t.chi2 /= 1.0 - config.map_offset_share;
-        const int x_var = p.PoseVar(pose, 0);
-        double j[2] = {0.0, 0.0};
-        for (int a = 0; a < t.size; ++a) {
-            if (t.var[a] == x_var) j[0] = t.jacobian[a];
-            if (t.var[a] == x_var + 1) j[1] = t.jacobian[a];
-        }
+        const Eigen::Vector2d j = Horizontal(t, p.PoseVar(pose, 0)).j;
         for (int c = 0; c < 2; ++c) t.var[t.size] = b + c, t.jacobian[t.size++] = -j[c];
     }
     const double info =
